@@ -1,0 +1,13 @@
+//! Rover data for gpodo: the simulated ExoTeR-like testbed (the embedded
+//! default dataset), loaders for logged rover runs and residual tables, and
+//! the residual dataset of the paper's §IV-C built from logs and a motion
+//! model.
+
+mod error;
+pub mod log;
+pub mod residuals;
+pub mod sim;
+pub mod standardize;
+pub mod table;
+
+pub use error::DatasetError;

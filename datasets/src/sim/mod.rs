@@ -1,0 +1,7 @@
+//! The deterministic simulator of the ExoTeR-like rover in ESA's Planetary Robotics Lab testbed.
+
+pub mod manoeuvre;
+pub mod noise;
+pub mod slip;
+pub mod soil;
+pub mod terrain;

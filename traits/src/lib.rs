@@ -1,0 +1,29 @@
+//! The interfaces of gpodo and the data types that flow between its crates.
+//!
+//! The pipeline of the paper (Hidalgo-Carrió et al., "Gaussian Process
+//! Estimation of Odometry Errors for Localization and Mapping") has three
+//! exchangeable parts, each a trait here:
+//!
+//! * [`MotionModel`]: sensed proprioceptive quantities → body velocity
+//!   (the parametric model `g(s(k), u̇(k))` of eq. 11–12, §III);
+//! * [`ResidualRegressor`]: learns the residual `y_k = s(k+1) − s(k) − g(·)`
+//!   (eq. 12, §IV-C) and predicts its mean and variance;
+//! * [`FrameSelector`]: decides whether a camera frame is processed (§V-B).
+//!
+//! All three are object safe, so an experiment configuration chooses the
+//! implementations at run time (`Box<dyn MotionModel>` and so on). This crate
+//! depends on nothing else of gpodo's.
+
+mod error;
+mod matrix;
+mod motion;
+mod regressor;
+mod sample;
+mod selector;
+
+pub use error::Error;
+pub use matrix::SampleMatrix;
+pub use motion::{BodyTwist, MotionEstimate, MotionModel};
+pub use regressor::{FitReport, Predictions, ResidualDataset, ResidualRegressor};
+pub use sample::{ImuSample, JointState, ProprioceptiveSample};
+pub use selector::{FrameContext, FrameDecision, FrameSelector};

@@ -1,0 +1,178 @@
+//! The residual regressor interface (paper §IV): learns
+//! `y_k = s(k+1) − s(k) − g(s(k), u̇(k))` from inputs `x_k` and predicts its
+//! mean and variance.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, SampleMatrix};
+
+/// Inputs and residual targets, one row per sample, with column names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualDataset {
+    /// `n × d` inputs.
+    pub inputs: SampleMatrix,
+    /// `n × o` targets (residuals).
+    pub targets: SampleMatrix,
+    /// Names of the `d` input columns.
+    pub input_names: Vec<String>,
+    /// Names of the `o` target columns.
+    pub target_names: Vec<String>,
+}
+
+impl ResidualDataset {
+    /// Builds a dataset, checking that shapes and names agree.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] naming what disagrees.
+    pub fn new(
+        inputs: SampleMatrix,
+        targets: SampleMatrix,
+        input_names: Vec<String>,
+        target_names: Vec<String>,
+    ) -> Result<Self, Error> {
+        let checks = [
+            ("target rows", inputs.nrows(), targets.nrows()),
+            ("input names", inputs.ncols(), input_names.len()),
+            ("target names", targets.ncols(), target_names.len()),
+        ];
+        for (what, expected, found) in checks {
+            if expected != found {
+                return Err(Error::DimensionMismatch {
+                    what: what.to_string(),
+                    expected,
+                    found,
+                });
+            }
+        }
+        Ok(Self {
+            inputs,
+            targets,
+            input_names,
+            target_names,
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.inputs.nrows()
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The samples with the given indices, in that order.
+    pub fn select(&self, indices: &[usize]) -> Self {
+        Self {
+            inputs: self.inputs.select_rows(indices),
+            targets: self.targets.select_rows(indices),
+            input_names: self.input_names.clone(),
+            target_names: self.target_names.clone(),
+        }
+    }
+}
+
+/// Predictive mean and variance, `n × o` each, in target units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Predictions {
+    /// Predictive mean.
+    pub mean: SampleMatrix,
+    /// Predictive variance of the noisy target (latent variance plus noise).
+    pub variance: SampleMatrix,
+}
+
+/// What a fit did, for reports and reproducibility.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct FitReport {
+    /// Number of training samples.
+    pub n_samples: usize,
+    /// Wall-clock duration of the fit (s).
+    pub duration_secs: f64,
+    /// Final value of the objective the fit optimised, if any
+    /// (e.g. the log marginal likelihood).
+    pub objective: Option<f64>,
+    /// Objective evaluations the optimiser used, if any.
+    pub evaluations: Option<usize>,
+    /// Diagonal jitter added to make a factorisation succeed, if any.
+    pub jitter: Option<f64>,
+}
+
+/// A regressor of odometry residuals.
+///
+/// `fit` learns from a batch; `predict` returns mean and variance per output;
+/// incremental learners also implement `update` (one sample at a time, the
+/// previous posterior acting as prior) and return `true` from
+/// `supports_online_update`.
+///
+/// ```
+/// use gpodo_traits::{Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix};
+///
+/// /// Predicts the training mean of each output with the training variance.
+/// #[derive(Default)]
+/// struct MeanOnly { mean: Vec<f64>, var: Vec<f64> }
+///
+/// impl ResidualRegressor for MeanOnly {
+///     fn name(&self) -> &str { "mean_only" }
+///     fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
+///         let n = data.len() as f64;
+///         let o = data.targets.ncols();
+///         self.mean = (0..o).map(|j| data.targets.column(j).iter().sum::<f64>() / n).collect();
+///         self.var = (0..o).map(|j| data.targets.column(j).iter()
+///             .map(|y| (y - self.mean[j]).powi(2)).sum::<f64>() / n).collect();
+///         Ok(FitReport { n_samples: data.len(), ..Default::default() })
+///     }
+///     fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+///         let rows = vec![self.mean.clone(); inputs.nrows()];
+///         let vars = vec![self.var.clone(); inputs.nrows()];
+///         Ok(Predictions {
+///             mean: SampleMatrix::from_rows(self.mean.len(), &rows)?,
+///             variance: SampleMatrix::from_rows(self.var.len(), &vars)?,
+///         })
+///     }
+/// }
+///
+/// let x = SampleMatrix::from_rows(1, &[[0.0], [1.0]]).unwrap();
+/// let y = SampleMatrix::from_rows(1, &[[1.0], [3.0]]).unwrap();
+/// let data = ResidualDataset::new(x.clone(), y, vec!["x".into()], vec!["y".into()]).unwrap();
+/// let mut model: Box<dyn ResidualRegressor> = Box::new(MeanOnly::default());
+/// model.fit(&data).unwrap();
+/// let p = model.predict(&x).unwrap();
+/// assert_eq!(p.mean.get(0, 0), 2.0);
+/// assert_eq!(p.variance.get(1, 0), 1.0);
+/// assert!(model.update(&[0.0], &[1.0]).is_err());
+/// ```
+pub trait ResidualRegressor: Send + Sync {
+    /// A short name for reports (e.g. `"exact_gp[rbf]"`).
+    fn name(&self) -> &str;
+
+    /// Learns from a batch, replacing what was learned before.
+    ///
+    /// # Errors
+    /// Implementation-specific: empty data, non-finite values, a failed
+    /// factorisation.
+    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error>;
+
+    /// Predicts mean and variance for each row of `inputs`.
+    ///
+    /// # Errors
+    /// [`Error::NotFitted`] before `fit`, [`Error::DimensionMismatch`] when
+    /// the inputs have the wrong number of columns.
+    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error>;
+
+    /// Whether [`ResidualRegressor::update`] learns online.
+    fn supports_online_update(&self) -> bool {
+        false
+    }
+
+    /// Learns from one more sample (online learning).
+    ///
+    /// # Errors
+    /// [`Error::OnlineUpdateUnsupported`] for batch-only models.
+    fn update(&mut self, inputs: &[f64], targets: &[f64]) -> Result<(), Error> {
+        let _ = (inputs, targets);
+        Err(Error::OnlineUpdateUnsupported {
+            model: self.name().to_string(),
+        })
+    }
+}

@@ -1,0 +1,53 @@
+//! Proprioceptive sensor samples: what a rover senses about itself at one
+//! instant (joint encoders, potentiometers, IMU).
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// Position and rate of one joint.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct JointState {
+    /// Joint angle (rad).
+    pub position_rad: f64,
+    /// Joint rate (rad/s), the mean over the sample interval.
+    pub rate_radps: f64,
+}
+
+/// One IMU reading, expressed in the body frame (x forward, y left, z up).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ImuSample {
+    /// Angular rate from the gyroscopes (rad/s).
+    pub gyro_radps: Vector3<f64>,
+    /// Specific force from the accelerometers (m/s², gravity included:
+    /// a rover at rest on flat ground reads `+9.81` on z).
+    pub accel_mps2: Vector3<f64>,
+    /// Roll from the attitude filter (rad, rotation about body x).
+    pub roll_rad: f64,
+    /// Pitch from the attitude filter (rad, rotation about body y; positive
+    /// pitch points the nose down, as with any right-handed z-up frame).
+    pub pitch_rad: f64,
+}
+
+/// Everything a rover senses about itself at one time step.
+///
+/// Joint vectors follow the order of the rover description that produced
+/// them (for the ExoTeR-like rover: wheels `fl, fr, ml, mr, rl, rr`, steering
+/// `fl, fr, rl, rr`, bogies `left, right, rear`). A motion model checks the
+/// lengths it needs and reports a [`crate::Error::DimensionMismatch`].
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ProprioceptiveSample {
+    /// Time stamp (s).
+    pub time_secs: f64,
+    /// Wheel (rolling) joints.
+    pub wheels: Vec<JointState>,
+    /// Steering joints.
+    pub steering: Vec<JointState>,
+    /// Passive bogie joints.
+    pub bogies: Vec<JointState>,
+    /// Inertial measurement.
+    pub imu: ImuSample,
+    /// Wheel–terrain contact angles (rad), one per wheel, when something
+    /// measured or estimated them (a simulator does; a real rover usually
+    /// does not, and models then assume 0).
+    pub contact_angles_rad: Option<Vec<f64>>,
+}
