@@ -79,7 +79,11 @@ fn weighted_and_uniform_solutions_agree_when_loads_are_equal() {
     let b = uniform.solve(&s, 0.08).unwrap();
     assert!(a.weights.iter().all(|w| (w - 1.0 / 6.0).abs() < 1e-15), "{:?}", a.weights);
     assert!((a.linear_mps - b.linear_mps).amax() < 1e-13);
-    assert!(a.weighted_residual > 1e-10, "the data really are inconsistent");
+    assert!(
+        a.slips.iter().any(|d| d[0].abs() > 1e-4),
+        "the data really are inconsistent: {:?}",
+        a.slips
+    );
 }
 
 #[test]
