@@ -173,4 +173,11 @@ pub enum DatasetError {
     /// A gpodo data type rejected what it was given.
     #[error(transparent)]
     Model(#[from] gpodo_traits::Error),
+    /// The simulator could not continue (e.g. the chassis cannot be placed
+    /// on terrain that is too steep).
+    #[error("simulation failed: {detail}")]
+    Simulation {
+        /// What went wrong.
+        detail: String,
+    },
 }

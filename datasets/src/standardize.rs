@@ -76,7 +76,10 @@ impl Standardizer {
     ///
     /// # Errors
     /// [`DatasetError::DimensionMismatch`] as for [`Self::transform`].
-    pub fn inverse_transform_mean(&self, data: &SampleMatrix) -> Result<SampleMatrix, DatasetError> {
+    pub fn inverse_transform_mean(
+        &self,
+        data: &SampleMatrix,
+    ) -> Result<SampleMatrix, DatasetError> {
         self.map_columns("standardizer inverse (mean)", data, |z, mean, std| {
             z * std + mean
         })
@@ -215,7 +218,10 @@ mod tests {
                 ..
             }
         ));
-        assert!(s.inverse_transform_variance(&SampleMatrix::zeros(1, 2)).is_err());
+        assert!(
+            s.inverse_transform_variance(&SampleMatrix::zeros(1, 2))
+                .is_err()
+        );
     }
 
     #[test]

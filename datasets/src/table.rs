@@ -79,10 +79,7 @@ impl TableSpec {
 /// [`DatasetError::NonFinite`], [`DatasetError::Shape`] (ragged row),
 /// [`DatasetError::Empty`], [`DatasetError::DuplicateColumn`],
 /// [`DatasetError::Csv`], [`DatasetError::Io`].
-pub fn read_residual_table(
-    path: &Path,
-    spec: &TableSpec,
-) -> Result<ResidualDataset, DatasetError> {
+pub fn read_residual_table(path: &Path, spec: &TableSpec) -> Result<ResidualDataset, DatasetError> {
     spec.validate()?;
     let (rows, input_names) = read_numeric_csv(path, |header| {
         let inputs = input_names(spec, header);
@@ -240,7 +237,10 @@ mod tests {
     fn rejects_infinity_with_line_and_column() {
         let (_dir, path) = write_table("a,y\n-inf,2\n");
         let err = read_residual_table(&path, &spec(None, &["y"])).unwrap_err();
-        assert!(matches!(&err, DatasetError::NonFinite { line: 2, .. }), "{err}");
+        assert!(
+            matches!(&err, DatasetError::NonFinite { line: 2, .. }),
+            "{err}"
+        );
     }
 
     #[test]

@@ -1,1 +1,17 @@
-//! placeholder
+//! The gpodo experiment runner: reads a YAML experiment, runs the paper's
+//! pipeline (simulate or load → motion model → residual dataset →
+//! regressors → evaluation) and writes `report.md` and `metrics.json`.
+//!
+//! * [`config`]: the experiment file schema, with errors naming file, line
+//!   and column;
+//! * [`pipeline`]: the run itself;
+//! * [`calibration`]: statistics of residual tables, to compare the
+//!   simulator with the real ExoTeR data;
+//! * [`odometry`]: dead reckoning with the motion model;
+//! * [`report`]: the Markdown and JSON outputs.
+
+pub mod calibration;
+pub mod config;
+pub mod odometry;
+pub mod pipeline;
+pub mod report;

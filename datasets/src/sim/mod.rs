@@ -5,3 +5,7 @@ pub mod noise;
 pub mod slip;
 pub mod soil;
 pub mod terrain;
+pub mod chassis;
+pub mod preset;
+pub mod rover;
+pub mod sensors;

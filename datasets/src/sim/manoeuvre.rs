@@ -1,0 +1,963 @@
+//! The driver of the simulated rover: which manoeuvre it commands, when.
+//!
+//! ExoTeR has four steerable corner wheels and two fixed middle wheels, so
+//! every feasible motion has its instantaneous centre of rotation on the
+//! middle-axle line (the body `y` axis): straight driving, Ackermann arcs
+//! (centre at `(0, R)`, `|R| ≥ 0.6 m`), turns on the spot (centre at the
+//! origin) and point turns about a middle wheel (centre at `(0, ±0.24 m)`).
+//! Rotating at `ω` about a centre `(0, y_c)` moves the body origin at
+//! `v_x = ω·y_c`. [`DriveCommand`]'s constructors build exactly these twists.
+//!
+//! [`Driver`] is a small state machine called at every sensor step with the
+//! rover's true planar pose. It runs in one of two modes:
+//! - **training** ([`Driver::training`]): the remote-driving sessions of paper
+//!   §V — random manoeuvres (forward, backward, Ackermann, turn on the spot,
+//!   point turn) of 5–40 s, with short stops in between so the rover moves
+//!   about 70% of the time; within `edge_margin_m` of the area's edge it turns
+//!   on the spot towards the centre and drives back in;
+//! - **waypoint following** ([`Driver::follow`]): turns on the spot to face
+//!   the next waypoint, then drives forward with Ackermann corrections, e.g.
+//!   along [`test_traverse_waypoints`], the ≈ 42 m test run of paper §V-B.
+//!
+//! Everything is deterministic given the random-number generator.
+
+use std::f64::consts::{PI, TAU};
+
+use nalgebra::Vector2;
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::DatasetError;
+
+/// Curvatures below this (1/m) are driven as [`ManoeuvreKind::Straight`].
+const STRAIGHT_CURVATURE_PER_M: f64 = 0.02;
+/// Waypoints of the test traverse for a 9 m area (scaled with the area).
+const TEST_TRAVERSE_9M: [(f64, f64); 9] = [
+    (1.4, 1.4),
+    (7.6, 7.6),
+    (7.6, 4.5),
+    (1.4, 4.5),
+    (1.4, 7.6),
+    (7.6, 1.4),
+    (4.5, 1.4),
+    (4.5, 7.6),
+    (7.6, 7.6),
+];
+
+/// A planar body twist: the body-frame velocity of the body origin and the
+/// yaw rate (body `x` forward, `y` left, `z` up).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlanarTwist {
+    /// Forward velocity, m/s.
+    pub vx_mps: f64,
+    /// Leftward velocity, m/s.
+    pub vy_mps: f64,
+    /// Yaw rate about body `z`, rad/s (positive turns left).
+    pub wz_radps: f64,
+}
+
+impl PlanarTwist {
+    /// No motion.
+    pub const ZERO: Self = Self::new(0.0, 0.0, 0.0);
+
+    /// A twist from its three components.
+    pub const fn new(vx_mps: f64, vy_mps: f64, wz_radps: f64) -> Self {
+        Self {
+            vx_mps,
+            vy_mps,
+            wz_radps,
+        }
+    }
+
+    /// Translational speed `sqrt(vx² + vy²)`, m/s.
+    pub fn speed_mps(&self) -> f64 {
+        self.vx_mps.hypot(self.vy_mps)
+    }
+
+    /// Whether all three components are exactly zero.
+    pub fn is_zero(&self) -> bool {
+        self.vx_mps == 0.0 && self.vy_mps == 0.0 && self.wz_radps == 0.0
+    }
+}
+
+/// The manoeuvre classes an ExoTeR-like rover can drive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum ManoeuvreKind {
+    /// Straight forward or backward.
+    Straight,
+    /// An arc about a centre on the middle-axle line, `|radius| ≥ 0.6 m`.
+    Ackermann,
+    /// Rotation about the body origin.
+    TurnOnSpot,
+    /// Rotation about one middle wheel.
+    PointTurn,
+    /// Standing still.
+    #[default]
+    Stop,
+}
+
+impl ManoeuvreKind {
+    /// Whether the wheels turn in this manoeuvre (everything but `Stop`).
+    pub fn is_moving(self) -> bool {
+        self != Self::Stop
+    }
+}
+
+/// A commanded manoeuvre and its slip-free twist.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DriveCommand {
+    /// The manoeuvre class.
+    pub kind: ManoeuvreKind,
+    /// The body twist the wheel speeds produce without slip.
+    pub twist: PlanarTwist,
+}
+
+impl DriveCommand {
+    /// Standing still.
+    pub const STOP: Self = Self {
+        kind: ManoeuvreKind::Stop,
+        twist: PlanarTwist::ZERO,
+    };
+
+    /// Straight at `vx_mps` (negative = backward).
+    pub fn straight(vx_mps: f64) -> Self {
+        Self::new(ManoeuvreKind::Straight, vx_mps, 0.0)
+    }
+
+    /// An Ackermann arc at forward speed `vx_mps` about the centre
+    /// `(0, radius_m)` (positive radius turns left): `wz = vx / radius`.
+    pub fn ackermann(vx_mps: f64, radius_m: f64) -> Self {
+        Self::new(ManoeuvreKind::Ackermann, vx_mps, vx_mps / radius_m)
+    }
+
+    /// A turn on the spot at `wz_radps` (positive = left).
+    pub fn turn_on_spot(wz_radps: f64) -> Self {
+        Self::new(ManoeuvreKind::TurnOnSpot, 0.0, wz_radps)
+    }
+
+    /// A rotation at `wz_radps` about the middle wheel at `(0, centre_y_m)`:
+    /// `vx = wz·centre_y`.
+    pub fn point_turn(wz_radps: f64, centre_y_m: f64) -> Self {
+        Self::new(ManoeuvreKind::PointTurn, wz_radps * centre_y_m, wz_radps)
+    }
+
+    fn new(kind: ManoeuvreKind, vx_mps: f64, wz_radps: f64) -> Self {
+        Self {
+            kind,
+            twist: PlanarTwist::new(vx_mps, 0.0, wz_radps),
+        }
+    }
+}
+
+/// One manoeuvre of the training script: a command held for a duration.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Segment {
+    /// The manoeuvre class.
+    pub kind: ManoeuvreKind,
+    /// How long the command is held, seconds.
+    pub duration_secs: f64,
+    /// The commanded slip-free body twist.
+    pub twist: PlanarTwist,
+}
+
+/// A planar pose in the world frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlanarPose {
+    /// World `x` of the body origin, metres.
+    pub x_m: f64,
+    /// World `y` of the body origin, metres.
+    pub y_m: f64,
+    /// Heading of body `x` from world `x`, rad (counter-clockwise).
+    pub yaw_rad: f64,
+}
+
+impl From<(f64, f64, f64)> for PlanarPose {
+    fn from((x_m, y_m, yaw_rad): (f64, f64, f64)) -> Self {
+        Self { x_m, y_m, yaw_rad }
+    }
+}
+
+impl PlanarPose {
+    fn position(&self) -> Vector2<f64> {
+        Vector2::new(self.x_m, self.y_m)
+    }
+}
+
+/// Relative frequencies of the moving manoeuvres the training driver picks
+/// (the real training set is mostly forward driving: 97% of its moving
+/// seconds).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ManoeuvreWeights {
+    /// Straight forward. Default 0.45.
+    pub forward: f64,
+    /// Straight backward. Default 0.05.
+    pub backward: f64,
+    /// Ackermann arcs, left or right. Default 0.25.
+    pub ackermann: f64,
+    /// Turns on the spot, left or right. Default 0.15.
+    pub turn_on_spot: f64,
+    /// Point turns about either middle wheel. Default 0.10.
+    pub point_turn: f64,
+}
+
+impl Default for ManoeuvreWeights {
+    fn default() -> Self {
+        Self {
+            forward: 0.45,
+            backward: 0.05,
+            ackermann: 0.25,
+            turn_on_spot: 0.15,
+            point_turn: 0.10,
+        }
+    }
+}
+
+impl ManoeuvreWeights {
+    fn as_array(&self) -> [f64; 5] {
+        [
+            self.forward,
+            self.backward,
+            self.ackermann,
+            self.turn_on_spot,
+            self.point_turn,
+        ]
+    }
+}
+
+/// How the driver drives; read from configs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DriverParams {
+    /// Nominal driving speed, m/s. Default 0.04 (paper: ≈ 4 cm/s).
+    pub speed_mps: f64,
+    /// Relative spread of speed and turn rate between training segments: each
+    /// is drawn uniformly within `±spread` of nominal. Default 0.25.
+    pub speed_spread: f64,
+    /// Nominal yaw rate of turns on the spot and point turns, rad/s.
+    /// Default 0.1.
+    pub turn_rate_radps: f64,
+    /// Smallest Ackermann radius, metres. Default 0.6.
+    pub min_ackermann_radius_m: f64,
+    /// Largest Ackermann radius of random training arcs, metres. Default 3.0.
+    pub max_ackermann_radius_m: f64,
+    /// Lateral offset of the middle wheels (point-turn centres), metres.
+    /// Default 0.24.
+    pub point_turn_offset_m: f64,
+    /// Shortest moving training segment, seconds. Default 5.
+    pub min_segment_secs: f64,
+    /// Longest moving training segment, seconds. Default 40.
+    pub max_segment_secs: f64,
+    /// Shortest stop, seconds. Default 3.
+    pub min_stop_secs: f64,
+    /// Longest stop, seconds. Default 15.
+    pub max_stop_secs: f64,
+    /// Share of training time spent in random stops, in [0, 1). The per-segment
+    /// stop probability is derived from it and the mean durations. Default 0.35.
+    pub stop_time_fraction: f64,
+    /// Relative frequencies of the moving manoeuvres.
+    pub weights: ManoeuvreWeights,
+    /// Distance from the area's edge within which the training driver stops
+    /// moving outwards and returns, metres. Default 1.0.
+    pub edge_margin_m: f64,
+    /// How far beyond the margin the driver drives back in before resuming
+    /// random manoeuvres, metres. Default 1.0.
+    pub retreat_m: f64,
+    /// Distance at which a waypoint counts as reached, metres. Default 0.05.
+    pub waypoint_tolerance_m: f64,
+    /// Heading error above which the driver stops and turns on the spot, rad.
+    /// Default 0.35.
+    pub align_start_rad: f64,
+    /// Heading error at which a turn on the spot ends, rad. Default 0.05.
+    pub align_stop_rad: f64,
+    /// Path curvature commanded per radian of heading error, 1/m. Default 2.0.
+    pub steering_gain_per_m: f64,
+}
+
+impl Default for DriverParams {
+    fn default() -> Self {
+        Self {
+            speed_mps: 0.04,
+            speed_spread: 0.25,
+            turn_rate_radps: 0.1,
+            min_ackermann_radius_m: 0.6,
+            max_ackermann_radius_m: 3.0,
+            point_turn_offset_m: 0.24,
+            min_segment_secs: 5.0,
+            max_segment_secs: 40.0,
+            min_stop_secs: 3.0,
+            max_stop_secs: 15.0,
+            stop_time_fraction: 0.35,
+            weights: ManoeuvreWeights::default(),
+            edge_margin_m: 1.0,
+            retreat_m: 1.0,
+            waypoint_tolerance_m: 0.05,
+            align_start_rad: 0.35,
+            align_stop_rad: 0.05,
+            steering_gain_per_m: 2.0,
+        }
+    }
+}
+
+impl DriverParams {
+    /// Checks every field, naming the first bad one.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`].
+    pub fn validate(&self) -> Result<(), DatasetError> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        let w = &self.weights;
+        let checks = [
+            (
+                "speed_mps",
+                positive(self.speed_mps) && self.speed_mps <= 1.0,
+                "a value in (0, 1]",
+            ),
+            (
+                "speed_spread",
+                non_negative(self.speed_spread) && self.speed_spread < 1.0,
+                "a value in [0, 1)",
+            ),
+            (
+                "turn_rate_radps",
+                positive(self.turn_rate_radps) && self.turn_rate_radps <= 2.0,
+                "a value in (0, 2]",
+            ),
+            (
+                "min_ackermann_radius_m",
+                positive(self.min_ackermann_radius_m),
+                "a finite value > 0",
+            ),
+            (
+                "max_ackermann_radius_m",
+                self.max_ackermann_radius_m.is_finite()
+                    && self.max_ackermann_radius_m >= self.min_ackermann_radius_m,
+                "a finite value >= min_ackermann_radius_m",
+            ),
+            (
+                "point_turn_offset_m",
+                positive(self.point_turn_offset_m),
+                "a finite value > 0",
+            ),
+            (
+                "min_segment_secs",
+                positive(self.min_segment_secs),
+                "a finite value > 0",
+            ),
+            (
+                "max_segment_secs",
+                self.max_segment_secs.is_finite() && self.max_segment_secs >= self.min_segment_secs,
+                "a finite value >= min_segment_secs",
+            ),
+            (
+                "min_stop_secs",
+                positive(self.min_stop_secs),
+                "a finite value > 0",
+            ),
+            (
+                "max_stop_secs",
+                self.max_stop_secs.is_finite() && self.max_stop_secs >= self.min_stop_secs,
+                "a finite value >= min_stop_secs",
+            ),
+            (
+                "stop_time_fraction",
+                non_negative(self.stop_time_fraction) && self.stop_time_fraction < 1.0,
+                "a value in [0, 1)",
+            ),
+            (
+                "weights",
+                w.as_array().iter().all(|&v| non_negative(v))
+                    && w.as_array().iter().sum::<f64>() > 0.0,
+                "finite weights >= 0 with a positive sum",
+            ),
+            (
+                "edge_margin_m",
+                non_negative(self.edge_margin_m),
+                "a finite value >= 0",
+            ),
+            (
+                "retreat_m",
+                non_negative(self.retreat_m),
+                "a finite value >= 0",
+            ),
+            (
+                "waypoint_tolerance_m",
+                positive(self.waypoint_tolerance_m),
+                "a finite value > 0",
+            ),
+            (
+                "align_start_rad",
+                positive(self.align_start_rad) && self.align_start_rad < PI,
+                "a value in (0, π)",
+            ),
+            (
+                "align_stop_rad",
+                positive(self.align_stop_rad) && self.align_stop_rad < self.align_start_rad,
+                "a value in (0, align_start_rad)",
+            ),
+            (
+                "steering_gain_per_m",
+                positive(self.steering_gain_per_m),
+                "a finite value > 0",
+            ),
+        ];
+        for (field, ok, expected) in checks {
+            require(ok, field, expected)?;
+        }
+        Ok(())
+    }
+
+    /// Probability that a training segment is a stop, such that stops take
+    /// `stop_time_fraction` of the time: `p = f·M / (f·M + (1 − f)·S)` with
+    /// `M`, `S` the mean moving and stop durations.
+    fn stop_probability(&self) -> f64 {
+        let f = self.stop_time_fraction;
+        let moving = 0.5 * (self.min_segment_secs + self.max_segment_secs);
+        let stop = 0.5 * (self.min_stop_secs + self.max_stop_secs);
+        f * moving / (f * moving + (1.0 - f) * stop)
+    }
+}
+
+/// The waypoints of the fixed test traverse for an area of side
+/// `area_size_m`: the two diagonals, the two mid-lines and four half-sides of
+/// a square 1.4 m (scaled) inside the edges, crossing the middle of the area
+/// (where the hills are) four times. Polyline length 42.34 m at 9 m (paper §V-B:
+/// 42.35 m), scaling with the area. Independent of any seed.
+pub fn test_traverse_waypoints(area_size_m: f64) -> Vec<(f64, f64)> {
+    let scale = area_size_m / 9.0;
+    TEST_TRAVERSE_9M
+        .iter()
+        .map(|&(x, y)| (scale * x, scale * y))
+        .collect()
+}
+
+/// Where the test traverse starts: on its first waypoint, facing the second.
+pub fn test_traverse_start_pose(area_size_m: f64) -> PlanarPose {
+    let points = test_traverse_waypoints(area_size_m);
+    let ((x0, y0), (x1, y1)) = (points[0], points[1]);
+    PlanarPose {
+        x_m: x0,
+        y_m: y0,
+        yaw_rad: (y1 - y0).atan2(x1 - x0),
+    }
+}
+
+/// Steers towards a target: turn on the spot while the heading error is
+/// large (with hysteresis), otherwise drive forward on a corrective arc.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Pursuit {
+    aligning: bool,
+}
+
+impl Pursuit {
+    fn steer(
+        &mut self,
+        params: &DriverParams,
+        pose: &PlanarPose,
+        target: Vector2<f64>,
+    ) -> DriveCommand {
+        let to_target = target - pose.position();
+        let error = wrap_angle(to_target.y.atan2(to_target.x) - pose.yaw_rad);
+        if self.aligning && error.abs() <= params.align_stop_rad {
+            self.aligning = false;
+        } else if !self.aligning && error.abs() > params.align_start_rad {
+            self.aligning = true;
+        }
+        if self.aligning {
+            return DriveCommand::turn_on_spot(params.turn_rate_radps.copysign(error));
+        }
+        let max_curvature = 1.0 / params.min_ackermann_radius_m;
+        let curvature = (params.steering_gain_per_m * error).clamp(-max_curvature, max_curvature);
+        if curvature.abs() < STRAIGHT_CURVATURE_PER_M {
+            DriveCommand::straight(params.speed_mps)
+        } else {
+            DriveCommand::ackermann(params.speed_mps, 1.0 / curvature)
+        }
+    }
+}
+
+/// State of the random training driver.
+#[derive(Clone, Debug, PartialEq)]
+struct Training {
+    area_size_m: f64,
+    segment: Option<Segment>,
+    segment_end_secs: f64,
+    retreat: Option<Pursuit>,
+}
+
+impl Training {
+    fn command<R: Rng + ?Sized>(
+        &mut self,
+        params: &DriverParams,
+        pose: &PlanarPose,
+        time_secs: f64,
+        rng: &mut R,
+    ) -> DriveCommand {
+        let centre = Vector2::repeat(self.area_size_m / 2.0);
+        if let Some(pursuit) = &mut self.retreat {
+            if edge_distance(pose, self.area_size_m) < params.edge_margin_m + params.retreat_m {
+                return pursuit.steer(params, pose, centre);
+            }
+            self.retreat = None;
+            self.segment = None;
+        }
+        let segment = match self.segment {
+            Some(segment) if time_secs < self.segment_end_secs => segment,
+            _ => {
+                let segment = random_segment(params, rng);
+                self.segment = Some(segment);
+                self.segment_end_secs = time_secs + segment.duration_secs;
+                segment
+            }
+        };
+        if heads_out_of_margin(pose, &segment.twist, self.area_size_m, params.edge_margin_m) {
+            let mut pursuit = Pursuit::default();
+            let command = pursuit.steer(params, pose, centre);
+            self.retreat = Some(pursuit);
+            return command;
+        }
+        DriveCommand {
+            kind: segment.kind,
+            twist: segment.twist,
+        }
+    }
+}
+
+/// State of the waypoint follower.
+#[derive(Clone, Debug, PartialEq)]
+struct Following {
+    waypoints: Vec<Vector2<f64>>,
+    next: usize,
+    pursuit: Pursuit,
+}
+
+impl Following {
+    fn command(&mut self, params: &DriverParams, pose: &PlanarPose) -> DriveCommand {
+        while let Some(&target) = self.waypoints.get(self.next) {
+            if (target - pose.position()).norm() > params.waypoint_tolerance_m {
+                return self.pursuit.steer(params, pose, target);
+            }
+            self.next += 1;
+        }
+        DriveCommand::STOP
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Mode {
+    Training(Training),
+    Following(Following),
+}
+
+/// The rover's driver: call [`Driver::command`] at every sensor step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Driver {
+    params: DriverParams,
+    mode: Mode,
+}
+
+impl Driver {
+    /// A random training driver that keeps the rover inside the square
+    /// `[0, area_size_m]²`.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] when `params` is invalid or the area
+    /// is too small for the margins (`area_size_m` must exceed
+    /// `2·(edge_margin_m + retreat_m) + 1`).
+    pub fn training(params: DriverParams, area_size_m: f64) -> Result<Self, DatasetError> {
+        params.validate()?;
+        require(
+            area_size_m.is_finite()
+                && area_size_m > 2.0 * (params.edge_margin_m + params.retreat_m) + 1.0,
+            "area_size_m",
+            "a finite value > 2·(edge_margin_m + retreat_m) + 1",
+        )?;
+        let training = Training {
+            area_size_m,
+            segment: None,
+            segment_end_secs: 0.0,
+            retreat: None,
+        };
+        Ok(Self {
+            params,
+            mode: Mode::Training(training),
+        })
+    }
+
+    /// A driver that visits `waypoints` (world `(x, y)`, metres) in order and
+    /// then stops for good ([`Driver::done`]).
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] when `params` is invalid or naming
+    /// `waypoints` when it is empty or holds a non-finite coordinate.
+    pub fn follow(params: DriverParams, waypoints: &[(f64, f64)]) -> Result<Self, DatasetError> {
+        params.validate()?;
+        require(
+            !waypoints.is_empty()
+                && waypoints
+                    .iter()
+                    .all(|(x, y)| x.is_finite() && y.is_finite()),
+            "waypoints",
+            "a non-empty list of finite (x, y) points",
+        )?;
+        let following = Following {
+            waypoints: waypoints.iter().map(|&(x, y)| Vector2::new(x, y)).collect(),
+            next: 0,
+            pursuit: Pursuit::default(),
+        };
+        Ok(Self {
+            params,
+            mode: Mode::Following(following),
+        })
+    }
+
+    /// The command for this step, given the rover's true planar pose and the
+    /// simulation time. Draws from `rng` only when a training segment starts.
+    pub fn command<R: Rng + ?Sized>(
+        &mut self,
+        pose: impl Into<PlanarPose>,
+        time_secs: f64,
+        rng: &mut R,
+    ) -> DriveCommand {
+        let pose = pose.into();
+        match &mut self.mode {
+            Mode::Training(training) => training.command(&self.params, &pose, time_secs, rng),
+            Mode::Following(following) => following.command(&self.params, &pose),
+        }
+    }
+
+    /// Whether a waypoint follower has reached its last waypoint (always
+    /// `false` for a training driver).
+    pub fn done(&self) -> bool {
+        match &self.mode {
+            Mode::Training(_) => false,
+            Mode::Following(following) => following.next >= following.waypoints.len(),
+        }
+    }
+
+    /// The current random training segment, if any (`None` while returning
+    /// from the edge and for a waypoint follower).
+    pub fn current_segment(&self) -> Option<&Segment> {
+        match &self.mode {
+            Mode::Training(training) if training.retreat.is_none() => training.segment.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The driver's parameters.
+    pub fn params(&self) -> &DriverParams {
+        &self.params
+    }
+}
+
+/// The moving manoeuvres, in the order of [`ManoeuvreWeights::as_array`].
+#[derive(Clone, Copy)]
+enum Choice {
+    Forward,
+    Backward,
+    Ackermann,
+    TurnOnSpot,
+    PointTurn,
+}
+
+fn random_segment<R: Rng + ?Sized>(params: &DriverParams, rng: &mut R) -> Segment {
+    if rng.random::<f64>() < params.stop_probability() {
+        let duration_secs = uniform(rng, params.min_stop_secs, params.max_stop_secs);
+        return to_segment(DriveCommand::STOP, duration_secs);
+    }
+    let duration_secs = uniform(rng, params.min_segment_secs, params.max_segment_secs);
+    let jitter = |rng: &mut R| 1.0 + params.speed_spread * uniform(rng, -1.0, 1.0);
+    let speed = params.speed_mps * jitter(rng);
+    let rate = params.turn_rate_radps * jitter(rng) * random_sign(rng);
+    let command = match pick(&params.weights, rng) {
+        Choice::Forward => DriveCommand::straight(speed),
+        Choice::Backward => DriveCommand::straight(-speed),
+        Choice::Ackermann => {
+            let radius = uniform(
+                rng,
+                params.min_ackermann_radius_m,
+                params.max_ackermann_radius_m,
+            );
+            DriveCommand::ackermann(speed, radius * random_sign(rng))
+        }
+        Choice::TurnOnSpot => DriveCommand::turn_on_spot(rate),
+        Choice::PointTurn => {
+            DriveCommand::point_turn(rate, params.point_turn_offset_m * random_sign(rng))
+        }
+    };
+    to_segment(command, duration_secs)
+}
+
+fn to_segment(command: DriveCommand, duration_secs: f64) -> Segment {
+    Segment {
+        kind: command.kind,
+        duration_secs,
+        twist: command.twist,
+    }
+}
+
+fn pick<R: Rng + ?Sized>(weights: &ManoeuvreWeights, rng: &mut R) -> Choice {
+    const CHOICES: [Choice; 5] = [
+        Choice::Forward,
+        Choice::Backward,
+        Choice::Ackermann,
+        Choice::TurnOnSpot,
+        Choice::PointTurn,
+    ];
+    let weights = weights.as_array();
+    let mut remaining = rng.random::<f64>() * weights.iter().sum::<f64>();
+    for (choice, weight) in CHOICES.into_iter().zip(weights) {
+        if remaining < weight {
+            return choice;
+        }
+        remaining -= weight;
+    }
+    Choice::Forward
+}
+
+/// Whether the body origin is within `margin` of an edge and the twist moves
+/// it further towards that edge.
+fn heads_out_of_margin(
+    pose: &PlanarPose,
+    twist: &PlanarTwist,
+    area_size_m: f64,
+    margin: f64,
+) -> bool {
+    let (sin, cos) = pose.yaw_rad.sin_cos();
+    let velocity = [
+        cos * twist.vx_mps - sin * twist.vy_mps,
+        sin * twist.vx_mps + cos * twist.vy_mps,
+    ];
+    [pose.x_m, pose.y_m]
+        .into_iter()
+        .zip(velocity)
+        .any(|(p, v)| (p < margin && v < 0.0) || (p > area_size_m - margin && v > 0.0))
+}
+
+/// Distance from the body origin to the nearest edge of the area (negative
+/// outside).
+fn edge_distance(pose: &PlanarPose, area_size_m: f64) -> f64 {
+    [
+        pose.x_m,
+        pose.y_m,
+        area_size_m - pose.x_m,
+        area_size_m - pose.y_m,
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min)
+}
+
+fn wrap_angle(angle_rad: f64) -> f64 {
+    (angle_rad + PI).rem_euclid(TAU) - PI
+}
+
+fn random_sign<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    if rng.random::<bool>() { 1.0 } else { -1.0 }
+}
+
+fn uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * rng.random::<f64>()
+}
+
+fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(DatasetError::InvalidConfig {
+            field: field.to_owned(),
+            expected: expected.to_owned(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    const DT: f64 = 0.08;
+
+    /// Slip-free integration of a body twist over one step.
+    fn integrate(pose: PlanarPose, twist: &PlanarTwist) -> PlanarPose {
+        let mid_yaw = pose.yaw_rad + 0.5 * twist.wz_radps * DT;
+        let (sin, cos) = mid_yaw.sin_cos();
+        PlanarPose {
+            x_m: pose.x_m + (cos * twist.vx_mps - sin * twist.vy_mps) * DT,
+            y_m: pose.y_m + (sin * twist.vx_mps + cos * twist.vy_mps) * DT,
+            yaw_rad: pose.yaw_rad + twist.wz_radps * DT,
+        }
+    }
+
+    fn polyline_length(points: &[(f64, f64)]) -> f64 {
+        points
+            .windows(2)
+            .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+            .sum()
+    }
+
+    #[test]
+    fn feasible_twists_rotate_about_the_middle_axle_line() {
+        let arc = DriveCommand::ackermann(0.04, 0.8);
+        assert!((arc.twist.vx_mps / arc.twist.wz_radps - 0.8).abs() < 1e-12);
+        let point = DriveCommand::point_turn(0.1, 0.24);
+        assert!((point.twist.vx_mps - 0.024).abs() < 1e-12);
+        for command in [
+            arc,
+            point,
+            DriveCommand::turn_on_spot(0.1),
+            DriveCommand::straight(-0.04),
+        ] {
+            assert_eq!(command.twist.vy_mps, 0.0);
+        }
+    }
+
+    #[test]
+    fn test_traverse_is_about_42_m_long_and_crosses_the_middle() {
+        let points = test_traverse_waypoints(9.0);
+        assert!((polyline_length(&points) - 42.35).abs() < 0.1);
+        assert!(
+            points
+                .iter()
+                .all(|&(x, y)| (1.0..8.0).contains(&x) && (1.0..8.0).contains(&y))
+        );
+        let through_middle = points.windows(2).filter(|w| {
+            let (a, b) = (Vector2::new(w[0].0, w[0].1), Vector2::new(w[1].0, w[1].1));
+            let d = b - a;
+            let t = ((Vector2::repeat(4.5) - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+            (a + t * d - Vector2::repeat(4.5)).norm() < 0.5
+        });
+        assert!(through_middle.count() >= 3);
+        assert_eq!(test_traverse_waypoints(9.0), points);
+    }
+
+    #[test]
+    fn following_the_test_traverse_reaches_every_waypoint_and_travels_about_42_m() {
+        let points = test_traverse_waypoints(9.0);
+        let mut driver = Driver::follow(DriverParams::default(), &points).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let mut pose = test_traverse_start_pose(9.0);
+        let mut closest = vec![f64::INFINITY; points.len()];
+        let mut travelled = 0.0;
+        let mut steps = 0;
+        while !driver.done() && steps < 50_000 {
+            let command = driver.command(pose, steps as f64 * DT, &mut rng);
+            pose = integrate(pose, &command.twist);
+            travelled += command.twist.speed_mps() * DT;
+            for (c, &(x, y)) in closest.iter_mut().zip(&points) {
+                *c = c.min((pose.x_m - x).hypot(pose.y_m - y));
+            }
+            steps += 1;
+        }
+        assert!(driver.done(), "not done after {steps} steps");
+        assert!(closest.iter().all(|&c| c < 0.15), "{closest:?}");
+        assert!((travelled - 42.0).abs() < 3.0, "travelled {travelled}");
+        assert_eq!(driver.command(pose, 1e6, &mut rng), DriveCommand::STOP);
+    }
+
+    fn run_training(seed: u64, duration_secs: f64) -> (Vec<PlanarPose>, Vec<DriveCommand>) {
+        let mut driver = Driver::training(DriverParams::default(), 9.0).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut pose = PlanarPose {
+            x_m: 4.5,
+            y_m: 4.5,
+            yaw_rad: 0.3,
+        };
+        let steps = (duration_secs / DT) as usize;
+        let mut poses = Vec::with_capacity(steps);
+        let mut commands = Vec::with_capacity(steps);
+        for step in 0..steps {
+            let command = driver.command(pose, step as f64 * DT, &mut rng);
+            pose = integrate(pose, &command.twist);
+            poses.push(pose);
+            commands.push(command);
+        }
+        (poses, commands)
+    }
+
+    #[test]
+    fn training_driver_keeps_the_rover_inside_the_area() {
+        for seed in 0..4 {
+            let (poses, _) = run_training(seed, 1200.0);
+            let inside = |v: f64| (0.5..=8.5).contains(&v);
+            assert!(
+                poses.iter().all(|p| inside(p.x_m) && inside(p.y_m)),
+                "seed {seed}"
+            );
+        }
+    }
+
+    #[test]
+    fn training_driver_moves_about_seventy_percent_of_the_time() {
+        for seed in 0..4 {
+            let (_, commands) = run_training(seed, 3600.0);
+            let moving = commands.iter().filter(|c| c.kind.is_moving()).count() as f64
+                / commands.len() as f64;
+            assert!((0.6..=0.8).contains(&moving), "seed {seed}: {moving}");
+        }
+    }
+
+    #[test]
+    fn training_driver_uses_every_manoeuvre_with_feasible_twists() {
+        let (_, commands) = run_training(7, 3600.0);
+        for kind in [
+            ManoeuvreKind::Straight,
+            ManoeuvreKind::Ackermann,
+            ManoeuvreKind::TurnOnSpot,
+            ManoeuvreKind::PointTurn,
+            ManoeuvreKind::Stop,
+        ] {
+            assert!(
+                commands.iter().any(|c| c.kind == kind),
+                "{kind:?} never used"
+            );
+        }
+        for c in commands
+            .iter()
+            .filter(|c| c.kind == ManoeuvreKind::Ackermann)
+        {
+            assert!((c.twist.vx_mps / c.twist.wz_radps).abs() >= 0.6 - 1e-9);
+        }
+        assert!(
+            commands.iter().any(|c| c.twist.vx_mps < 0.0),
+            "never drove backward"
+        );
+    }
+
+    #[test]
+    fn training_driver_is_deterministic_given_the_seed() {
+        assert_eq!(run_training(3, 300.0), run_training(3, 300.0));
+    }
+
+    #[test]
+    fn stops_are_exactly_zero_twists() {
+        let (_, commands) = run_training(5, 600.0);
+        assert!(
+            commands
+                .iter()
+                .filter(|c| c.kind == ManoeuvreKind::Stop)
+                .all(|c| c.twist.is_zero())
+        );
+    }
+
+    #[test]
+    fn invalid_params_are_rejected_by_name() {
+        let params = DriverParams {
+            align_stop_rad: 0.5,
+            ..DriverParams::default()
+        };
+        let err = Driver::training(params, 9.0).unwrap_err();
+        assert!(
+            matches!(err, DatasetError::InvalidConfig { ref field, .. } if field == "align_stop_rad")
+        );
+        let err = Driver::training(DriverParams::default(), 4.0).unwrap_err();
+        assert!(
+            matches!(err, DatasetError::InvalidConfig { ref field, .. } if field == "area_size_m")
+        );
+        let err = Driver::follow(DriverParams::default(), &[]).unwrap_err();
+        assert!(
+            matches!(err, DatasetError::InvalidConfig { ref field, .. } if field == "waypoints")
+        );
+    }
+}

@@ -1,0 +1,210 @@
+//! Simulator settings and presets: the whole testbed (terrain, soils, slip,
+//! sensors, rover, runs) from one seed.
+//!
+//! The `exoter-prl` preset mimics the paper's experiments in ESA's Planetary
+//! Robotics Laboratory: a 9 × 9 m Mars-like area with slopes up to ~20°,
+//! several training runs covering all manoeuvres, and a held-out test
+//! traverse of ~42 m (the paper's: 42.35 m). The same seed gives bit-identical
+//! data: the terrain and soils draw from stream 0 of a ChaCha8 generator
+//! seeded with it, run `i` from stream `i + 1`.
+
+use gpodo_kinematics::RoverDescription;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::DatasetError;
+use crate::log::RoverLog;
+use crate::sim::manoeuvre::{
+    Driver, DriverParams, PlanarPose, test_traverse_start_pose, test_traverse_waypoints,
+};
+use crate::sim::rover::World;
+use crate::sim::sensors::SensorNoise;
+use crate::sim::slip::SlipParams;
+use crate::sim::soil::{SoilMap, SoilMapSpec};
+use crate::sim::terrain::{Terrain, TerrainSpec};
+
+/// Named simulator presets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// The paper's testbed: 4 training runs of 10 min and the 42 m test
+    /// traverse.
+    ExoterPrl,
+}
+
+impl std::str::FromStr for Preset {
+    type Err = DatasetError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "exoter-prl" => Ok(Self::ExoterPrl),
+            other => Err(DatasetError::InvalidConfig {
+                field: "preset".into(),
+                expected: format!("one of exoter-prl, found `{other}`"),
+            }),
+        }
+    }
+}
+
+/// Everything the simulator needs; `SimulatorConfig::preset` fills it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimulatorConfig {
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Number of training runs. Default 4.
+    pub training_runs: usize,
+    /// Duration of each training run (s). Default 600.
+    pub training_run_secs: f64,
+    /// Longest the test traverse may take (s). Default 2400.
+    pub test_max_secs: f64,
+    /// Sensor period (s). Default 0.08 (12.5 Hz, as ExoTeR).
+    pub dt_secs: f64,
+    /// Native camera rate (Hz). Default 10.
+    pub camera_rate_hz: f64,
+    /// Steering joint speed limit (rad/s). Default 0.4.
+    pub steering_rate_radps: f64,
+    /// Terrain.
+    pub terrain: TerrainSpec,
+    /// Soils.
+    pub soils: SoilMapSpec,
+    /// Slip model.
+    pub slip: SlipParams,
+    /// Driver.
+    pub driver: DriverParams,
+    /// Sensor noise.
+    pub sensors: SensorNoise,
+}
+
+impl Default for SimulatorConfig {
+    fn default() -> Self {
+        Self::preset(Preset::ExoterPrl, 0)
+    }
+}
+
+/// The simulated testbed and its runs.
+#[derive(Debug, Clone)]
+pub struct SimulatedTestbed {
+    /// The rover that drove.
+    pub description: RoverDescription,
+    /// The ground.
+    pub terrain: Terrain,
+    /// The soils.
+    pub soils: SoilMap,
+    /// Training runs.
+    pub train: Vec<RoverLog>,
+    /// Held-out test runs (the test traverse).
+    pub test: Vec<RoverLog>,
+}
+
+impl SimulatorConfig {
+    /// The settings of a preset with a seed.
+    pub fn preset(preset: Preset, seed: u64) -> Self {
+        match preset {
+            Preset::ExoterPrl => Self {
+                seed,
+                training_runs: 4,
+                training_run_secs: 600.0,
+                test_max_secs: 2400.0,
+                dt_secs: 0.08,
+                camera_rate_hz: 10.0,
+                steering_rate_radps: 0.4,
+                terrain: TerrainSpec::default(),
+                soils: SoilMapSpec::default(),
+                slip: SlipParams::default(),
+                driver: DriverParams::default(),
+                sensors: SensorNoise::default(),
+            },
+        }
+    }
+
+    /// Checks every field, naming the first bad one.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`].
+    pub fn validate(&self) -> Result<(), DatasetError> {
+        let bad = |field: &str, expected: &str| {
+            Err(DatasetError::InvalidConfig {
+                field: field.into(),
+                expected: expected.into(),
+            })
+        };
+        if !(self.training_run_secs.is_finite() && self.training_run_secs > 0.0) {
+            return bad("training_run_secs", "a positive duration in seconds");
+        }
+        if !(self.test_max_secs.is_finite() && self.test_max_secs > 0.0) {
+            return bad("test_max_secs", "a positive duration in seconds");
+        }
+        if !(self.dt_secs.is_finite() && self.dt_secs > 0.0 && self.dt_secs <= 1.0) {
+            return bad("dt_secs", "a sensor period in (0, 1] s");
+        }
+        if !(self.camera_rate_hz.is_finite() && self.camera_rate_hz > 0.0) {
+            return bad("camera_rate_hz", "a positive rate in Hz");
+        }
+        if !(self.steering_rate_radps.is_finite() && self.steering_rate_radps > 0.0) {
+            return bad("steering_rate_radps", "a positive rate in rad/s");
+        }
+        self.terrain.validate()?;
+        self.soils.validate()?;
+        self.slip.validate()?;
+        self.driver.validate()?;
+        Ok(())
+    }
+
+    fn rng(&self, stream: u64) -> ChaCha8Rng {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(stream);
+        rng
+    }
+
+    /// Generates the testbed and drives every run.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] for bad settings,
+    /// [`DatasetError::Simulation`] if a run fails.
+    pub fn simulate(&self) -> Result<SimulatedTestbed, DatasetError> {
+        self.validate()?;
+        let description = RoverDescription::exoter();
+        let mut rng = self.rng(0);
+        let terrain = Terrain::generate(&self.terrain, &mut rng)?;
+        let soils = SoilMap::generate(&self.soils, self.terrain.size_m, &mut rng)?;
+        let slip = self.slip.clone().check()?;
+        let world = World {
+            description: &description,
+            terrain: &terrain,
+            soils: &soils,
+            slip: &slip,
+            noise: self.sensors,
+            dt_secs: self.dt_secs,
+            camera_rate_hz: self.camera_rate_hz,
+            steering_rate_radps: self.steering_rate_radps,
+        };
+        let size = self.terrain.size_m;
+        let mut train = Vec::with_capacity(self.training_runs);
+        for i in 0..self.training_runs {
+            let mut rng = self.rng(i as u64 + 1);
+            let margin = (self.driver.edge_margin_m + 0.5).min(size / 2.0);
+            let start = PlanarPose {
+                x_m: rand::Rng::random_range(&mut rng, margin..size - margin),
+                y_m: rand::Rng::random_range(&mut rng, margin..size - margin),
+                yaw_rad: rand::Rng::random_range(&mut rng, -std::f64::consts::PI..std::f64::consts::PI),
+            };
+            let mut driver = Driver::training(self.driver.clone(), size)?;
+            let name = format!("train_{:02}", i + 1);
+            train.push(world.run(&name, &mut driver, start, self.training_run_secs, &mut rng)?);
+        }
+        let mut rng = self.rng(self.training_runs as u64 + 1);
+        let waypoints = test_traverse_waypoints(size);
+        let mut driver = Driver::follow(self.driver.clone(), &waypoints)?;
+        let start = test_traverse_start_pose(size);
+        let test = vec![world.run("test", &mut driver, start, self.test_max_secs, &mut rng)?];
+        Ok(SimulatedTestbed {
+            description,
+            terrain,
+            soils,
+            train,
+            test,
+        })
+    }
+}

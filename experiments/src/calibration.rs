@@ -1,0 +1,126 @@
+//! Statistics of a residual table that say whether a simulated testbed
+//! behaves like the real rover (see `shared/data/README.md`): residual
+//! magnitudes per axis, how much of the time the rover moves, slip relative
+//! to wheel speed, and how residuals grow with slope. The same function is
+//! applied to the simulated and to the real table, so the comparison is like
+//! for like (1-s means, absolute values).
+
+use gpodo_traits::ResidualDataset;
+use serde::{Deserialize, Serialize};
+
+/// Rows whose mean wheel speed is below this count as standing (m/s).
+pub const MOVING_THRESHOLD_MPS: f64 = 0.005;
+
+/// Residual statistics of one table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualStatistics {
+    /// Rows.
+    pub n_rows: usize,
+    /// Mean |residual| per target (target units).
+    pub mean_abs: Vec<f64>,
+    /// 95th percentile of |residual| per target.
+    pub p95_abs: Vec<f64>,
+    /// Fraction of rows in which the rover moves.
+    pub moving_fraction: Option<f64>,
+    /// Mean wheel translational speed over moving rows (m/s).
+    pub mean_wheel_speed_moving_mps: Option<f64>,
+    /// Median over moving rows of |residual_x| / wheel speed.
+    pub median_slip_ratio_x: Option<f64>,
+    /// Pearson correlation of |residual_x| with |pitch|.
+    pub corr_abs_x_abs_pitch: Option<f64>,
+    /// Pearson correlation of |residual_x| with |roll|.
+    pub corr_abs_x_abs_roll: Option<f64>,
+}
+
+/// Linear-interpolation percentile (numpy's default) of unsorted values.
+pub fn percentile(values: &[f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let pos = q / 100.0 * (v.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+}
+
+fn pearson(a: &[f64], b: &[f64]) -> Option<f64> {
+    let n = a.len() as f64;
+    if a.len() < 2 {
+        return None;
+    }
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
+    (va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+}
+
+/// Computes the statistics; the slope and speed figures need columns named
+/// `pitch`, `roll` and `*_transl` (wheel speeds), as in the authors' table
+/// and gpodo's residual datasets.
+pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
+    let o = data.targets.ncols();
+    let abs_col = |j: usize| -> Vec<f64> { data.targets.column(j).iter().map(|v| v.abs()).collect() };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mean_abs = (0..o).map(|j| mean(&abs_col(j))).collect();
+    let p95_abs = (0..o).map(|j| percentile(&abs_col(j), 95.0)).collect();
+
+    let index = |name: &str| data.input_names.iter().position(|n| n == name);
+    let wheel_cols: Vec<usize> = data
+        .input_names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.ends_with("_transl"))
+        .map(|(i, _)| i)
+        .collect();
+    let speed: Option<Vec<f64>> = (!wheel_cols.is_empty()).then(|| {
+        data.inputs
+            .rows()
+            .map(|r| wheel_cols.iter().map(|&c| r[c].abs()).sum::<f64>() / wheel_cols.len() as f64)
+            .collect()
+    });
+    let res_x = if o > 0 { abs_col(0) } else { Vec::new() };
+    let moving: Option<Vec<usize>> = speed.as_ref().map(|s| {
+        (0..s.len()).filter(|&i| s[i] > MOVING_THRESHOLD_MPS).collect()
+    });
+    let abs_input = |name: &str| {
+        index(name).map(|c| data.inputs.column(c).iter().map(|v| v.abs()).collect::<Vec<f64>>())
+    };
+    ResidualStatistics {
+        n_rows: data.len(),
+        mean_abs,
+        p95_abs,
+        moving_fraction: moving
+            .as_ref()
+            .map(|m| m.len() as f64 / data.len().max(1) as f64),
+        mean_wheel_speed_moving_mps: speed
+            .as_ref()
+            .zip(moving.as_ref())
+            .map(|(s, m)| m.iter().map(|&i| s[i]).sum::<f64>() / m.len().max(1) as f64),
+        median_slip_ratio_x: speed.as_ref().zip(moving.as_ref()).and_then(|(s, m)| {
+            let ratios: Vec<f64> = m.iter().map(|&i| res_x[i] / s[i]).collect();
+            (!ratios.is_empty()).then(|| percentile(&ratios, 50.0))
+        }),
+        corr_abs_x_abs_pitch: abs_input("pitch").and_then(|p| pearson(&res_x, &p)),
+        corr_abs_x_abs_roll: abs_input("roll").and_then(|r| pearson(&res_x, &r)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentile_interpolates_like_numpy() {
+        let v = [4.0, 1.0, 3.0, 2.0];
+        assert_eq!(percentile(&v, 50.0), 2.5);
+        assert!((percentile(&v, 95.0) - 3.85).abs() < 1e-12);
+    }
+
+    #[test]
+    fn pearson_of_proportional_series_is_one() {
+        assert!((pearson(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0]).unwrap() - 1.0).abs() < 1e-15);
+        assert!(pearson(&[1.0, 1.0], &[2.0, 3.0]).is_none());
+    }
+}

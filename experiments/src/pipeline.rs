@@ -1,0 +1,341 @@
+//! Runs one experiment: data → motion model → residual dataset →
+//! regressors → evaluation on the held-out runs.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use gpodo_datasets::log::{RoverLog, read_log_csv};
+use gpodo_datasets::residuals::residual_dataset;
+use gpodo_datasets::sim::preset::SimulatorConfig;
+use gpodo_datasets::standardize::Standardizer;
+use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
+use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
+use gpodo_regressors::metrics::{Evaluation, evaluate};
+use gpodo_traits::{FitReport, MotionModel, ResidualDataset};
+use serde::{Deserialize, Serialize};
+
+use crate::calibration::{ResidualStatistics, residual_statistics};
+use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};
+use crate::odometry::{DeadReckoning, dead_reckoning};
+
+/// A run's length and duration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Run name.
+    pub name: String,
+    /// Sensor samples.
+    pub samples: usize,
+    /// Duration (s).
+    pub duration_secs: f64,
+    /// Ground-truth path length (m).
+    pub path_length_m: f64,
+}
+
+/// What the data were.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DatasetSummary {
+    /// Human-readable source.
+    pub source: String,
+    /// Training runs (empty for residual tables).
+    pub train_runs: Vec<RunSummary>,
+    /// Test runs (empty for residual tables).
+    pub test_runs: Vec<RunSummary>,
+    /// Training rows.
+    pub n_train: usize,
+    /// Test rows.
+    pub n_test: usize,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Target column names.
+    pub target_names: Vec<String>,
+    /// Steepest slope of a simulated terrain (deg).
+    pub terrain_max_slope_deg: Option<f64>,
+}
+
+/// One regressor's outcome.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RegressorResult {
+    /// Label for tables.
+    pub label: String,
+    /// Its specification.
+    pub spec: gpodo_regressors::RegressorSpec,
+    /// What the fit did.
+    pub fit: FitReport,
+    /// Scores on the test rows.
+    pub evaluation: Evaluation,
+}
+
+/// Everything an experiment produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExperimentResults {
+    /// The resolved configuration.
+    pub config: ExperimentConfig,
+    /// `git describe` of the code, or the crate version.
+    pub code_version: String,
+    /// The data.
+    pub dataset: DatasetSummary,
+    /// The motion model's name (none for residual tables).
+    pub motion_model: Option<String>,
+    /// Dead reckoning with the motion model on each test run.
+    pub dead_reckoning: Vec<(String, DeadReckoning)>,
+    /// Residual statistics of the training and test rows.
+    pub train_statistics: ResidualStatistics,
+    /// Residual statistics of the test rows.
+    pub test_statistics: ResidualStatistics,
+    /// The same statistics of a reference table, when one was given.
+    pub reference_statistics: Option<(String, ResidualStatistics)>,
+    /// One entry per regressor, in config order.
+    pub regressors: Vec<RegressorResult>,
+    /// Wall-clock duration of the whole experiment (s).
+    pub duration_secs: f64,
+}
+
+/// Why an experiment failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// Reading or simulating data failed.
+    #[error(transparent)]
+    Dataset(#[from] gpodo_datasets::DatasetError),
+    /// The rover description or motion model is invalid.
+    #[error(transparent)]
+    Kinematics(#[from] gpodo_kinematics::KinematicsError),
+    /// A regressor failed.
+    #[error("regressor `{label}`: {source}")]
+    Regressor {
+        /// The regressor.
+        label: String,
+        /// What failed.
+        source: gpodo_traits::Error,
+    },
+    /// Building or scoring a regressor failed.
+    #[error(transparent)]
+    Spec(#[from] gpodo_regressors::RegressorError),
+    /// A model failed on a sample.
+    #[error(transparent)]
+    Model(#[from] gpodo_traits::Error),
+}
+
+fn resolve(base: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() { p.to_path_buf() } else { base.join(p) }
+}
+
+fn summarize(log: &RoverLog) -> RunSummary {
+    RunSummary {
+        name: log.name.clone(),
+        samples: log.samples.len(),
+        duration_secs: log.duration_secs(),
+        path_length_m: log.path_length_m(),
+    }
+}
+
+/// The code version: `git describe --always --dirty` when available.
+pub fn code_version() -> String {
+    std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .unwrap_or_else(|| env!("CARGO_PKG_VERSION").to_string())
+}
+
+fn motion_model(spec: &MotionModelSpec, base: &Path) -> Result<(Box<dyn MotionModel>, f64), PipelineError> {
+    let load = |rover: &Option<PathBuf>| match rover {
+        Some(p) => RoverDescription::from_path(&resolve(base, p)),
+        None => Ok(RoverDescription::exoter()),
+    };
+    Ok(match spec {
+        MotionModelSpec::WeightedJacobian { rover, config } => {
+            let d = load(rover)?;
+            let r = d.wheel_radius_m;
+            (Box::new(WeightedJacobianModel::new(d, *config)?), r)
+        }
+        MotionModelSpec::SkidSteer { rover, yaw } => {
+            let d = load(rover)?;
+            let r = d.wheel_radius_m;
+            (Box::new(SkidSteerModel::from_description(&d, *yaw)?), r)
+        }
+    })
+}
+
+/// Train/test rows plus what the report says about where they came from.
+struct PreparedData {
+    train: ResidualDataset,
+    test: ResidualDataset,
+    summary: DatasetSummary,
+    motion_model: Option<String>,
+    dead_reckoning: Vec<(String, DeadReckoning)>,
+}
+
+fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
+    logs.iter().collect()
+}
+
+fn from_logs(
+    config: &ExperimentConfig,
+    base: &Path,
+    train_logs: &[RoverLog],
+    test_logs: &[RoverLog],
+    source: String,
+    terrain_max_slope_deg: Option<f64>,
+) -> Result<PreparedData, PipelineError> {
+    let (model, radius) = motion_model(&config.motion_model, base)?;
+    let train = residual_dataset(&refs(train_logs), model.as_ref(), radius, &config.residuals)?;
+    let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
+    let dead_reckoning = test_logs
+        .iter()
+        .map(|log| Ok((log.name.clone(), dead_reckoning(log, model.as_ref())?)))
+        .collect::<Result<_, PipelineError>>()?;
+    Ok(PreparedData {
+        summary: DatasetSummary {
+            source,
+            train_runs: train_logs.iter().map(summarize).collect(),
+            test_runs: test_logs.iter().map(summarize).collect(),
+            n_train: train.len(),
+            n_test: test.len(),
+            input_names: train.input_names.clone(),
+            target_names: train.target_names.clone(),
+            terrain_max_slope_deg,
+        },
+        train,
+        test,
+        motion_model: Some(model.name().to_string()),
+        dead_reckoning,
+    })
+}
+
+fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, PipelineError> {
+    match &config.dataset {
+        DatasetSpec::Simulated {
+            preset,
+            seed,
+            training_runs,
+            training_run_secs,
+        } => {
+            let mut sim = SimulatorConfig::preset(*preset, *seed);
+            if let Some(n) = training_runs {
+                sim.training_runs = *n;
+            }
+            if let Some(s) = training_run_secs {
+                sim.training_run_secs = *s;
+            }
+            tracing::info!(seed, "simulating the testbed");
+            let testbed = sim.simulate()?;
+            let source = format!("simulated {preset:?} testbed, seed {seed}");
+            from_logs(
+                config,
+                base,
+                &testbed.train,
+                &testbed.test,
+                source,
+                Some(testbed.terrain.max_slope_deg()),
+            )
+        }
+        DatasetSpec::Logs { train, test } => {
+            let read = |paths: &[PathBuf]| {
+                paths
+                    .iter()
+                    .map(|p| read_log_csv(&resolve(base, p)))
+                    .collect::<Result<Vec<_>, _>>()
+            };
+            let (train, test) = (read(train)?, read(test)?);
+            from_logs(config, base, &train, &test, "rover logs".into(), None)
+        }
+        DatasetSpec::ResidualTable {
+            path,
+            inputs,
+            targets,
+            train_fraction,
+        } => {
+            let spec = TableSpec {
+                inputs: inputs.clone(),
+                targets: targets.clone(),
+            };
+            let data = read_residual_table(&resolve(base, path), &spec)?;
+            let (train, test) = split_fraction(&data, *train_fraction)?;
+            Ok(PreparedData {
+                summary: DatasetSummary {
+                    source: format!("residual table {}", path.display()),
+                    train_runs: Vec::new(),
+                    test_runs: Vec::new(),
+                    n_train: train.len(),
+                    n_test: test.len(),
+                    input_names: train.input_names.clone(),
+                    target_names: train.target_names.clone(),
+                    terrain_max_slope_deg: None,
+                },
+                train,
+                test,
+                motion_model: None,
+                dead_reckoning: Vec::new(),
+            })
+        }
+    }
+}
+
+fn reference_statistics(
+    config: &ExperimentConfig,
+    base: &Path,
+) -> Option<(String, ResidualStatistics)> {
+    let reference = config.compare_with.as_ref()?;
+    let path = resolve(base, &reference.path);
+    let spec = TableSpec {
+        inputs: None,
+        targets: reference.targets.clone(),
+    };
+    match read_residual_table(&path, &spec) {
+        Ok(table) => Some((reference.path.display().to_string(), residual_statistics(&table))),
+        Err(e) => {
+            tracing::warn!("reference table not used: {e}");
+            None
+        }
+    }
+}
+
+/// Runs `config`; relative paths are resolved against `base` (the
+/// experiment file's folder).
+///
+/// # Errors
+/// [`PipelineError`] saying which stage failed.
+pub fn run_experiment(config: &ExperimentConfig, base: &Path) -> Result<ExperimentResults, PipelineError> {
+    let start = Instant::now();
+    let data = prepare(config, base)?;
+    let scaler = Standardizer::fit(&data.train.inputs)?;
+    let mut train = data.train.clone();
+    train.inputs = scaler.transform(&data.train.inputs)?;
+    let mut test = data.test.clone();
+    test.inputs = scaler.transform(&data.test.inputs)?;
+
+    let mut regressors = Vec::with_capacity(config.regressors.len());
+    for spec in &config.regressors {
+        let label = spec.label();
+        tracing::info!(regressor = %label, n = train.len(), "fitting");
+        let mut model = spec.build()?;
+        let wrap = |source| PipelineError::Regressor {
+            label: label.clone(),
+            source,
+        };
+        let fit = model.fit(&train).map_err(wrap)?;
+        let predictions = model.predict(&test.inputs).map_err(wrap)?;
+        let evaluation = evaluate(&predictions, &test.targets)?;
+        regressors.push(RegressorResult {
+            label,
+            spec: spec.clone(),
+            fit,
+            evaluation,
+        });
+    }
+    Ok(ExperimentResults {
+        config: config.clone(),
+        code_version: code_version(),
+        train_statistics: residual_statistics(&data.train),
+        test_statistics: residual_statistics(&data.test),
+        reference_statistics: reference_statistics(config, base),
+        dataset: data.summary,
+        motion_model: data.motion_model,
+        dead_reckoning: data.dead_reckoning,
+        regressors,
+        duration_secs: start.elapsed().as_secs_f64(),
+    })
+}
