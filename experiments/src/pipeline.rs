@@ -88,6 +88,13 @@ pub struct ExperimentResults {
     pub regressors: Vec<RegressorResult>,
     /// Wall-clock duration of the whole experiment (s).
     pub duration_secs: f64,
+    /// The training rows (physical units), written as a CSV beside the
+    /// report.
+    #[serde(skip)]
+    pub train_rows: Option<ResidualDataset>,
+    /// The test rows (physical units).
+    #[serde(skip)]
+    pub test_rows: Option<ResidualDataset>,
 }
 
 /// Why an experiment failed.
@@ -337,5 +344,7 @@ pub fn run_experiment(config: &ExperimentConfig, base: &Path) -> Result<Experime
         dead_reckoning: data.dead_reckoning,
         regressors,
         duration_secs: start.elapsed().as_secs_f64(),
+        train_rows: Some(data.train),
+        test_rows: Some(data.test),
     })
 }

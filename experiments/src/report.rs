@@ -33,7 +33,29 @@ pub fn write_report(results: &ExperimentResults, dir: &Path) -> anyhow::Result<(
     let json = dir.join("metrics.json");
     write_atomically(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
     write_atomically(&md, markdown(results).as_bytes())?;
+    for (name, rows) in [("residuals_train.csv", &results.train_rows), ("residuals_test.csv", &results.test_rows)] {
+        if let Some(rows) = rows {
+            write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
+        }
+    }
     Ok((md, json))
+}
+
+/// A residual dataset as CSV: input columns, then target columns, full
+/// precision (the format `kind: residual_table` reads back).
+pub fn residual_csv(data: &gpodo_traits::ResidualDataset) -> String {
+    let mut s = data.input_names.join(",");
+    for t in &data.target_names {
+        s.push(',');
+        s.push_str(t);
+    }
+    s.push('\n');
+    for (x, y) in data.inputs.rows().zip(data.targets.rows()) {
+        let cells: Vec<String> = x.iter().chain(y).map(|v| v.to_string()).collect();
+        s.push_str(&cells.join(","));
+        s.push('\n');
+    }
+    s
 }
 
 fn mm(v: f64) -> String {

@@ -110,11 +110,21 @@ impl SimulatorConfig {
                 dt_secs: 0.08,
                 camera_rate_hz: 10.0,
                 steering_rate_radps: 0.4,
-                terrain: TerrainSpec::default(),
+                terrain: TerrainSpec {
+                    max_slope_deg: 24.0,
+                    roughness_m: 0.006,
+                    ..TerrainSpec::default()
+                },
                 soils: SoilMapSpec::default(),
                 slip: SlipParams::default(),
-                driver: DriverParams::default(),
-                sensors: SensorNoise::default(),
+                driver: DriverParams {
+                    stop_time_fraction: 0.25,
+                    ..DriverParams::default()
+                },
+                sensors: SensorNoise {
+                    mocap_jitter_m: 5e-4,
+                    ..SensorNoise::default()
+                },
             },
         }
     }
