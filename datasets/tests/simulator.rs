@@ -56,6 +56,8 @@ fn no_slip_run(terrain: &Terrain, secs: f64) -> RoverLog {
         dt_secs: 0.08,
         camera_rate_hz: 10.0,
         steering_rate_radps: 0.4,
+        sinkage_m: 0.0,
+        sinkage_length_m: 0.1,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let mut driver = Driver::training(DriverParams::default(), terrain.size_m()).unwrap();

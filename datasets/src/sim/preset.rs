@@ -65,6 +65,10 @@ pub struct SimulatorConfig {
     pub camera_rate_hz: f64,
     /// Steering joint speed limit (rad/s). Default 0.4.
     pub steering_rate_radps: f64,
+    /// Std of the wheel sinkage fluctuation in soft ground (m). Default 0.002.
+    pub sinkage_m: f64,
+    /// Distance over which the sinkage decorrelates (m). Default 0.1.
+    pub sinkage_length_m: f64,
     /// Terrain.
     pub terrain: TerrainSpec,
     /// Soils.
@@ -110,15 +114,18 @@ impl SimulatorConfig {
                 dt_secs: 0.08,
                 camera_rate_hz: 10.0,
                 steering_rate_radps: 0.4,
+                sinkage_m: 0.002,
+                sinkage_length_m: 0.1,
                 terrain: TerrainSpec {
                     max_slope_deg: 24.0,
-                    roughness_m: 0.006,
+                    roughness_m: 0.008,
                     ..TerrainSpec::default()
                 },
                 soils: SoilMapSpec::default(),
                 slip: SlipParams::default(),
                 driver: DriverParams {
                     stop_time_fraction: 0.25,
+                    speed_mps: 0.037,
                     ..DriverParams::default()
                 },
                 sensors: SensorNoise {
@@ -189,6 +196,8 @@ impl SimulatorConfig {
             dt_secs: self.dt_secs,
             camera_rate_hz: self.camera_rate_hz,
             steering_rate_radps: self.steering_rate_radps,
+            sinkage_m: self.sinkage_m,
+            sinkage_length_m: self.sinkage_length_m,
         };
         let size = self.terrain.size_m;
         let mut train = Vec::with_capacity(self.training_runs);

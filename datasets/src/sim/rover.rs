@@ -25,6 +25,7 @@ use rand::Rng;
 use crate::DatasetError;
 use crate::log::RoverLog;
 use crate::sim::chassis::{ChassisSolver, Placement};
+use crate::sim::noise::OrnsteinUhlenbeck;
 use crate::sim::manoeuvre::{DriveCommand, Driver, ManoeuvreKind, PlanarPose, PlanarTwist};
 use crate::sim::sensors::{SensorErrors, SensorNoise, normal};
 use crate::sim::slip::{SlipInput, SlipModel, SlipNoiseProcess};
@@ -53,11 +54,17 @@ pub struct World<'a> {
     pub camera_rate_hz: f64,
     /// Steering joint speed limit (rad/s).
     pub steering_rate_radps: f64,
+    /// Wheel sinkage in soft ground: the body height fluctuates by this
+    /// much (m, stationary std) as the rover drives, which no joint senses.
+    pub sinkage_m: f64,
+    /// Distance over which the sinkage decorrelates (m).
+    pub sinkage_length_m: f64,
 }
 
 /// State carried from step to step.
 struct RoverState {
     pose: PlanarPose,
+    sinkage: OrnsteinUhlenbeck,
     placement: Placement,
     steer: [f64; 6],
     wheel_angle: [f64; 6],
@@ -176,6 +183,7 @@ impl World<'_> {
         let placement = self.place(&solver, &start, &steer0, &guess)?;
         let mut state = RoverState {
             pose: start,
+            sinkage: OrnsteinUhlenbeck::new_stationary(self.sinkage_m, self.sinkage_length_m, rng)?,
             placement,
             steer: steer0,
             wheel_angle: [0.0; 6],
@@ -229,7 +237,12 @@ impl World<'_> {
         rng: &mut R,
     ) -> Result<(ProprioceptiveSample, Isometry3<f64>, RoverState), DatasetError> {
         let dt = self.dt_secs;
-        let body_k = state.placement.world_from_body;
+        let sunk = |body: &Isometry3<f64>, sinkage_m: f64| {
+            let mut body = *body;
+            body.translation.vector.z -= sinkage_m;
+            body
+        };
+        let body_k = sunk(&state.placement.world_from_body, state.sinkage.value());
 
         // 1. Steer first; drive only once the wheels point the right way.
         let target = steering_for(chains, &command.twist, &state.steer);
@@ -273,7 +286,11 @@ impl World<'_> {
             yaw_rad: state.pose.yaw_rad + actual.wz_radps * roll.cos() / pitch.cos() * dt,
         };
         let placement = self.place(solver, &pose, &steer, &state.placement.suspension)?;
-        let body_next = placement.world_from_body;
+        // The sinkage process advances with distance travelled, not time:
+        // a standing rover does not sink further.
+        let mut sinkage = state.sinkage.clone();
+        sinkage.step(actual.speed_mps() * dt, rng);
+        let body_next = sunk(&placement.world_from_body, sinkage.value());
 
         // 4. Sensors.
         let v_true = body_k.rotation.inverse() * (body_next.translation.vector - body_k.translation.vector) / dt;
@@ -343,6 +360,7 @@ impl World<'_> {
             truth,
             RoverState {
                 pose,
+                sinkage,
                 placement,
                 steer,
                 wheel_angle,
