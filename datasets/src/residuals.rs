@@ -64,8 +64,8 @@ impl ResidualConfig {
     }
 }
 
-/// The input column names for a log's joints, in the order of
-/// [`step_features`].
+/// The input column names for a log's joints, in the order the rows hold
+/// them.
 pub fn feature_names(log: &RoverLog) -> Vec<String> {
     let mut names = vec!["roll".to_string(), "pitch".to_string()];
     names.extend(log.bogie_names.iter().map(|b| format!("pos_{b}_passive")));
@@ -99,67 +99,70 @@ pub fn true_body_velocity(log: &RoverLog, k: usize) -> Vector3<f64> {
     a.rotation.inverse() * (b.translation.vector - a.translation.vector) / dt
 }
 
-/// Per-step rows of one log: time, inputs, targets.
+/// One step of a log: its time, inputs and residual.
+struct StepRow {
+    time_secs: f64,
+    inputs: Vec<f64>,
+    residual: Vector3<f64>,
+}
+
+/// Per-step rows of one log.
 fn step_rows(
     log: &RoverLog,
     model: &dyn MotionModel,
     wheel_radius_m: f64,
-) -> Result<Vec<(f64, Vec<f64>, Vector3<f64>)>, DatasetError> {
+) -> Result<Vec<StepRow>, DatasetError> {
     let n = log.samples.len();
     let mut rows = Vec::with_capacity(n.saturating_sub(1));
     for k in 0..n.saturating_sub(1) {
         let dt = log.samples[k + 1].time_secs - log.samples[k].time_secs;
         let estimate = model.estimate(&log.samples[k], dt)?;
         let residual = true_body_velocity(log, k) - estimate.twist.linear_mps;
-        rows.push((
-            log.samples[k].time_secs,
-            step_features(log, k, wheel_radius_m),
+        rows.push(StepRow {
+            time_secs: log.samples[k].time_secs,
+            inputs: step_features(log, k, wheel_radius_m),
             residual,
-        ));
+        });
     }
     Ok(rows)
 }
 
 /// Averages consecutive rows over windows of `window_secs`, dropping a
 /// trailing window shorter than half its length.
-fn windowed(
-    rows: Vec<(f64, Vec<f64>, Vector3<f64>)>,
-    window_secs: f64,
-) -> Vec<(Vec<f64>, Vector3<f64>)> {
-    let Some(t0) = rows.first().map(|r| r.0) else {
+fn windowed(rows: Vec<StepRow>, window_secs: f64) -> Vec<(Vec<f64>, Vector3<f64>)> {
+    let Some(t0) = rows.first().map(|r| r.time_secs) else {
         return Vec::new();
     };
     let mut out = Vec::new();
-    let mut group: Vec<&(f64, Vec<f64>, Vector3<f64>)> = Vec::new();
-    let flush =
-        |group: &mut Vec<&(f64, Vec<f64>, Vector3<f64>)>, out: &mut Vec<_>, complete: bool| {
-            if group.is_empty() {
-                return;
-            }
-            let span = group[group.len() - 1].0 - group[0].0;
-            let step = if group.len() > 1 {
-                span / (group.len() - 1) as f64
-            } else {
-                0.0
-            };
-            if complete || span + step >= 0.5 * window_secs {
-                let n = group.len() as f64;
-                let d = group[0].1.len();
-                let mut x = vec![0.0; d];
-                let mut y = Vector3::zeros();
-                for r in group.iter() {
-                    for (acc, v) in x.iter_mut().zip(&r.1) {
-                        *acc += v / n;
-                    }
-                    y += r.2 / n;
-                }
-                out.push((x, y));
-            }
-            group.clear();
+    let mut group: Vec<&StepRow> = Vec::new();
+    let flush = |group: &mut Vec<&StepRow>, out: &mut Vec<_>, complete: bool| {
+        if group.is_empty() {
+            return;
+        }
+        let span = group[group.len() - 1].time_secs - group[0].time_secs;
+        let step = if group.len() > 1 {
+            span / (group.len() - 1) as f64
+        } else {
+            0.0
         };
+        if complete || span + step >= 0.5 * window_secs {
+            let n = group.len() as f64;
+            let d = group[0].inputs.len();
+            let mut x = vec![0.0; d];
+            let mut y = Vector3::zeros();
+            for r in group.iter() {
+                for (acc, v) in x.iter_mut().zip(&r.inputs) {
+                    *acc += v / n;
+                }
+                y += r.residual / n;
+            }
+            out.push((x, y));
+        }
+        group.clear();
+    };
     let mut current = 0u64;
     for row in &rows {
-        let w = ((row.0 - t0) / window_secs).floor() as u64;
+        let w = ((row.time_secs - t0) / window_secs).floor() as u64;
         if w != current {
             flush(&mut group, &mut out, true);
             current = w;
@@ -201,7 +204,7 @@ pub fn residual_dataset(
         let rows = step_rows(log, model, wheel_radius_m)?;
         let rows: Vec<(Vec<f64>, Vector3<f64>)> = match config.window_secs {
             Some(w) => windowed(rows, w),
-            None => rows.into_iter().map(|(_, x, y)| (x, y)).collect(),
+            None => rows.into_iter().map(|r| (r.inputs, r.residual)).collect(),
         };
         for (x, y) in rows {
             inputs.extend(x);
@@ -222,10 +225,14 @@ pub fn residual_dataset(
 mod tests {
     use super::*;
 
-    fn rows(times: &[f64]) -> Vec<(f64, Vec<f64>, Vector3<f64>)> {
+    fn rows(times: &[f64]) -> Vec<StepRow> {
         times
             .iter()
-            .map(|&t| (t, vec![t], Vector3::new(t, 2.0 * t, 0.0)))
+            .map(|&t| StepRow {
+                time_secs: t,
+                inputs: vec![t],
+                residual: Vector3::new(t, 2.0 * t, 0.0),
+            })
             .collect()
     }
 
@@ -238,7 +245,7 @@ mod tests {
         assert_eq!(out.len(), 3);
         assert!((out[0].0[0] - 0.375).abs() < 1e-15);
         assert!((out[1].1.y - 2.0 * 1.375).abs() < 1e-15);
-        let out = windowed(rows(&times[..10]), 1.0); // tail 2.0, 2.25 only
+        let out = windowed(rows(&times[..9]), 1.0); // tail 2.0 only
         assert_eq!(out.len(), 2);
     }
 

@@ -2,6 +2,9 @@
 //! README) and checks the figures the README states. The file is part of the
 //! repository's contract: if it is missing, this test fails.
 
+// Tests panic on failure by design.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::path::Path;
 
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction, summarize_abs};

@@ -2,6 +2,9 @@
 //! the residual is only what the model cannot represent (terrain curvature,
 //! unknown contact angles), and the same seed gives the same data.
 
+// Tests panic on failure by design.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use gpodo_datasets::log::RoverLog;
 use gpodo_datasets::residuals::{ResidualConfig, residual_dataset};
 use gpodo_datasets::sim::manoeuvre::{Driver, DriverParams, PlanarPose};
@@ -11,7 +14,9 @@ use gpodo_datasets::sim::sensors::SensorNoise;
 use gpodo_datasets::sim::slip::SlipParams;
 use gpodo_datasets::sim::soil::{Soil, SoilMap};
 use gpodo_datasets::sim::terrain::{Terrain, TerrainSpec};
-use gpodo_kinematics::{ContactAngleSource, RoverDescription, WeightedJacobianConfig, WeightedJacobianModel};
+use gpodo_kinematics::{
+    ContactAngleSource, RoverDescription, WeightedJacobianConfig, WeightedJacobianModel,
+};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -66,7 +71,9 @@ fn no_slip_run(terrain: &Terrain, secs: f64) -> RoverLog {
         y_m: 4.5,
         yaw_rad: 0.3,
     };
-    world.run("no_slip", &mut driver, start, secs, &mut rng).unwrap()
+    world
+        .run("no_slip", &mut driver, start, secs, &mut rng)
+        .unwrap()
 }
 
 /// Median and maximum |residual| per axis, one row per step.
@@ -112,7 +119,10 @@ fn without_slip_on_hills_the_residual_is_small() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let terrain = Terrain::generate(&TerrainSpec::default(), &mut rng).unwrap();
     let log = no_slip_run(&terrain, 240.0);
-    for source in [ContactAngleSource::AssumeZero, ContactAngleSource::FromSample] {
+    for source in [
+        ContactAngleSource::AssumeZero,
+        ContactAngleSource::FromSample,
+    ] {
         let (median, max) = residual_stats(&log, source);
         println!("hills, no slip, {source:?}: median {median:?}, max {max:?}");
         // Terrain curvature and steering in place (the contact point off
@@ -136,4 +146,3 @@ fn same_seed_gives_bit_identical_runs() {
     let c = config.simulate().unwrap();
     assert_ne!(a.train, c.train);
 }
-

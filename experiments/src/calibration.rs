@@ -61,7 +61,8 @@ fn pearson(a: &[f64], b: &[f64]) -> Option<f64> {
 /// and gpodo's residual datasets.
 pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
     let o = data.targets.ncols();
-    let abs_col = |j: usize| -> Vec<f64> { data.targets.column(j).iter().map(|v| v.abs()).collect() };
+    let abs_col =
+        |j: usize| -> Vec<f64> { data.targets.column(j).iter().map(|v| v.abs()).collect() };
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let mean_abs = (0..o).map(|j| mean(&abs_col(j))).collect();
     let p95_abs = (0..o).map(|j| percentile(&abs_col(j), 95.0)).collect();
@@ -82,10 +83,18 @@ pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
     });
     let res_x = if o > 0 { abs_col(0) } else { Vec::new() };
     let moving: Option<Vec<usize>> = speed.as_ref().map(|s| {
-        (0..s.len()).filter(|&i| s[i] > MOVING_THRESHOLD_MPS).collect()
+        (0..s.len())
+            .filter(|&i| s[i] > MOVING_THRESHOLD_MPS)
+            .collect()
     });
     let abs_input = |name: &str| {
-        index(name).map(|c| data.inputs.column(c).iter().map(|v| v.abs()).collect::<Vec<f64>>())
+        index(name).map(|c| {
+            data.inputs
+                .column(c)
+                .iter()
+                .map(|v| v.abs())
+                .collect::<Vec<f64>>()
+        })
     };
     ResidualStatistics {
         n_rows: data.len(),

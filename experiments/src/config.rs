@@ -72,6 +72,10 @@ pub enum DatasetSpec {
         /// Override of the preset's training run duration (s).
         #[serde(default)]
         training_run_secs: Option<f64>,
+        /// Override of the longest the test traverse may take (s); a shorter
+        /// value cuts the traverse (quick runs, tests).
+        #[serde(default)]
+        test_max_secs: Option<f64>,
     },
     /// Rover logs in gpodo's trajectory CSV format (paths relative to the
     /// experiment file).
@@ -250,7 +254,10 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(err.contains("exp.yaml") && err.contains("regresors"), "{err}");
+        assert!(
+            err.contains("exp.yaml") && err.contains("regresors"),
+            "{err}"
+        );
         assert!(err.contains('3'), "line number expected: {err}");
     }
 
@@ -277,6 +284,9 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(err.contains("regressors[0]") && err.contains("variance"), "{err}");
+        assert!(
+            err.contains("regressors[0]") && err.contains("variance"),
+            "{err}"
+        );
     }
 }

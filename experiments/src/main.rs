@@ -55,9 +55,11 @@ enum Command {
 fn run(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
     let config = ExperimentConfig::from_path(file)?;
     let base = file.parent().unwrap_or_else(|| Path::new("."));
-    let results = run_experiment(&config, base).with_context(|| format!("experiment {}", file.display()))?;
+    let results =
+        run_experiment(&config, base).with_context(|| format!("experiment {}", file.display()))?;
     let dir = out.unwrap_or_else(|| PathBuf::from("results").join(&config.name));
-    let (md, json) = write_report(&results, &dir).with_context(|| format!("writing {}", dir.display()))?;
+    let (md, json) =
+        write_report(&results, &dir).with_context(|| format!("writing {}", dir.display()))?;
     for r in &results.regressors {
         tracing::info!(
             regressor = %r.label,

@@ -25,9 +25,15 @@ pub struct DeadReckoning {
 ///
 /// # Errors
 /// Whatever the model returns for a sample it cannot handle.
-pub fn dead_reckoning(log: &RoverLog, model: &dyn MotionModel) -> Result<DeadReckoning, gpodo_traits::Error> {
+pub fn dead_reckoning(
+    log: &RoverLog,
+    model: &dyn MotionModel,
+) -> Result<DeadReckoning, gpodo_traits::Error> {
     let Some(first) = log.ground_truth.first() else {
-        return Err(gpodo_traits::Error::InvalidInput(format!("run {} is empty", log.name)));
+        return Err(gpodo_traits::Error::InvalidInput(format!(
+            "run {} is empty",
+            log.name
+        )));
     };
     let mut pose: Isometry3<f64> = *first;
     let mut max_error: f64 = 0.0;

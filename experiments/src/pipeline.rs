@@ -123,7 +123,11 @@ pub enum PipelineError {
 }
 
 fn resolve(base: &Path, p: &Path) -> PathBuf {
-    if p.is_absolute() { p.to_path_buf() } else { base.join(p) }
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
 }
 
 fn summarize(log: &RoverLog) -> RunSummary {
@@ -147,7 +151,10 @@ pub fn code_version() -> String {
         .unwrap_or_else(|| env!("CARGO_PKG_VERSION").to_string())
 }
 
-fn motion_model(spec: &MotionModelSpec, base: &Path) -> Result<(Box<dyn MotionModel>, f64), PipelineError> {
+fn motion_model(
+    spec: &MotionModelSpec,
+    base: &Path,
+) -> Result<(Box<dyn MotionModel>, f64), PipelineError> {
     let load = |rover: &Option<PathBuf>| match rover {
         Some(p) => RoverDescription::from_path(&resolve(base, p)),
         None => Ok(RoverDescription::exoter()),
@@ -219,6 +226,7 @@ fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, Pipel
             seed,
             training_runs,
             training_run_secs,
+            test_max_secs,
         } => {
             let mut sim = SimulatorConfig::preset(*preset, *seed);
             if let Some(n) = training_runs {
@@ -227,9 +235,12 @@ fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, Pipel
             if let Some(s) = training_run_secs {
                 sim.training_run_secs = *s;
             }
+            if let Some(s) = test_max_secs {
+                sim.test_max_secs = *s;
+            }
             tracing::info!(seed, "simulating the testbed");
             let testbed = sim.simulate()?;
-            let source = format!("simulated {preset:?} testbed, seed {seed}");
+            let source = format!("simulated `{}` testbed, seed {seed}", preset.name());
             from_logs(
                 config,
                 base,
@@ -292,7 +303,10 @@ fn reference_statistics(
         targets: reference.targets.clone(),
     };
     match read_residual_table(&path, &spec) {
-        Ok(table) => Some((reference.path.display().to_string(), residual_statistics(&table))),
+        Ok(table) => Some((
+            reference.path.display().to_string(),
+            residual_statistics(&table),
+        )),
         Err(e) => {
             tracing::warn!("reference table not used: {e}");
             None
@@ -305,7 +319,10 @@ fn reference_statistics(
 ///
 /// # Errors
 /// [`PipelineError`] saying which stage failed.
-pub fn run_experiment(config: &ExperimentConfig, base: &Path) -> Result<ExperimentResults, PipelineError> {
+pub fn run_experiment(
+    config: &ExperimentConfig,
+    base: &Path,
+) -> Result<ExperimentResults, PipelineError> {
     let start = Instant::now();
     let data = prepare(config, base)?;
     let scaler = Standardizer::fit(&data.train.inputs)?;

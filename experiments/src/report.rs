@@ -33,7 +33,10 @@ pub fn write_report(results: &ExperimentResults, dir: &Path) -> anyhow::Result<(
     let json = dir.join("metrics.json");
     write_atomically(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
     write_atomically(&md, markdown(results).as_bytes())?;
-    for (name, rows) in [("residuals_train.csv", &results.train_rows), ("residuals_test.csv", &results.test_rows)] {
+    for (name, rows) in [
+        ("residuals_train.csv", &results.train_rows),
+        ("residuals_test.csv", &results.test_rows),
+    ] {
         if let Some(rows) = rows {
             write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
         }
@@ -95,8 +98,14 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     if r.dataset.train_runs.is_empty() {
         return;
     }
-    let _ = writeln!(s, "## Runs\n\n| run | role | samples | duration [s] | path [m] |\n|---|---|---:|---:|---:|");
-    for (role, runs) in [("train", &r.dataset.train_runs), ("test", &r.dataset.test_runs)] {
+    let _ = writeln!(
+        s,
+        "## Runs\n\n| run | role | samples | duration [s] | path [m] |\n|---|---|---:|---:|---:|"
+    );
+    for (role, runs) in [
+        ("train", &r.dataset.train_runs),
+        ("test", &r.dataset.test_runs),
+    ] {
         for run in runs {
             let _ = writeln!(
                 s,

@@ -52,7 +52,8 @@ impl ContactGeometry {
         let body_from_wheel = bogie * Rotation3::from_axis_angle(&Vector3::z_axis(), steer_rad);
         let body_from_contact_rot =
             body_from_wheel * Rotation3::from_axis_angle(&Vector3::y_axis(), angles.contact_rad);
-        let contact = wheel_center + body_from_contact_rot * Vector3::new(0.0, 0.0, -wheel_radius_m);
+        let contact =
+            wheel_center + body_from_contact_rot * Vector3::new(0.0, 0.0, -wheel_radius_m);
         Self {
             bogie_pivot: chain.bogie_pivot,
             bogie_axis: chain.bogie_axis.into_inner(),

@@ -232,10 +232,16 @@ mod tests {
 
     #[test]
     fn unknown_bogie_is_named_in_the_error() {
-        let yaml = EXOTER_YAML.replace("bogie: rear, steerable: true, center_m: [-0.29, -0.28", "bogie: back, steerable: true, center_m: [-0.29, -0.28");
+        let yaml = EXOTER_YAML.replace(
+            "bogie: rear, steerable: true, center_m: [-0.29, -0.28",
+            "bogie: back, steerable: true, center_m: [-0.29, -0.28",
+        );
         let err = RoverDescription::from_yaml_str(&yaml, "x.yaml").unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains("wheels[5].bogie") && msg.contains("back"), "{msg}");
+        assert!(
+            msg.contains("wheels[5].bogie") && msg.contains("back"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -243,7 +249,10 @@ mod tests {
         let yaml = EXOTER_YAML.replace("wheel_radius_m: 0.07", "wheel_radius: 0.07");
         let err = RoverDescription::from_yaml_str(&yaml, "x.yaml").unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains("x.yaml") && msg.contains("wheel_radius"), "{msg}");
+        assert!(
+            msg.contains("x.yaml") && msg.contains("wheel_radius"),
+            "{msg}"
+        );
     }
 
     #[test]

@@ -23,5 +23,5 @@ pub use description::RoverDescription;
 pub use error::KinematicsError;
 pub use skid_steer::{SkidSteerModel, YawSource};
 pub use weighted_jacobian::{
-    ContactAngleSource, SolveBounds, Weighting, WeightedJacobianConfig, WeightedJacobianModel,
+    ContactAngleSource, SolveBounds, WeightedJacobianConfig, WeightedJacobianModel, Weighting,
 };

@@ -56,9 +56,15 @@ pub fn static_normal_forces(
     let g = gravity_body;
 
     let a = Matrix3::new(
-        1.0, 1.0, 1.0, //
-        support[0].x, support[1].x, support[2].x, //
-        support[0].y, support[1].y, support[2].y,
+        1.0,
+        1.0,
+        1.0, //
+        support[0].x,
+        support[1].x,
+        support[2].x, //
+        support[0].y,
+        support[1].y,
+        support[2].y,
     );
     let rhs = Vector3::new(-g.z, h * g.x - com.x * g.z, h * g.y - com.y * g.z);
     let forces = a

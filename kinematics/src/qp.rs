@@ -51,7 +51,8 @@ pub fn solve_bounded_qp(
     let q: Vec<f64> = g.iter().map(|v| -v).collect();
 
     // Each finite bound is one row `±v_k + s = ±limit`, `s ≥ 0`.
-    let (mut a_rows, mut a_cols, mut a_vals, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut a_rows, mut a_cols, mut a_vals, mut b) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for bound in bounds {
         for (sign, limit) in [(1.0, bound.hi), (-1.0, -bound.lo)] {
             if limit.is_finite() {

@@ -56,7 +56,10 @@ impl SkidSteerModel {
             });
         }
         let mean_y = |idx: &[usize]| {
-            idx.iter().map(|&i| description.wheels[i].center_m[1]).sum::<f64>() / idx.len() as f64
+            idx.iter()
+                .map(|&i| description.wheels[i].center_m[1])
+                .sum::<f64>()
+                / idx.len() as f64
         };
         Ok(Self {
             wheel_radius_m: description.wheel_radius_m,
@@ -92,7 +95,10 @@ impl MotionModel for SkidSteerModel {
                 found: s.wheels.len(),
             });
         }
-        let (v_left, v_right) = (self.side_speed(s, &self.left), self.side_speed(s, &self.right));
+        let (v_left, v_right) = (
+            self.side_speed(s, &self.left),
+            self.side_speed(s, &self.right),
+        );
         let angular_radps = match self.yaw_source {
             YawSource::Gyro => s.imu.gyro_radps,
             YawSource::Wheels => Vector3::new(0.0, 0.0, (v_right - v_left) / self.track_width_m),

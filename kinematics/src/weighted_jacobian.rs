@@ -234,7 +234,9 @@ impl WeightedJacobianModel {
             .map(|(i, chain)| {
                 let angles = ChainAngles {
                     bogie_rad: s.bogies[chain.bogie_index].position_rad,
-                    steer_rad: chain.steer_index.map_or(0.0, |k| s.steering[k].position_rad),
+                    steer_rad: chain
+                        .steer_index
+                        .map_or(0.0, |k| s.steering[k].position_rad),
                     contact_rad: self.contact_angle(s, i),
                 };
                 ContactGeometry::new(chain, self.description.wheel_radius_m, angles)

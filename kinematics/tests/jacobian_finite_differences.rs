@@ -4,6 +4,9 @@
 //! contact point moving only by the slip `(δ_x, δ_y)` in the contact plane,
 //! and the contact frame turning only by `δ_ψ` about its normal.
 
+// Tests panic on failure by design.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use gpodo_kinematics::RoverDescription;
 use gpodo_kinematics::chain::{ChainAngles, ContactGeometry};
 use gpodo_kinematics::jacobian::{CONTACT_COLUMNS, contact_jacobian};
@@ -39,9 +42,11 @@ fn state_at(
         Translation3::from(twist.fixed_rows::<3>(0) * t),
         UnitQuaternion::from_scaled_axis(twist.fixed_rows::<3>(3) * t),
     );
-    let material_world = world_from_body.transform_point(&material_body.into()).coords;
-    let contact_world =
-        world_from_body.rotation.to_rotation_matrix() * g.body_from_contact.rotation.to_rotation_matrix();
+    let material_world = world_from_body
+        .transform_point(&material_body.into())
+        .coords;
+    let contact_world = world_from_body.rotation.to_rotation_matrix()
+        * g.body_from_contact.rotation.to_rotation_matrix();
     (material_world, contact_world)
 }
 

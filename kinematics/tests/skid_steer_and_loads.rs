@@ -1,5 +1,8 @@
 //! The skid-steer model and the static normal forces on closed-form cases.
 
+// Tests panic on failure by design.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod support;
 
 use gpodo_kinematics::chain::{ChainAngles, ContactGeometry};
@@ -16,7 +19,16 @@ fn skid_steer_reads_forward_speed_and_yaw_rate_off_the_sides() {
     assert!((m.track_width_m() - 0.56).abs() < 1e-15);
     // Turning on an arc: with wheels pointing straight (no steering), the
     // sides' speeds are v ∓ ω·track/2.
-    let mut s = planar_sample(&d, PlanarMotion { vx: 0.04, vy: 0.0, wz: 0.0 }, (0.0, 0.0), &[]);
+    let mut s = planar_sample(
+        &d,
+        PlanarMotion {
+            vx: 0.04,
+            vy: 0.0,
+            wz: 0.0,
+        },
+        (0.0, 0.0),
+        &[],
+    );
     let w = 0.05;
     for (i, wheel) in d.wheels.iter().enumerate() {
         let side_speed = 0.04 - w * wheel.center_m[1];
@@ -31,7 +43,16 @@ fn skid_steer_reads_forward_speed_and_yaw_rate_off_the_sides() {
 fn skid_steer_with_gyro_passes_the_imu_rate_through() {
     let d = RoverDescription::exoter();
     let m = SkidSteerModel::from_description(&d, YawSource::Gyro).unwrap();
-    let s = planar_sample(&d, PlanarMotion { vx: 0.0, vy: 0.0, wz: 0.1 }, (0.0, 0.0), &[]);
+    let s = planar_sample(
+        &d,
+        PlanarMotion {
+            vx: 0.0,
+            vy: 0.0,
+            wz: 0.1,
+        },
+        (0.0, 0.0),
+        &[],
+    );
     let twist = m.estimate(&s, 0.08).unwrap().twist;
     assert_eq!(twist.angular_radps, Vector3::new(0.0, 0.0, 0.1));
 }
@@ -71,5 +92,8 @@ fn loads_shift_downhill_and_balance_moments() {
     // The right side carries more than the left; each passive bogie
     // equalises its two wheels (the rear one across, the side ones along).
     assert!(n[1] > n[0] && n[1] > n[4], "{n:?}");
-    assert!((n[4] - n[5]).abs() < 1e-15 && (n[0] - n[2]).abs() < 1e-15, "{n:?}");
+    assert!(
+        (n[4] - n[5]).abs() < 1e-15 && (n[0] - n[2]).abs() < 1e-15,
+        "{n:?}"
+    );
 }

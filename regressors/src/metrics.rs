@@ -73,9 +73,13 @@ impl Accumulator {
 ///
 /// # Errors
 /// [`RegressorError::ShapeMismatch`] or [`RegressorError::EmptyTestSet`].
-pub fn evaluate(predictions: &Predictions, targets: &SampleMatrix) -> Result<Evaluation, RegressorError> {
+pub fn evaluate(
+    predictions: &Predictions,
+    targets: &SampleMatrix,
+) -> Result<Evaluation, RegressorError> {
     let shape = |m: &SampleMatrix| (m.nrows(), m.ncols());
-    if shape(&predictions.mean) != shape(targets) || shape(&predictions.variance) != shape(targets) {
+    if shape(&predictions.mean) != shape(targets) || shape(&predictions.variance) != shape(targets)
+    {
         return Err(RegressorError::ShapeMismatch {
             predicted: shape(&predictions.mean),
             targets: shape(targets),
@@ -84,10 +88,16 @@ pub fn evaluate(predictions: &Predictions, targets: &SampleMatrix) -> Result<Eva
     if targets.nrows() == 0 || targets.ncols() == 0 {
         return Err(RegressorError::EmptyTestSet);
     }
-    let mut per_output: Vec<Accumulator> = (0..targets.ncols()).map(|_| Accumulator::default()).collect();
+    let mut per_output: Vec<Accumulator> = (0..targets.ncols())
+        .map(|_| Accumulator::default())
+        .collect();
     let mut pooled = Accumulator::default();
     for i in 0..targets.nrows() {
-        let (y, m, v) = (targets.row(i), predictions.mean.row(i), predictions.variance.row(i));
+        let (y, m, v) = (
+            targets.row(i),
+            predictions.mean.row(i),
+            predictions.variance.row(i),
+        );
         for j in 0..targets.ncols() {
             per_output[j].add(y[j], m[j], v[j]);
             pooled.add(y[j], m[j], v[j]);
@@ -132,12 +142,18 @@ mod tests {
             mean: SampleMatrix::zeros(2, 2),
             variance: SampleMatrix::zeros(2, 2),
         };
-        assert!(matches!(evaluate(&p, &t), Err(RegressorError::ShapeMismatch { .. })));
+        assert!(matches!(
+            evaluate(&p, &t),
+            Err(RegressorError::ShapeMismatch { .. })
+        ));
         let empty = SampleMatrix::zeros(0, 3);
         let p = Predictions {
             mean: empty.clone(),
             variance: empty.clone(),
         };
-        assert!(matches!(evaluate(&p, &empty), Err(RegressorError::EmptyTestSet)));
+        assert!(matches!(
+            evaluate(&p, &empty),
+            Err(RegressorError::EmptyTestSet)
+        ));
     }
 }

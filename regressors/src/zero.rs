@@ -5,7 +5,9 @@
 
 use std::time::Instant;
 
-use gpodo_traits::{Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix};
+use gpodo_traits::{
+    Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+};
 
 /// Predicts a zero residual with a fixed or training variance.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,9 +42,8 @@ impl ResidualRegressor for ZeroResidual {
         let n = data.len() as f64;
         let variance = (0..data.targets.ncols())
             .map(|j| {
-                self.fixed_variance.unwrap_or_else(|| {
-                    data.targets.rows().map(|r| r[j] * r[j]).sum::<f64>() / n
-                })
+                self.fixed_variance
+                    .unwrap_or_else(|| data.targets.rows().map(|r| r[j] * r[j]).sum::<f64>() / n)
             })
             .collect();
         self.variance = Some(variance);
@@ -83,8 +84,13 @@ mod tests {
     fn data() -> ResidualDataset {
         let x = SampleMatrix::from_rows(2, &[[0.0, 1.0], [1.0, 0.0]]).unwrap();
         let y = SampleMatrix::from_rows(3, &[[0.1, -0.2, 0.0], [-0.3, 0.2, 0.0]]).unwrap();
-        ResidualDataset::new(x, y, vec!["a".into(), "b".into()], vec!["x".into(), "y".into(), "z".into()])
-            .unwrap()
+        ResidualDataset::new(
+            x,
+            y,
+            vec!["a".into(), "b".into()],
+            vec!["x".into(), "y".into(), "z".into()],
+        )
+        .unwrap()
     }
 
     #[test]
@@ -116,7 +122,10 @@ mod tests {
         let mut m = m;
         m.fit(&d).unwrap();
         let wide = SampleMatrix::zeros(1, 3);
-        assert!(matches!(m.predict(&wide), Err(Error::DimensionMismatch { .. })));
+        assert!(matches!(
+            m.predict(&wide),
+            Err(Error::DimensionMismatch { .. })
+        ));
         assert!(m.update(&[0.0, 0.0], &[0.0; 3]).is_err());
     }
 }

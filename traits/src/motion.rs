@@ -80,8 +80,11 @@ pub trait MotionModel: Send + Sync {
     /// # Errors
     /// [`Error::DimensionMismatch`] when the sample does not match the
     /// model's rover, [`Error::Numerical`] when the solve fails.
-    fn estimate(&self, sample: &ProprioceptiveSample, dt_secs: f64)
-    -> Result<MotionEstimate, Error>;
+    fn estimate(
+        &self,
+        sample: &ProprioceptiveSample,
+        dt_secs: f64,
+    ) -> Result<MotionEstimate, Error>;
 }
 
 #[cfg(test)]

@@ -531,6 +531,32 @@ fn duration_and_path_length_follow_samples_and_ground_truth() {
         .iter()
         .map(|p| Isometry3::translation(p[0], p[1], p[2]))
         .collect();
-    approx::assert_relative_eq!(log.path_length_m(), 7.0);
     approx::assert_relative_eq!(log.duration_secs(), 1e3 + 1e-9 - (0.1 + 0.2));
+    for (k, s) in log.samples.iter_mut().enumerate() {
+        s.time_secs = k as f64;
+    }
+    approx::assert_relative_eq!(log.path_length_m(), 7.0);
+}
+
+#[test]
+fn path_length_ignores_sample_to_sample_jitter() {
+    // 3 m straight at 12.5 Hz with ±1 mm alternating jitter across the path:
+    // summing every step would add ~0.6 m.
+    let mut log = awkward_log();
+    let template = log.samples[0].clone();
+    log.samples = (0..=1250)
+        .map(|k| {
+            let mut s = template.clone();
+            s.time_secs = k as f64 * 0.08;
+            s
+        })
+        .collect();
+    log.ground_truth = (0..=1250)
+        .map(|k| {
+            let jitter = if k % 2 == 0 { 1e-3 } else { -1e-3 };
+            Isometry3::translation(3.0 * k as f64 / 1250.0, jitter, 0.0)
+        })
+        .collect();
+    let length = log.path_length_m();
+    assert!((length - 3.0).abs() < 0.01, "{length}");
 }

@@ -200,9 +200,9 @@ impl ChassisSolver {
         let suspension = Suspension::from_vector(&v);
         let body = world_from_body(planar.0, planar.1, planar.2, &suspension);
         let (mut contact_rad, mut contact_points) = (Vec::new(), Vec::new());
-        for i in 0..6 {
-            let bogie = suspension.bogie_rad[self.chains[i].bogie_index];
-            let (p, gamma, _) = self.wheel_contact(terrain, &body, i, bogie, steer[i]);
+        for (i, (chain, steer_rad)) in self.chains.iter().zip(steer).enumerate() {
+            let bogie = suspension.bogie_rad[chain.bogie_index];
+            let (p, gamma, _) = self.wheel_contact(terrain, &body, i, bogie, *steer_rad);
             contact_points.push(p);
             contact_rad.push(gamma);
         }

@@ -1,11 +1,11 @@
 //! The deterministic simulator of the ExoTeR-like rover in ESA's Planetary Robotics Lab testbed.
 
+pub mod chassis;
 pub mod manoeuvre;
 pub mod noise;
-pub mod slip;
-pub mod soil;
-pub mod terrain;
-pub mod chassis;
 pub mod preset;
 pub mod rover;
 pub mod sensors;
+pub mod slip;
+pub mod soil;
+pub mod terrain;

@@ -33,6 +33,15 @@ pub enum Preset {
     ExoterPrl,
 }
 
+impl Preset {
+    /// The preset's name as written in configs (`exoter-prl`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ExoterPrl => "exoter-prl",
+        }
+    }
+}
+
 impl std::str::FromStr for Preset {
     type Err = DatasetError;
 
@@ -117,7 +126,7 @@ impl SimulatorConfig {
                 sinkage_m: 0.002,
                 sinkage_length_m: 0.1,
                 terrain: TerrainSpec {
-                    max_slope_deg: 24.0,
+                    max_slope_deg: 20.0,
                     roughness_m: 0.008,
                     ..TerrainSpec::default()
                 },
@@ -207,7 +216,10 @@ impl SimulatorConfig {
             let start = PlanarPose {
                 x_m: rand::Rng::random_range(&mut rng, margin..size - margin),
                 y_m: rand::Rng::random_range(&mut rng, margin..size - margin),
-                yaw_rad: rand::Rng::random_range(&mut rng, -std::f64::consts::PI..std::f64::consts::PI),
+                yaw_rad: rand::Rng::random_range(
+                    &mut rng,
+                    -std::f64::consts::PI..std::f64::consts::PI,
+                ),
             };
             let mut driver = Driver::training(self.driver.clone(), size)?;
             let name = format!("train_{:02}", i + 1);

@@ -25,8 +25,8 @@ use rand::Rng;
 use crate::DatasetError;
 use crate::log::RoverLog;
 use crate::sim::chassis::{ChassisSolver, Placement};
-use crate::sim::noise::OrnsteinUhlenbeck;
 use crate::sim::manoeuvre::{DriveCommand, Driver, ManoeuvreKind, PlanarPose, PlanarTwist};
+use crate::sim::noise::OrnsteinUhlenbeck;
 use crate::sim::sensors::{SensorErrors, SensorNoise, normal};
 use crate::sim::slip::{SlipInput, SlipModel, SlipNoiseProcess};
 use crate::sim::soil::SoilMap;
@@ -83,7 +83,10 @@ fn steering_for(chains: &[WheelChain], twist: &PlanarTwist, current: &[f64; 6]) 
             continue;
         }
         let (x, y) = (chain.center.x, chain.center.y);
-        let (vx, vy) = (twist.vx_mps - twist.wz_radps * y, twist.vy_mps + twist.wz_radps * x);
+        let (vx, vy) = (
+            twist.vx_mps - twist.wz_radps * y,
+            twist.vy_mps + twist.wz_radps * x,
+        );
         let mut angle = vy.atan2(vx);
         if angle.abs() > std::f64::consts::FRAC_PI_2 {
             angle -= std::f64::consts::PI * angle.signum();
@@ -126,10 +129,20 @@ impl World<'_> {
         steer: &[f64; 6],
         guess: &crate::sim::chassis::Suspension,
     ) -> Result<Placement, DatasetError> {
-        solver.place(self.terrain, (pose.x_m, pose.y_m, pose.yaw_rad), steer, guess)
+        solver.place(
+            self.terrain,
+            (pose.x_m, pose.y_m, pose.yaw_rad),
+            steer,
+            guess,
+        )
     }
 
-    fn contacts(&self, chains: &[WheelChain], placement: &Placement, steer: &[f64; 6]) -> Vec<ContactGeometry> {
+    fn contacts(
+        &self,
+        chains: &[WheelChain],
+        placement: &Placement,
+        steer: &[f64; 6],
+    ) -> Vec<ContactGeometry> {
         chains
             .iter()
             .enumerate()
@@ -198,8 +211,17 @@ impl World<'_> {
             }
             let t = k as f64 * dt;
             let command = driver.command(state.pose, t, rng);
-            let (sample, truth, next) =
-                self.step(&solver, &chains, &state, command, &mut errors, &mut slip_noise, previous_position, t, rng)?;
+            let (sample, truth, next) = self.step(
+                &solver,
+                &chains,
+                &state,
+                command,
+                &mut errors,
+                &mut slip_noise,
+                previous_position,
+                t,
+                rng,
+            )?;
             previous_position = state.placement.world_from_body.translation.vector;
             samples.push(sample);
             ground_truth.push(truth);
@@ -293,13 +315,21 @@ impl World<'_> {
         let body_next = sunk(&placement.world_from_body, sinkage.value());
 
         // 4. Sensors.
-        let v_true = body_k.rotation.inverse() * (body_next.translation.vector - body_k.translation.vector) / dt;
+        let v_true = body_k.rotation.inverse()
+            * (body_next.translation.vector - body_k.translation.vector)
+            / dt;
         let w_true = body_rate(&body_k, &body_next, dt);
         let v_cmd = v_true
-            + Vector3::new(commanded.vx_mps - actual.vx_mps, commanded.vy_mps - actual.vy_mps, 0.0);
+            + Vector3::new(
+                commanded.vx_mps - actual.vx_mps,
+                commanded.vy_mps - actual.vy_mps,
+                0.0,
+            );
         let w_cmd = w_true + Vector3::new(0.0, 0.0, commanded.wz_radps - actual.wz_radps);
         let bogie_rates: Vec<f64> = (0..3)
-            .map(|b| (placement.suspension.bogie_rad[b] - state.placement.suspension.bogie_rad[b]) / dt)
+            .map(|b| {
+                (placement.suspension.bogie_rad[b] - state.placement.suspension.bogie_rad[b]) / dt
+            })
             .collect();
         let steer_rates: Vec<f64> = (0..6).map(|i| (steer[i] - state.steer[i]) / dt).collect();
 
@@ -330,13 +360,16 @@ impl World<'_> {
         }
         let bogies = (0..3)
             .map(|b| JointState {
-                position_rad: state.placement.suspension.bogie_rad[b] + normal(rng, noise.joint_angle_noise_rad),
+                position_rad: state.placement.suspension.bogie_rad[b]
+                    + normal(rng, noise.joint_angle_noise_rad),
                 rate_radps: bogie_rates[b] + normal(rng, noise.joint_rate_noise_radps),
             })
             .collect();
         let position = body_k.translation.vector;
-        let accel_world = (body_next.translation.vector - 2.0 * position + previous_position) / (dt * dt);
-        let specific_force = body_k.rotation.inverse() * (accel_world + Vector3::new(0.0, 0.0, GRAVITY_MPS2));
+        let accel_world =
+            (body_next.translation.vector - 2.0 * position + previous_position) / (dt * dt);
+        let specific_force =
+            body_k.rotation.inverse() * (accel_world + Vector3::new(0.0, 0.0, GRAVITY_MPS2));
         let vibration = soil.vibration_mps2 * (commanded.speed_mps() / 0.04).min(2.0);
         let (roll_k, pitch_k, _) = body_k.rotation.euler_angles();
         let (roll_meas, pitch_meas) = errors.attitude(roll_k, pitch_k);

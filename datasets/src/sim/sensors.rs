@@ -110,9 +110,14 @@ impl SensorErrors {
     /// [`DatasetError::InvalidConfig`] for negative levels or times.
     pub fn new<R: Rng + ?Sized>(noise: SensorNoise, rng: &mut R) -> Result<Self, DatasetError> {
         let walk = |rng: &mut R| {
-            RandomWalk::new(noise.gyro_bias_walk, normal(rng, noise.gyro_bias_walk * 30.0))
+            RandomWalk::new(
+                noise.gyro_bias_walk,
+                normal(rng, noise.gyro_bias_walk * 30.0),
+            )
         };
-        let ou = |sigma: f64, secs: f64, rng: &mut R| OrnsteinUhlenbeck::new_stationary(sigma, secs, rng);
+        let ou = |sigma: f64, secs: f64, rng: &mut R| {
+            OrnsteinUhlenbeck::new_stationary(sigma, secs, rng)
+        };
         Ok(Self {
             noise,
             gyro_bias: [walk(rng)?, walk(rng)?, walk(rng)?],
@@ -126,9 +131,21 @@ impl SensorErrors {
                 ou(noise.mocap_position_error_m, noise.mocap_error_secs, rng)?,
             ],
             mocap_orientation: [
-                ou(noise.mocap_orientation_error_rad, noise.mocap_error_secs, rng)?,
-                ou(noise.mocap_orientation_error_rad, noise.mocap_error_secs, rng)?,
-                ou(noise.mocap_orientation_error_rad, noise.mocap_error_secs, rng)?,
+                ou(
+                    noise.mocap_orientation_error_rad,
+                    noise.mocap_error_secs,
+                    rng,
+                )?,
+                ou(
+                    noise.mocap_orientation_error_rad,
+                    noise.mocap_error_secs,
+                    rng,
+                )?,
+                ou(
+                    noise.mocap_orientation_error_rad,
+                    noise.mocap_error_secs,
+                    rng,
+                )?,
             ],
         })
     }

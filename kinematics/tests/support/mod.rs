@@ -2,6 +2,9 @@
 //! moving rigidly on a plane without slip, built from rigid-body velocities
 //! only (not from the model's Jacobians).
 
+// Each test binary uses a subset of these fixtures.
+#![allow(dead_code)]
+
 use gpodo_kinematics::RoverDescription;
 use gpodo_traits::{JointState, ProprioceptiveSample};
 use nalgebra::Vector3;

@@ -1,0 +1,154 @@
+//! The `gpodo` binary end to end: simulate → CSV logs → experiment on those
+//! logs gives exactly the numbers of the experiment on the simulator itself;
+//! a run writes its report and metrics; a bad config names file and line.
+
+// Tests panic on failure by design.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::Command;
+
+const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+
+fn gpodo(args: &[&str], cwd: &Path) -> std::process::Output {
+    Command::new(GPODO)
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap()
+}
+
+fn write(path: &Path, text: &str) {
+    std::fs::write(path, text).unwrap();
+}
+
+fn metrics(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn experiment_on_written_logs_matches_the_simulated_experiment() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = gpodo(
+        &[
+            "-q",
+            "simulate",
+            "--seed",
+            "3",
+            "--out",
+            "logs",
+            "--training-runs",
+            "1",
+            "--training-run-secs",
+            "120",
+        ],
+        d,
+    );
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    assert!(d.join("logs/train_01.csv").exists() && d.join("logs/test.camera.csv").exists());
+
+    // The CLI's test traverse is the preset's whole 42 m traverse; the config
+    // below simulates the same seed and lengths in memory.
+    write(
+        &d.join("simulated.yaml"),
+        "name: sim\ndataset: {kind: simulated, preset: exoter-prl, seed: 3, training_runs: 1, training_run_secs: 120}\nregressors:\n  - kind: zero\n",
+    );
+    write(
+        &d.join("logs.yaml"),
+        "name: logs\ndataset: {kind: logs, train: [logs/train_01.csv], test: [logs/test.csv]}\nregressors:\n  - kind: zero\n",
+    );
+    for file in ["simulated.yaml", "logs.yaml"] {
+        let out = gpodo(&["-q", "run", file], d);
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let a = metrics(&d.join("results/sim/metrics.json"));
+    let b = metrics(&d.join("results/logs/metrics.json"));
+    assert_eq!(
+        a["regressors"], b["regressors"],
+        "CSV round trip changed the results"
+    );
+    assert_eq!(a["dead_reckoning"], b["dead_reckoning"]);
+    let report = std::fs::read_to_string(d.join("results/sim/report.md")).unwrap();
+    assert!(
+        report.contains("Table I") && report.contains("parametric only"),
+        "{report}"
+    );
+    let rmse = a["regressors"][0]["evaluation"]["pooled"]["rmse"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        rmse > 1e-4 && rmse < 0.05,
+        "implausible baseline RMSE {rmse}"
+    );
+    assert!(d.join("results/sim/residuals_test.csv").exists());
+}
+
+#[test]
+fn residual_table_experiment_reads_back_the_residual_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut csv = String::from("a,b,y1,y2\n");
+    for i in 0..20 {
+        let x = i as f64 * 0.1;
+        csv.push_str(&format!("{x},{},{},{}\n", x * x, 0.01 * x, -0.02));
+    }
+    write(&d.join("table.csv"), &csv);
+    write(
+        &d.join("t.yaml"),
+        "name: table\ndataset: {kind: residual_table, path: table.csv, targets: [y1, y2], train_fraction: 0.75}\nregressors:\n  - kind: zero\n",
+    );
+    let out = gpodo(&["-q", "run", "t.yaml", "--out", "out"], d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = metrics(&d.join("out/metrics.json"));
+    assert_eq!(m["dataset"]["n_train"], 15);
+    assert_eq!(m["dataset"]["n_test"], 5);
+    // Zero predictor: MAE of y2 is exactly 0.02.
+    let mae = m["regressors"][0]["evaluation"]["per_output"][1]["mae"]
+        .as_f64()
+        .unwrap();
+    assert!((mae - 0.02).abs() < 1e-15, "{mae}");
+}
+
+#[test]
+fn malformed_config_is_reported_with_file_and_line_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        &d.join("bad.yaml"),
+        "name: bad\ndataset: {kind: simulated, preset: exoter-prl, seed: 1}\nregressors:\n  - kind: zero\n    varience: 1.0\n",
+    );
+    let out = gpodo(&["run", "bad.yaml"], d);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.yaml") && err.contains("varience"),
+        "{err}"
+    );
+    assert!(
+        err.contains("5:") || err.contains("line 5"),
+        "no line number: {err}"
+    );
+    assert!(!d.join("results").exists());
+
+    write(
+        &d.join("missing.yaml"),
+        "name: m\ndataset: {kind: logs, train: [nope.csv], test: [nope.csv]}\nregressors:\n  - kind: zero\n",
+    );
+    let out = gpodo(&["run", "missing.yaml"], d);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nope.csv"), "{err}");
+}
