@@ -181,3 +181,16 @@ pub enum DatasetError {
         detail: String,
     },
 }
+
+/// `Ok(())` when `ok`, otherwise [`DatasetError::InvalidConfig`] naming
+/// `field` and what was `expected`.
+pub(crate) fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(DatasetError::InvalidConfig {
+            field: field.to_owned(),
+            expected: expected.to_owned(),
+        })
+    }
+}

@@ -28,6 +28,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
+use crate::error::require;
 
 /// Curvatures below this (1/m) are driven as [`ManoeuvreKind::Straight`].
 const STRAIGHT_CURVATURE_PER_M: f64 = 0.02;
@@ -758,17 +759,6 @@ fn random_sign<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 
 fn uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
-}
-
-fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
-    }
 }
 
 #[cfg(test)]

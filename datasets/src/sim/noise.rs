@@ -18,6 +18,7 @@ use rand::Rng;
 use rand_distr::StandardNormal;
 
 use crate::DatasetError;
+use crate::error::require;
 
 /// Mean-reverting Gaussian noise (an Ornstein–Uhlenbeck process).
 ///
@@ -160,17 +161,6 @@ impl RandomWalk {
 /// One draw of `N(0, 1)`.
 pub(crate) fn standard_normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     rng.sample::<f64, _>(StandardNormal)
-}
-
-fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
-    }
 }
 
 #[cfg(test)]

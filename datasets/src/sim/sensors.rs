@@ -10,11 +10,10 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
-use crate::sim::noise::{OrnsteinUhlenbeck, RandomWalk};
+use crate::sim::noise::{OrnsteinUhlenbeck, RandomWalk, standard_normal};
 
 /// Noise levels of every sensor (standard deviations unless said otherwise).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -89,8 +88,7 @@ pub fn normal<R: Rng + ?Sized>(rng: &mut R, sigma: f64) -> f64 {
     if sigma == 0.0 {
         return 0.0;
     }
-    let z: f64 = StandardNormal.sample(rng);
-    sigma * z
+    sigma * standard_normal(rng)
 }
 
 /// The time-correlated parts of the sensor errors of one run.

@@ -39,6 +39,7 @@ pub use super::manoeuvre::{ManoeuvreKind, PlanarTwist};
 use super::noise::OrnsteinUhlenbeck;
 use super::soil::Soil;
 use crate::DatasetError;
+use crate::error::require;
 
 /// Global scale factors of the slip model; the per-soil ones live in [`Soil`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -467,17 +468,6 @@ fn sanitized_noise(noise: SlipNoise) -> SlipNoise {
         longitudinal: sanitize(noise.longitudinal),
         lateral: sanitize(noise.lateral),
         yaw: sanitize(noise.yaw),
-    }
-}
-
-fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
     }
 }
 

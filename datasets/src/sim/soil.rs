@@ -15,6 +15,7 @@ use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
+use crate::error::require;
 
 /// Grid points per side used to estimate patch area fractions.
 const AREA_GRID_POINTS: usize = 200;
@@ -341,17 +342,6 @@ fn patch_labels(spec: &SoilMapSpec) -> Vec<usize> {
             _ => SoilMap::COMPACT,
         })
         .collect()
-}
-
-fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
-    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
+use crate::error::require;
 
 /// Number of sinusoidal components of the small-scale roughness.
 const ROUGHNESS_WAVES: usize = 6;
@@ -399,17 +400,6 @@ fn solve_shape_scale(
 
 fn uniform<R: Rng + ?Sized>(rng: &mut R, (lo, hi): (f64, f64)) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
-}
-
-fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
-    }
 }
 
 #[cfg(test)]
