@@ -70,7 +70,7 @@ mod columns;
 mod read;
 mod write;
 
-use gpodo_traits::ProprioceptiveSample;
+use gpodo_traits::{JointState, ProprioceptiveSample};
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
@@ -106,7 +106,90 @@ pub struct RoverLog {
     pub camera_times_secs: Vec<f64>,
 }
 
+/// Positions in `have` of each name of `want`, or an error naming the first
+/// missing one.
+fn permutation(
+    log: &str,
+    kind: &str,
+    have: &[String],
+    want: &[String],
+) -> Result<Vec<usize>, DatasetError> {
+    if have.len() != want.len() {
+        return Err(DatasetError::InvalidLog {
+            log: log.to_string(),
+            sample: None,
+            detail: format!("the rover has {kind} joints {want:?}, the log {have:?}"),
+        });
+    }
+    want.iter()
+        .map(|name| {
+            have.iter()
+                .position(|h| h == name)
+                .ok_or_else(|| DatasetError::InvalidLog {
+                    log: log.to_string(),
+                    sample: None,
+                    detail: format!("no {kind} joint `{name}` (the log has {have:?})"),
+                })
+        })
+        .collect()
+}
+
 impl RoverLog {
+    /// The same log with its joints in the given orders, matched by name:
+    /// motion models read joints by position, so a log whose columns come
+    /// in another order (or from a logger with its own conventions) is
+    /// brought into the rover description's order first.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidLog`] naming a joint the log lacks, or when the
+    /// joint counts differ.
+    pub fn with_joint_order(
+        &self,
+        wheels: &[String],
+        steering: &[String],
+        bogies: &[String],
+    ) -> Result<RoverLog, DatasetError> {
+        let pw = permutation(&self.name, "wheel", &self.wheel_names, wheels)?;
+        let ps = permutation(&self.name, "steering", &self.steer_names, steering)?;
+        let pb = permutation(&self.name, "bogie", &self.bogie_names, bogies)?;
+        let pick = |v: &[JointState], p: &[usize]| -> Vec<JointState> {
+            p.iter().map(|&i| v[i]).collect()
+        };
+        let mut samples = Vec::with_capacity(self.samples.len());
+        for (k, s) in self.samples.iter().enumerate() {
+            let lengths_ok = s.wheels.len() == pw.len()
+                && s.steering.len() == ps.len()
+                && s.bogies.len() == pb.len()
+                && s.contact_angles_rad
+                    .as_ref()
+                    .is_none_or(|c| c.len() == pw.len());
+            if !lengths_ok {
+                return Err(DatasetError::InvalidLog {
+                    log: self.name.clone(),
+                    sample: Some(k),
+                    detail: "joint vectors do not match the log's joint names".into(),
+                });
+            }
+            let mut s = s.clone();
+            s.wheels = pick(&s.wheels, &pw);
+            s.steering = pick(&s.steering, &ps);
+            s.bogies = pick(&s.bogies, &pb);
+            s.contact_angles_rad = s
+                .contact_angles_rad
+                .map(|c| pw.iter().map(|&i| c[i]).collect());
+            samples.push(s);
+        }
+        Ok(RoverLog {
+            name: self.name.clone(),
+            wheel_names: wheels.to_vec(),
+            steer_names: steering.to_vec(),
+            bogie_names: bogies.to_vec(),
+            samples,
+            ground_truth: self.ground_truth.clone(),
+            camera_times_secs: self.camera_times_secs.clone(),
+        })
+    }
+
     /// Checks that the log is consistent and can be written as CSV: joint
     /// names non-empty, distinct within their group and free of `,`, `"`,
     /// control characters and surrounding spaces; at least one sample; one

@@ -99,9 +99,10 @@ pub fn true_body_velocity(log: &RoverLog, k: usize) -> Vector3<f64> {
     a.rotation.inverse() * (b.translation.vector - a.translation.vector) / dt
 }
 
-/// One step of a log: its time, inputs and residual.
+/// One step of a log: its time, duration, inputs and residual.
 struct StepRow {
     time_secs: f64,
+    dt_secs: f64,
     inputs: Vec<f64>,
     residual: Vector3<f64>,
 }
@@ -120,6 +121,7 @@ fn step_rows(
         let residual = true_body_velocity(log, k) - estimate.twist.linear_mps;
         rows.push(StepRow {
             time_secs: log.samples[k].time_secs,
+            dt_secs: dt,
             inputs: step_features(log, k, wheel_radius_m),
             residual,
         });
@@ -127,49 +129,38 @@ fn step_rows(
     Ok(rows)
 }
 
-/// Averages consecutive rows over windows of `window_secs`, dropping a
-/// trailing window shorter than half its length.
+/// Averages consecutive steps over windows of `window_secs`, each step
+/// weighted by its duration (so the target is the window's mean velocity
+/// residual even when samples were dropped); a window whose steps cover less
+/// than half its length (a gap in the log, the end of a run) is dropped.
 fn windowed(rows: Vec<StepRow>, window_secs: f64) -> Vec<(Vec<f64>, Vector3<f64>)> {
     let Some(t0) = rows.first().map(|r| r.time_secs) else {
         return Vec::new();
     };
     let mut out = Vec::new();
-    let mut group: Vec<&StepRow> = Vec::new();
-    let flush = |group: &mut Vec<&StepRow>, out: &mut Vec<_>, complete: bool| {
-        if group.is_empty() {
-            return;
-        }
-        let span = group[group.len() - 1].time_secs - group[0].time_secs;
-        let step = if group.len() > 1 {
-            span / (group.len() - 1) as f64
-        } else {
-            0.0
-        };
-        if complete || span + step >= 0.5 * window_secs {
-            let n = group.len() as f64;
-            let d = group[0].inputs.len();
-            let mut x = vec![0.0; d];
+    let mut start = 0;
+    while start < rows.len() {
+        let window = ((rows[start].time_secs - t0) / window_secs).floor();
+        let end = rows[start..]
+            .iter()
+            .position(|r| ((r.time_secs - t0) / window_secs).floor() != window)
+            .map_or(rows.len(), |n| start + n);
+        let group = &rows[start..end];
+        let covered: f64 = group.iter().map(|r| r.dt_secs).sum();
+        if covered >= 0.5 * window_secs {
+            let mut x = vec![0.0; group[0].inputs.len()];
             let mut y = Vector3::zeros();
-            for r in group.iter() {
+            for r in group {
+                let w = r.dt_secs / covered;
                 for (acc, v) in x.iter_mut().zip(&r.inputs) {
-                    *acc += v / n;
+                    *acc += w * v;
                 }
-                y += r.residual / n;
+                y += r.residual * w;
             }
             out.push((x, y));
         }
-        group.clear();
-    };
-    let mut current = 0u64;
-    for row in &rows {
-        let w = ((row.time_secs - t0) / window_secs).floor() as u64;
-        if w != current {
-            flush(&mut group, &mut out, true);
-            current = w;
-        }
-        group.push(row);
+        start = end;
     }
-    flush(&mut group, &mut out, false);
     out
 }
 
@@ -201,6 +192,7 @@ pub fn residual_dataset(
                 expected: format!("the same joints as run {}", first.name),
             });
         }
+        log.validate()?;
         let rows = step_rows(log, model, wheel_radius_m)?;
         let rows: Vec<(Vec<f64>, Vector3<f64>)> = match config.window_secs {
             Some(w) => windowed(rows, w),
@@ -230,6 +222,7 @@ mod tests {
             .iter()
             .map(|&t| StepRow {
                 time_secs: t,
+                dt_secs: 0.25,
                 inputs: vec![t],
                 residual: Vector3::new(t, 2.0 * t, 0.0),
             })
@@ -240,13 +233,79 @@ mod tests {
     fn windows_average_consecutive_steps_and_drop_a_short_tail() {
         let times: Vec<f64> = (0..11).map(|k| 0.25 * k as f64).collect(); // 0 … 2.5 s
         let out = windowed(rows(&times), 1.0);
-        // Windows [0,1), [1,2) are complete; [2,3) holds 2.0, 2.25, 2.5: span
-        // 0.75 s ≥ half a window, kept.
+        // Windows [0,1), [1,2) are complete; [2,3) holds 2.0, 2.25, 2.5:
+        // 0.75 s covered ≥ half a window, kept.
         assert_eq!(out.len(), 3);
         assert!((out[0].0[0] - 0.375).abs() < 1e-15);
         assert!((out[1].1.y - 2.0 * 1.375).abs() < 1e-15);
         let out = windowed(rows(&times[..9]), 1.0); // tail 2.0 only
         assert_eq!(out.len(), 2);
+    }
+
+    #[test]
+    fn windows_weight_steps_by_their_duration() {
+        // A dropped sample: one step lasts 0.5 s, two last 0.25 s.
+        let mut r = rows(&[0.0, 0.5, 0.75]);
+        r[0].dt_secs = 0.5;
+        let out = windowed(r, 1.0);
+        assert_eq!(out.len(), 1);
+        let expected = 0.5 * 0.0 + 0.25 * 0.5 + 0.25 * 0.75;
+        assert!((out[0].1.x - expected).abs() < 1e-15, "{}", out[0].1.x);
+    }
+
+    /// Reports a constant body velocity.
+    struct Constant(Vector3<f64>);
+
+    impl MotionModel for Constant {
+        fn name(&self) -> &str {
+            "constant"
+        }
+        fn estimate(
+            &self,
+            _: &gpodo_traits::ProprioceptiveSample,
+            _: f64,
+        ) -> Result<gpodo_traits::MotionEstimate, gpodo_traits::Error> {
+            Ok(gpodo_traits::MotionEstimate {
+                twist: gpodo_traits::BodyTwist {
+                    linear_mps: self.0,
+                    angular_radps: Vector3::zeros(),
+                },
+                ..Default::default()
+            })
+        }
+    }
+
+    #[test]
+    fn target_is_truth_minus_model_in_the_body_frame_at_the_step_start() {
+        use nalgebra::{Isometry3, UnitQuaternion};
+        // Heading 90° left: moving +y in the world is moving forward.
+        let yaw = UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let start = Isometry3::from_parts(Vector3::new(1.0, 2.0, 0.0).into(), yaw);
+        let end = Isometry3::from_parts(Vector3::new(1.0, 2.1, 0.0).into(), yaw * yaw);
+        let sample = |t: f64| gpodo_traits::ProprioceptiveSample {
+            time_secs: t,
+            ..Default::default()
+        };
+        let log = RoverLog {
+            name: "two".into(),
+            wheel_names: vec![],
+            steer_names: vec![],
+            bogie_names: vec![],
+            samples: vec![sample(0.0), sample(2.0)],
+            ground_truth: vec![start, end],
+            camera_times_secs: vec![],
+        };
+        // Truth: 0.1 m forward in 2 s = 0.05 m/s along body x at the start.
+        let model = Constant(Vector3::new(0.04, 0.01, 0.0));
+        let config = ResidualConfig {
+            window_secs: None,
+            absolute_targets: false,
+        };
+        let data = residual_dataset(&[&log], &model, 0.07, &config).unwrap();
+        let y = data.targets.row(0);
+        assert!((y[0] - 0.01).abs() < 1e-15, "{y:?}");
+        assert!((y[1] + 0.01).abs() < 1e-15, "{y:?}");
+        assert!(y[2].abs() < 1e-15, "{y:?}");
     }
 
     #[test]

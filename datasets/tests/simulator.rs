@@ -49,6 +49,10 @@ fn perfect_soil() -> Soil {
 }
 
 fn no_slip_run(terrain: &Terrain, secs: f64) -> RoverLog {
+    no_slip_run_with_sinkage(terrain, secs, 0.0)
+}
+
+fn no_slip_run_with_sinkage(terrain: &Terrain, secs: f64, sinkage_m: f64) -> RoverLog {
     let description = RoverDescription::exoter();
     let soils = SoilMap::uniform(perfect_soil(), terrain.size_m()).unwrap();
     let slip = frictionless_slip().check().unwrap();
@@ -61,7 +65,7 @@ fn no_slip_run(terrain: &Terrain, secs: f64) -> RoverLog {
         dt_secs: 0.08,
         camera_rate_hz: 10.0,
         steering_rate_radps: 0.4,
-        sinkage_m: 0.0,
+        sinkage_m,
         sinkage_length_m: 0.1,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(3);
@@ -165,4 +169,36 @@ fn same_seed_gives_bit_identical_runs() {
     config.seed = 6;
     let c = config.simulate().unwrap();
     assert_ne!(a.train, c.train);
+}
+
+#[test]
+fn noiseless_imu_reads_the_ground_truth_motion() {
+    let terrain = Terrain::plane(9.0, 10.0, 2.0).unwrap();
+    let log = no_slip_run_with_sinkage(&terrain, 120.0, 0.002);
+    let dt = 0.08;
+    let gt = &log.ground_truth;
+    let mut sinking = 0;
+    for k in 1..log.samples.len() - 1 {
+        let s = &log.samples[k];
+        let r = gt[k].rotation;
+        // Specific force: acceleration minus gravity, in the body frame.
+        let a = (gt[k + 1].translation.vector - 2.0 * gt[k].translation.vector
+            + gt[k - 1].translation.vector)
+            / (dt * dt);
+        let f = r.inverse() * (a + nalgebra::Vector3::new(0.0, 0.0, 9.81));
+        assert!(
+            (s.imu.accel_mps2 - f).amax() < 1e-6,
+            "k={k}: {} vs {f}",
+            s.imu.accel_mps2
+        );
+        if (gt[k + 1].translation.z - gt[k].translation.z).abs() > 1e-6 {
+            sinking += 1;
+        }
+        // Gyro: the body rate over the step; attitude: roll and pitch of the pose.
+        let w = (gt[k].rotation.inverse() * gt[k + 1].rotation).scaled_axis() / dt;
+        assert!((s.imu.gyro_radps - w).amax() < 1e-9, "k={k}");
+        let (roll, pitch, _) = r.euler_angles();
+        assert!((s.imu.roll_rad - roll).abs() < 1e-12 && (s.imu.pitch_rad - pitch).abs() < 1e-12);
+    }
+    assert!(sinking > 100, "the run never sank: {sinking}");
 }

@@ -29,6 +29,8 @@ pub fn dead_reckoning(
     log: &RoverLog,
     model: &dyn MotionModel,
 ) -> Result<DeadReckoning, gpodo_traits::Error> {
+    log.validate()
+        .map_err(|e| gpodo_traits::Error::InvalidInput(e.to_string()))?;
     let Some(first) = log.ground_truth.first() else {
         return Err(gpodo_traits::Error::InvalidInput(format!(
             "run {} is empty",

@@ -120,6 +120,9 @@ pub enum PipelineError {
     /// A model failed on a sample.
     #[error(transparent)]
     Model(#[from] gpodo_traits::Error),
+    /// Training and test rows do not have the same columns.
+    #[error("training and test rows differ: {0}")]
+    Inconsistent(String),
 }
 
 fn resolve(base: &Path, p: &Path) -> PathBuf {
@@ -162,13 +165,11 @@ fn motion_model(
     Ok(match spec {
         MotionModelSpec::WeightedJacobian { rover, config } => {
             let d = load(rover)?;
-            let r = d.wheel_radius_m;
-            (Box::new(WeightedJacobianModel::new(d, *config)?), r)
+            (Box::new(WeightedJacobianModel::new(d.clone(), *config)?), d)
         }
         MotionModelSpec::SkidSteer { rover, yaw } => {
             let d = load(rover)?;
-            let r = d.wheel_radius_m;
-            (Box::new(SkidSteerModel::from_description(&d, *yaw)?), r)
+            (Box::new(SkidSteerModel::from_description(&d, *yaw)?), d)
         }
     })
 }
@@ -194,7 +195,21 @@ fn from_logs(
     source: String,
     terrain_max_slope_deg: Option<f64>,
 ) -> Result<PreparedData, PipelineError> {
-    let (model, radius) = motion_model(&config.motion_model, base)?;
+    let (model, rover) = motion_model(&config.motion_model, base)?;
+    // Models read joints by position: put every log in the rover's order.
+    let in_rover_order = |logs: &[RoverLog]| {
+        logs.iter()
+            .map(|l| {
+                l.with_joint_order(
+                    &rover.wheel_names(),
+                    &rover.steer_names(),
+                    &rover.bogie_names(),
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let (train_logs, test_logs) = (&in_rover_order(train_logs)?, &in_rover_order(test_logs)?);
+    let radius = rover.wheel_radius_m;
     let train = residual_dataset(&refs(train_logs), model.as_ref(), radius, &config.residuals)?;
     let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
     let dead_reckoning = test_logs
@@ -325,6 +340,17 @@ pub fn run_experiment(
 ) -> Result<ExperimentResults, PipelineError> {
     let start = Instant::now();
     let data = prepare(config, base)?;
+    if data.train.input_names != data.test.input_names
+        || data.train.target_names != data.test.target_names
+    {
+        return Err(PipelineError::Inconsistent(format!(
+            "training columns {:?} → {:?}, test columns {:?} → {:?}",
+            data.train.input_names,
+            data.train.target_names,
+            data.test.input_names,
+            data.test.target_names
+        )));
+    }
     let scaler = Standardizer::fit(&data.train.inputs)?;
     let mut train = data.train.clone();
     train.inputs = scaler.transform(&data.train.inputs)?;

@@ -560,3 +560,31 @@ fn path_length_ignores_sample_to_sample_jitter() {
     let length = log.path_length_m();
     assert!((length - 3.0).abs() < 0.01, "{length}");
 }
+
+#[test]
+fn joints_are_reordered_by_name_and_missing_ones_are_named() {
+    let log = awkward_log();
+    let mut wheels = log.wheel_names.clone();
+    wheels.reverse();
+    let reordered = log
+        .with_joint_order(&wheels, &log.steer_names, &log.bogie_names)
+        .unwrap();
+    let n = log.wheel_names.len();
+    for (k, s) in reordered.samples.iter().enumerate() {
+        for i in 0..n {
+            assert_eq!(s.wheels[i], log.samples[k].wheels[n - 1 - i]);
+            if let (Some(a), Some(b)) = (&s.contact_angles_rad, &log.samples[k].contact_angles_rad)
+            {
+                assert_eq!(a[i], b[n - 1 - i]);
+            }
+        }
+    }
+    assert_eq!(reordered.wheel_names, wheels);
+    let mut wrong = wheels.clone();
+    wrong[0] = "nope".into();
+    let err = log
+        .with_joint_order(&wrong, &log.steer_names, &log.bogie_names)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("nope"), "{err}");
+}

@@ -54,8 +54,9 @@ pub struct World<'a> {
     pub camera_rate_hz: f64,
     /// Steering joint speed limit (rad/s).
     pub steering_rate_radps: f64,
-    /// Wheel sinkage in soft ground: the body height fluctuates by this
-    /// much (m, stationary std) as the rover drives, which no joint senses.
+    /// Wheel sinkage: as the wheels sink into and climb out of the ground,
+    /// the body height fluctuates by this much (m, stationary std); the
+    /// motion capture and the IMU see it, the joints do not.
     pub sinkage_m: f64,
     /// Distance over which the sinkage decorrelates (m).
     pub sinkage_length_m: f64,
@@ -68,6 +69,13 @@ struct RoverState {
     placement: Placement,
     steer: [f64; 6],
     wheel_angle: [f64; 6],
+}
+
+/// Where the body really is (sinkage included) in state `s`.
+fn truth_position(s: &RoverState) -> Vector3<f64> {
+    sunk(&s.placement.world_from_body, s.sinkage.value())
+        .translation
+        .vector
 }
 
 /// Target steering angle of each wheel for a twist whose centre of rotation
@@ -114,6 +122,13 @@ fn rolling_rate(
         vel += a.cross(&(p - g.wheel_center.coords)) * steer_rate;
     }
     x_c.dot(&vel) / radius_m
+}
+
+/// The pose lowered by `sinkage_m` along the world vertical.
+fn sunk(body: &Isometry3<f64>, sinkage_m: f64) -> Isometry3<f64> {
+    let mut body = *body;
+    body.translation.vector.z -= sinkage_m;
+    body
 }
 
 /// Rotation vector of `b` relative to `a`, in `a`'s frame, per second.
@@ -201,7 +216,10 @@ impl World<'_> {
             steer: steer0,
             wheel_angle: [0.0; 6],
         };
-        let mut previous_position = state.placement.world_from_body.translation.vector;
+        // Position of the (sunk) body one step back, for the accelerometer.
+        let mut previous_position = sunk(&state.placement.world_from_body, state.sinkage.value())
+            .translation
+            .vector;
         let mut samples = Vec::new();
         let mut ground_truth = Vec::new();
         let steps = (max_duration_secs / dt).floor() as usize;
@@ -222,7 +240,7 @@ impl World<'_> {
                 t,
                 rng,
             )?;
-            previous_position = state.placement.world_from_body.translation.vector;
+            previous_position = truth_position(&state);
             samples.push(sample);
             ground_truth.push(truth);
             state = next;
@@ -259,11 +277,6 @@ impl World<'_> {
         rng: &mut R,
     ) -> Result<(ProprioceptiveSample, Isometry3<f64>, RoverState), DatasetError> {
         let dt = self.dt_secs;
-        let sunk = |body: &Isometry3<f64>, sinkage_m: f64| {
-            let mut body = *body;
-            body.translation.vector.z -= sinkage_m;
-            body
-        };
         let body_k = sunk(&state.placement.world_from_body, state.sinkage.value());
 
         // 1. Steer first; drive only once the wheels point the right way.
@@ -315,11 +328,15 @@ impl World<'_> {
         let body_next = sunk(&placement.world_from_body, sinkage.value());
 
         // 4. Sensors.
-        let v_true = body_k.rotation.inverse()
-            * (body_next.translation.vector - body_k.translation.vector)
-            / dt;
         let w_true = body_rate(&body_k, &body_next, dt);
-        let v_cmd = v_true
+        // The wheels follow the commanded motion over the ground, which the
+        // sinkage is not part of.
+        let (chassis_k, chassis_next) =
+            (&state.placement.world_from_body, &placement.world_from_body);
+        let v_chassis = chassis_k.rotation.inverse()
+            * (chassis_next.translation.vector - chassis_k.translation.vector)
+            / dt;
+        let v_cmd = v_chassis
             + Vector3::new(
                 commanded.vx_mps - actual.vx_mps,
                 commanded.vy_mps - actual.vy_mps,
