@@ -89,10 +89,12 @@ fn simulated_residual_inputs_have_the_real_tables_columns() {
     // The residual dataset built from the ExoTeR-like rover's logs uses the
     // authors' column names, in their order, so a regressor trained on one
     // can be run on the other.
-    let mut config = gpodo_datasets::sim::preset::SimulatorConfig::default();
-    config.training_runs = 1;
-    config.training_run_secs = 5.0;
-    config.test_max_secs = 5.0;
+    let config = gpodo_datasets::sim::preset::SimulatorConfig {
+        training_runs: 1,
+        training_run_secs: 5.0,
+        test_max_secs: 5.0,
+        ..Default::default()
+    };
     let testbed = config.simulate().unwrap();
     let names = gpodo_datasets::residuals::feature_names(&testbed.train[0]);
     assert_eq!(names, load().input_names);

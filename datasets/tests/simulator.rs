@@ -129,6 +129,14 @@ fn without_slip_on_a_plane_the_model_recovers_the_motion() {
     println!("plane, no slip: max |residual| = {max:?}");
     // What remains is the chord of a turning step (v·ω·dt/2 ≈ 1e-4 m/s).
     assert!(max.iter().all(|v| *v < 2e-4), "{max:?}");
+    // Driving straight up, down and across the 12° slope, the model is
+    // exact to round-off.
+    let straight =
+        |k: usize| driving_straight_wheels(&log, k) && log.samples[k].imu.gyro_radps.norm() < 1e-12;
+    let (_, max, n) = residual_stats(&log, ContactAngleSource::AssumeZero, straight);
+    println!("plane, no slip, {n} straight steps: max |residual| = {max:?}");
+    assert!(n > 300, "only {n} straight steps");
+    assert!(max.iter().all(|v| *v < 1e-12), "{max:?}");
 }
 
 #[test]
@@ -201,4 +209,28 @@ fn noiseless_imu_reads_the_ground_truth_motion() {
         assert!((s.imu.roll_rad - roll).abs() < 1e-12 && (s.imu.pitch_rad - pitch).abs() < 1e-12);
     }
     assert!(sinking > 100, "the run never sank: {sinking}");
+}
+
+#[test]
+fn bad_simulator_settings_are_rejected_by_name() {
+    let base = SimulatorConfig::preset(Preset::ExoterPrl, 1);
+    type Change = Box<dyn Fn(&mut SimulatorConfig)>;
+    let cases: Vec<(&str, Change)> = vec![
+        (
+            "training_run_secs",
+            Box::new(|c| c.training_run_secs = 1e12),
+        ),
+        ("training_runs", Box::new(|c| c.training_runs = 0)),
+        ("sinkage_m", Box::new(|c| c.sinkage_m = -1.0)),
+        (
+            "sensors.gyro_noise_radps",
+            Box::new(|c| c.sensors.gyro_noise_radps = -1e-3),
+        ),
+    ];
+    for (field, change) in cases {
+        let mut c = base.clone();
+        change(&mut c);
+        let err = c.simulate().unwrap_err().to_string();
+        assert!(err.contains(field), "{field}: {err}");
+    }
 }

@@ -154,10 +154,11 @@ pub fn code_version() -> String {
         .unwrap_or_else(|| env!("CARGO_PKG_VERSION").to_string())
 }
 
+/// The motion model of `spec` and the rover it describes.
 fn motion_model(
     spec: &MotionModelSpec,
     base: &Path,
-) -> Result<(Box<dyn MotionModel>, f64), PipelineError> {
+) -> Result<(Box<dyn MotionModel>, RoverDescription), PipelineError> {
     let load = |rover: &Option<PathBuf>| match rover {
         Some(p) => RoverDescription::from_path(&resolve(base, p)),
         None => Ok(RoverDescription::exoter()),

@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::calibration::ResidualStatistics;
+use crate::config::DatasetSpec;
 use crate::pipeline::ExperimentResults;
 
 /// Writes `contents` to `path` atomically (temporary file + rename).
@@ -122,9 +123,14 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
 
 fn table_one(s: &mut String, r: &ExperimentResults) {
     let targets = r.dataset.target_names.join(", ");
+    let units = match (&r.config.dataset, r.config.residuals.window_secs) {
+        (DatasetSpec::ResidualTable { .. }, _) => "in the table's target units".to_string(),
+        (_, Some(w)) => format!("m/s ({w}-s mean body-velocity residuals)"),
+        (_, None) => "m/s (per-step body-velocity residuals)".to_string(),
+    };
     let _ = writeln!(
         s,
-        "## Table I — residual prediction on the test rows\n\nRMSE and MAE pooled over the outputs ({targets}), in the paper's layout; units m/s (1-s mean velocity residuals).\n\n| Regressor | RMSE | MAE |\n|---|---:|---:|"
+        "## Table I — residual prediction on the test rows\n\nRMSE and MAE pooled over the outputs ({targets}), in the paper's layout; {units}.\n\n| Regressor | RMSE | MAE |\n|---|---:|---:|"
     );
     for reg in &r.regressors {
         let e = &reg.evaluation.pooled;
@@ -132,7 +138,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
     }
     let _ = writeln!(
         s,
-        "\nPer output (mm/s), predictive quality and fit:\n\n| Regressor | RMSE per output | MAE per output | NLPD | 95% coverage | fit [s] |\n|---|---|---|---:|---:|---:|"
+        "\nPer output (× 1000), predictive quality and fit:\n\n| Regressor | RMSE per output | MAE per output | NLPD | 95% coverage | fit [s] |\n|---|---|---|---:|---:|---:|"
     );
     for reg in &r.regressors {
         let per = &reg.evaluation.per_output;
@@ -190,7 +196,7 @@ fn statistics_row(s: &mut String, label: &str, st: &ResidualStatistics) {
 fn statistics_section(s: &mut String, r: &ExperimentResults) {
     let _ = writeln!(
         s,
-        "## Residual statistics\n\nAbsolute residuals of the rows as used (mean and 95th percentile per output, mm/s); moving rows have a mean wheel speed above 5 mm/s; slip ratio = |residual x| / wheel speed on moving rows; correlations of |residual x| with |pitch| and |roll|.\n\n| rows | n | mean abs | p95 abs | moving [%] | wheel speed [cm/s] | median slip ratio x [%] | corr pitch | corr roll |\n|---|---:|---|---|---:|---:|---:|---:|---:|"
+        "## Residual statistics\n\nAbsolute residuals of the rows as used (mean and 95th percentile per output, × 1000: mm/s for velocity residuals); moving rows have a mean wheel speed above 5 mm/s; slip ratio = |residual x| / wheel speed on moving rows; correlations of |residual x| with |pitch| and |roll|.\n\n| rows | n | mean abs | p95 abs | moving [%] | wheel speed [cm/s] | median slip ratio x [%] | corr pitch | corr roll |\n|---|---:|---|---|---:|---:|---:|---:|---:|"
     );
     statistics_row(s, "train", &r.train_statistics);
     statistics_row(s, "test", &r.test_statistics);

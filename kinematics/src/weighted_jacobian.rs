@@ -17,10 +17,10 @@
 //! which equations carry the forward speed: with a tiny `κ` the slips are
 //! free and the speed is fixed by the wheels' non-penetration rows, which
 //! depend on the contact angles a real rover does not sense; with `κ ≈ 1`
-//! the rolling rows dominate. On a simulated no-slip run over hills the
-//! median horizontal speed error was 2.2 mm/s with `κ = 1e-3` and below
-//! 0.1 mm/s with `κ = 1` (the run of `datasets/tests/simulator.rs`), hence
-//! the default `κ = 1`. When bounds are
+//! the rolling rows dominate. When this default was chosen, a simulated
+//! no-slip run over hills gave a median horizontal speed error of 2.2 mm/s
+//! with `κ = 1e-3` and below 0.1 mm/s with `κ ≥ 1` (the latter is what
+//! `datasets/tests/simulator.rs` now checks), hence `κ = 1`. When bounds are
 //! configured (contact angle, slip rate), the same objective is minimised
 //! subject to them as a QP (see [`crate::qp`]).
 

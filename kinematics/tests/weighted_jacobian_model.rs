@@ -17,7 +17,7 @@ fn model(config: WeightedJacobianConfig) -> WeightedJacobianModel {
 }
 
 /// The manoeuvres of the paper: forward, backward, Ackermann, turn on spot,
-/// point turn about the left middle wheel.
+/// point turn about the right middle wheel (centre at y = vx/ω = −0.28 m).
 fn manoeuvres() -> Vec<PlanarMotion> {
     vec![
         PlanarMotion {

@@ -4,7 +4,8 @@
 //! every feasible motion has its instantaneous centre of rotation on the
 //! middle-axle line (the body `y` axis): straight driving, Ackermann arcs
 //! (centre at `(0, R)`, `|R| ≥ 0.6 m`), turns on the spot (centre at the
-//! origin) and point turns about a middle wheel (centre at `(0, ±0.24 m)`).
+//! origin) and point turns about a middle wheel (centre at `(0, ±0.28 m)`,
+//! the ExoTeR-like rover's middle wheels).
 //! Rotating at `ω` about a centre `(0, y_c)` moves the body origin at
 //! `v_x = ω·y_c`. [`DriveCommand`]'s constructors build exactly these twists.
 //!
@@ -243,7 +244,7 @@ pub struct DriverParams {
     /// Largest Ackermann radius of random training arcs, metres. Default 3.0.
     pub max_ackermann_radius_m: f64,
     /// Lateral offset of the middle wheels (point-turn centres), metres.
-    /// Default 0.24.
+    /// Default 0.28 (the ExoTeR-like rover's middle wheels).
     pub point_turn_offset_m: f64,
     /// Shortest moving training segment, seconds. Default 5.
     pub min_segment_secs: f64,
@@ -283,7 +284,7 @@ impl Default for DriverParams {
             turn_rate_radps: 0.1,
             min_ackermann_radius_m: 0.6,
             max_ackermann_radius_m: 3.0,
-            point_turn_offset_m: 0.24,
+            point_turn_offset_m: 0.28,
             min_segment_secs: 5.0,
             max_segment_secs: 40.0,
             min_stop_secs: 3.0,
@@ -791,8 +792,8 @@ mod tests {
     fn feasible_twists_rotate_about_the_middle_axle_line() {
         let arc = DriveCommand::ackermann(0.04, 0.8);
         assert!((arc.twist.vx_mps / arc.twist.wz_radps - 0.8).abs() < 1e-12);
-        let point = DriveCommand::point_turn(0.1, 0.24);
-        assert!((point.twist.vx_mps - 0.024).abs() < 1e-12);
+        let point = DriveCommand::point_turn(0.1, 0.28);
+        assert!((point.twist.vx_mps - 0.028).abs() < 1e-12);
         for command in [
             arc,
             point,

@@ -4,7 +4,7 @@
 //! The `exoter-prl` preset mimics the paper's experiments in ESA's Planetary
 //! Robotics Laboratory: a 9 × 9 m Mars-like area with slopes up to ~20°,
 //! several training runs covering all manoeuvres, and a held-out test
-//! traverse of ~42 m (the paper's: 42.35 m). The same seed gives bit-identical
+//! traverse along a 42.3 m route (the paper's: 42.35 m). The same seed gives bit-identical
 //! data: the terrain and soils draw from stream 0 of a ChaCha8 generator
 //! seeded with it, run `i` from stream `i + 1`.
 
@@ -24,11 +24,14 @@ use crate::sim::slip::SlipParams;
 use crate::sim::soil::{SoilMap, SoilMapSpec};
 use crate::sim::terrain::{Terrain, TerrainSpec};
 
+/// Longest run the simulator accepts (s): one day.
+pub const MAX_RUN_SECS: f64 = 86_400.0;
+
 /// Named simulator presets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Preset {
-    /// The paper's testbed: 4 training runs of 10 min and the 42 m test
+    /// The paper's testbed: 4 training runs of 10 min and the 42.3 m test
     /// traverse.
     ExoterPrl,
 }
@@ -156,12 +159,24 @@ impl SimulatorConfig {
                 expected: expected.into(),
             })
         };
-        if !(self.training_run_secs.is_finite() && self.training_run_secs > 0.0) {
-            return bad("training_run_secs", "a positive duration in seconds");
+        // Durations are bounded so a typo cannot ask for years of samples.
+        let duration = |v: f64| v.is_finite() && v > 0.0 && v <= MAX_RUN_SECS;
+        if !(1..=1000).contains(&self.training_runs) {
+            return bad("training_runs", "between 1 and 1000 runs");
         }
-        if !(self.test_max_secs.is_finite() && self.test_max_secs > 0.0) {
-            return bad("test_max_secs", "a positive duration in seconds");
+        if !duration(self.training_run_secs) {
+            return bad("training_run_secs", "a duration in (0, 86400] s");
         }
+        if !duration(self.test_max_secs) {
+            return bad("test_max_secs", "a duration in (0, 86400] s");
+        }
+        if !(self.sinkage_m.is_finite() && (0.0..=0.05).contains(&self.sinkage_m)) {
+            return bad("sinkage_m", "a height in [0, 0.05] m");
+        }
+        if !(self.sinkage_length_m.is_finite() && self.sinkage_length_m > 0.0) {
+            return bad("sinkage_length_m", "a positive distance in m");
+        }
+        self.sensors.validate()?;
         if !(self.dt_secs.is_finite() && self.dt_secs > 0.0 && self.dt_secs <= 1.0) {
             return bad("dt_secs", "a sensor period in (0, 1] s");
         }

@@ -13,6 +13,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
+use crate::error::require;
 use crate::sim::noise::{OrnsteinUhlenbeck, RandomWalk, standard_normal};
 
 /// Noise levels of every sensor (standard deviations unless said otherwise).
@@ -65,6 +66,47 @@ impl Default for SensorNoise {
 }
 
 impl SensorNoise {
+    /// Checks that every level is finite and non-negative and every time
+    /// positive.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] naming the field (`sensors.<name>`).
+    pub fn validate(&self) -> Result<(), DatasetError> {
+        let levels = [
+            ("gyro_noise_radps", self.gyro_noise_radps),
+            ("gyro_bias_walk", self.gyro_bias_walk),
+            ("accel_noise_mps2", self.accel_noise_mps2),
+            ("attitude_error_rad", self.attitude_error_rad),
+            ("wheel_rate_noise_radps", self.wheel_rate_noise_radps),
+            ("joint_angle_noise_rad", self.joint_angle_noise_rad),
+            ("joint_rate_noise_radps", self.joint_rate_noise_radps),
+            ("mocap_position_error_m", self.mocap_position_error_m),
+            (
+                "mocap_orientation_error_rad",
+                self.mocap_orientation_error_rad,
+            ),
+            ("mocap_jitter_m", self.mocap_jitter_m),
+        ];
+        for (name, v) in levels {
+            require(
+                v.is_finite() && v >= 0.0,
+                &format!("sensors.{name}"),
+                "a finite value >= 0",
+            )?;
+        }
+        for (name, v) in [
+            ("attitude_error_secs", self.attitude_error_secs),
+            ("mocap_error_secs", self.mocap_error_secs),
+        ] {
+            require(
+                v.is_finite() && v > 0.0,
+                &format!("sensors.{name}"),
+                "a positive time in s",
+            )?;
+        }
+        Ok(())
+    }
+
     /// Every level zero: ideal sensors and ground truth.
     pub fn none() -> Self {
         Self {
@@ -107,6 +149,7 @@ impl SensorErrors {
     /// # Errors
     /// [`DatasetError::InvalidConfig`] for negative levels or times.
     pub fn new<R: Rng + ?Sized>(noise: SensorNoise, rng: &mut R) -> Result<Self, DatasetError> {
+        noise.validate()?;
         let walk = |rng: &mut R| {
             RandomWalk::new(
                 noise.gyro_bias_walk,
