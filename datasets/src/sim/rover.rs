@@ -23,6 +23,7 @@ use nalgebra::{Isometry3, Vector3};
 use rand::Rng;
 
 use crate::DatasetError;
+use crate::error::require;
 use crate::log::RoverLog;
 use crate::sim::chassis::{ChassisSolver, Placement};
 use crate::sim::manoeuvre::{DriveCommand, Driver, ManoeuvreKind, PlanarPose, PlanarTwist};
@@ -198,6 +199,27 @@ impl World<'_> {
         max_duration_secs: f64,
         rng: &mut R,
     ) -> Result<RoverLog, DatasetError> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        require(
+            positive(self.dt_secs),
+            "dt_secs",
+            "a positive sensor period in s",
+        )?;
+        require(
+            positive(self.camera_rate_hz),
+            "camera_rate_hz",
+            "a positive rate in Hz",
+        )?;
+        require(
+            positive(self.steering_rate_radps),
+            "steering_rate_radps",
+            "a positive rate in rad/s",
+        )?;
+        require(
+            max_duration_secs.is_finite() && max_duration_secs >= 0.0,
+            "max_duration_secs",
+            "a finite duration in s",
+        )?;
         let d = self.description;
         let chains = d.chains();
         let solver = ChassisSolver::new(d)?;
@@ -217,9 +239,7 @@ impl World<'_> {
             wheel_angle: [0.0; 6],
         };
         // Position of the (sunk) body one step back, for the accelerometer.
-        let mut previous_position = sunk(&state.placement.world_from_body, state.sinkage.value())
-            .translation
-            .vector;
+        let mut previous_position = truth_position(&state);
         let mut samples = Vec::new();
         let mut ground_truth = Vec::new();
         let steps = (max_duration_secs / dt).floor() as usize;
