@@ -24,11 +24,11 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run an experiment file and write results/<name>/report.md and metrics.json.
+    /// Run an experiment file and write results/NAME/report.md and metrics.json.
     Run {
         /// The experiment YAML.
         file: PathBuf,
-        /// Output folder (default: results/<name>).
+        /// Output folder (default: results/NAME, NAME from the file).
         #[arg(long)]
         out: Option<PathBuf>,
     },

@@ -9,8 +9,9 @@
 //! seeded with it, run `i` from stream `i + 1`.
 
 use gpodo_kinematics::RoverDescription;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
@@ -224,27 +225,31 @@ impl SimulatorConfig {
             sinkage_length_m: self.sinkage_length_m,
         };
         let size = self.terrain.size_m;
-        let mut train = Vec::with_capacity(self.training_runs);
-        for i in 0..self.training_runs {
+        // Run `i` draws from stream `i + 1` whatever thread runs it, so the
+        // runs are simulated in parallel with the same result as in series.
+        let run = |i: usize| -> Result<RoverLog, DatasetError> {
             let mut rng = self.rng(i as u64 + 1);
+            if i == self.training_runs {
+                let waypoints = test_traverse_waypoints(size);
+                let mut driver = Driver::follow(self.driver.clone(), &waypoints)?;
+                let start = test_traverse_start_pose(size);
+                return world.run("test", &mut driver, start, self.test_max_secs, &mut rng);
+            }
+            let mut driver = Driver::training(self.driver.clone(), size)?;
             let margin = (self.driver.edge_margin_m + 0.5).min(size / 2.0);
             let start = PlanarPose {
-                x_m: rand::Rng::random_range(&mut rng, margin..size - margin),
-                y_m: rand::Rng::random_range(&mut rng, margin..size - margin),
-                yaw_rad: rand::Rng::random_range(
-                    &mut rng,
-                    -std::f64::consts::PI..std::f64::consts::PI,
-                ),
+                x_m: rng.random_range(margin..size - margin),
+                y_m: rng.random_range(margin..size - margin),
+                yaw_rad: rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
             };
-            let mut driver = Driver::training(self.driver.clone(), size)?;
             let name = format!("train_{:02}", i + 1);
-            train.push(world.run(&name, &mut driver, start, self.training_run_secs, &mut rng)?);
-        }
-        let mut rng = self.rng(self.training_runs as u64 + 1);
-        let waypoints = test_traverse_waypoints(size);
-        let mut driver = Driver::follow(self.driver.clone(), &waypoints)?;
-        let start = test_traverse_start_pose(size);
-        let test = vec![world.run("test", &mut driver, start, self.test_max_secs, &mut rng)?];
+            world.run(&name, &mut driver, start, self.training_run_secs, &mut rng)
+        };
+        let mut train = (0..=self.training_runs)
+            .into_par_iter()
+            .map(run)
+            .collect::<Result<Vec<_>, _>>()?;
+        let test = train.split_off(self.training_runs);
         Ok(SimulatedTestbed {
             description,
             terrain,
