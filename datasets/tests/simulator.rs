@@ -173,7 +173,10 @@ fn same_seed_gives_bit_identical_runs() {
     config.training_runs = 3;
     let a = config.simulate().unwrap();
     // Same numbers whatever the thread count.
-    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let b = one_thread.install(|| config.simulate()).unwrap();
     assert_eq!(a.train, b.train);
     assert_eq!(a.test, b.test);
