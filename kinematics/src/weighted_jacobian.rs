@@ -24,7 +24,7 @@
 //! configured (contact angle, slip rate), the same objective is minimised
 //! subject to them as a QP (see [`crate::qp`]).
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use gpodo_traits::{BodyTwist, Error, MotionEstimate, MotionModel, ProprioceptiveSample};
@@ -38,6 +38,16 @@ use crate::{KinematicsError, RoverDescription};
 
 /// Unknowns per contact: contact angle rate and three slips.
 const LOCAL: usize = 4;
+
+/// The non-zero block of one contact's rows of Ω: columns are the body
+/// velocity (3) and the contact's own unknowns (4).
+type ContactBlock = SMatrix<f64, 6, 7>;
+
+/// Where the columns of contact `i`'s block sit among all unknowns.
+fn block_index(i: usize) -> [usize; 7] {
+    let o = 3 + LOCAL * i;
+    [0, 1, 2, o, o + 1, o + 2, o + 3]
+}
 
 /// How each contact's equations are weighted (the matrix `C` of eq. 5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -280,14 +290,16 @@ impl WeightedJacobianModel {
         let n_unknowns = 3 + LOCAL * n_contacts;
 
         // Normal equations of eq. (5) plus the slip prior, assembled contact
-        // by contact: H = Σ_i w_i Ω_iᵀ Ω_i, g = Σ_i w_i Ω_iᵀ b_i.
+        // by contact: H = Σ_i w_i Ω_iᵀ Ω_i, g = Σ_i w_i Ω_iᵀ b_i. Contact i's
+        // rows touch only the body velocity and its own four unknowns, so
+        // Ω_i is kept as its 6 × 7 non-zero block.
         let mut h = DMatrix::<f64>::zeros(n_unknowns, n_unknowns);
         let mut g = DVector::<f64>::zeros(n_unknowns);
         let mut systems = Vec::with_capacity(n_contacts);
         for (i, (contact, chain)) in contacts.iter().zip(&self.chains).enumerate() {
             let j = contact_jacobian(contact);
-            let mut omega = DMatrix::<f64>::zeros(6, n_unknowns);
-            let mut b = DVector::<f64>::zeros(6);
+            let mut omega = ContactBlock::zeros();
+            let mut b = Vector6::zeros();
             let bogie_rate = s.bogies[chain.bogie_index].rate_radps;
             let steer_rate = chain.steer_index.map_or(0.0, |k| s.steering[k].rate_radps);
             let wheel_rate = s.wheels[i].rate_radps;
@@ -298,14 +310,21 @@ impl WeightedJacobianModel {
                     b[r] = -s.imu.gyro_radps[r - 3];
                 }
                 for k in 0..LOCAL {
-                    omega[(r, 3 + LOCAL * i + k)] = -j[(r, COL_CONTACT_ANGLE + k)];
+                    omega[(r, 3 + k)] = -j[(r, COL_CONTACT_ANGLE + k)];
                 }
                 b[r] += j[(r, COL_BOGIE)] * bogie_rate
                     + j[(r, COL_STEER)] * steer_rate
                     + j[(r, COL_WHEEL)] * wheel_rate;
             }
-            h += omega.transpose() * &omega * weights[i];
-            g += omega.transpose() * &b * weights[i];
+            let index = block_index(i);
+            let hb = omega.transpose() * omega * weights[i];
+            let gb = omega.transpose() * b * weights[i];
+            for (p, &row) in index.iter().enumerate() {
+                g[row] += gb[p];
+                for (q, &col) in index.iter().enumerate() {
+                    h[(row, col)] += hb[(p, q)];
+                }
+            }
             for slip_axis in [1, 2] {
                 h[(3 + LOCAL * i + slip_axis, 3 + LOCAL * i + slip_axis)] +=
                     self.config.slip_prior * weights[i];
@@ -326,7 +345,11 @@ impl WeightedJacobianModel {
         let weighted_residual = systems
             .iter()
             .zip(&weights)
-            .map(|((omega, b), w)| w * (b - omega * &v).norm_squared())
+            .enumerate()
+            .map(|(i, ((omega, b), w))| {
+                let local = SVector::<f64, 7>::from_iterator(block_index(i).iter().map(|&k| v[k]));
+                w * (b - omega * local).norm_squared()
+            })
             .sum();
         Ok(WeightedJacobianSolution {
             linear_mps: Vector3::new(v[0], v[1], v[2]),
