@@ -7,7 +7,8 @@
 
 use gpodo_datasets::log::RoverLog;
 use gpodo_datasets::residuals::{ResidualConfig, residual_dataset};
-use gpodo_datasets::sim::manoeuvre::{Driver, DriverParams, PlanarPose};
+use gpodo_datasets::sim::driver::Driver;
+use gpodo_datasets::sim::manoeuvre::{DriverParams, PlanarPose};
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_datasets::sim::rover::World;
 use gpodo_datasets::sim::sensors::SensorNoise;

@@ -1,6 +1,7 @@
 //! The deterministic simulator of the ExoTeR-like rover in ESA's Planetary Robotics Lab testbed.
 
 pub mod chassis;
+pub mod driver;
 pub mod manoeuvre;
 pub mod noise;
 pub mod preset;

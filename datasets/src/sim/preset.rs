@@ -16,8 +16,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::DatasetError;
 use crate::log::RoverLog;
+use crate::sim::driver::Driver;
 use crate::sim::manoeuvre::{
-    Driver, DriverParams, PlanarPose, test_traverse_start_pose, test_traverse_waypoints,
+    DriverParams, PlanarPose, test_traverse_start_pose, test_traverse_waypoints,
 };
 use crate::sim::rover::World;
 use crate::sim::sensors::SensorNoise;

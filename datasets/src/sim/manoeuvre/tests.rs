@@ -1,5 +1,6 @@
 //! Tests of [`super`].
 use super::*;
+use crate::sim::driver::Driver;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -1,6 +1,7 @@
 //! Tests of [`super`].
 use super::*;
-use crate::sim::manoeuvre::{Driver, DriverParams, PlanarPose};
+use crate::sim::driver::Driver;
+use crate::sim::manoeuvre::{DriverParams, PlanarPose};
 use crate::sim::soil::{SoilMap, SoilMapSpec};
 use crate::sim::terrain::{Terrain, TerrainSpec};
 use rand::SeedableRng;
