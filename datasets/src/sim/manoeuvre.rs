@@ -10,14 +10,14 @@
 //! Rotating at `ω` about a centre `(0, y_c)` moves the body origin at
 //! `v_x = ω·y_c`. [`DriveCommand`]'s constructors build exactly these twists.
 //!
-//! [`Driver`] is a small state machine called at every sensor step with the
+//! [`Driver`](crate::sim::driver::Driver) is a small state machine called at every sensor step with the
 //! rover's true planar pose. It runs in one of two modes:
-//! - **training** ([`Driver::training`]): the remote-driving sessions of paper
+//! - **training** ([`Driver::training`](crate::sim::driver::Driver::training)): the remote-driving sessions of paper
 //!   §V — random manoeuvres (forward, backward, Ackermann, turn on the spot,
 //!   point turn) of 5–40 s, with short stops in between so the rover moves
 //!   about 70% of the time; within `edge_margin_m` of the area's edge it turns
 //!   on the spot towards the centre and drives back in;
-//! - **waypoint following** ([`Driver::follow`]): turns on the spot to face
+//! - **waypoint following** ([`Driver::follow`](crate::sim::driver::Driver::follow)): turns on the spot to face
 //!   the next waypoint, then drives forward with Ackermann corrections, e.g.
 //!   along [`test_traverse_waypoints`], the ≈ 42 m test run of paper §V-B.
 //!
