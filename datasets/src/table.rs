@@ -23,7 +23,7 @@ use crate::DatasetError;
 
 pub(crate) use reader::{NumericRows, column_index, read_numeric_csv};
 pub use split::split_fraction;
-pub use summary::{ColumnSummary, summarize_abs};
+pub use summary::{ColumnSummary, percentile, percentile_sorted, summarize_abs};
 
 /// Which columns of a residual table are inputs and which are targets.
 ///

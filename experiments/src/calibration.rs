@@ -5,6 +5,7 @@
 //! applied to the simulated and to the real table, so the comparison is like
 //! for like (1-s means, absolute values).
 
+use gpodo_datasets::table::{percentile, summarize_abs};
 use gpodo_traits::ResidualDataset;
 use serde::{Deserialize, Serialize};
 
@@ -32,18 +33,6 @@ pub struct ResidualStatistics {
     pub corr_abs_x_abs_roll: Option<f64>,
 }
 
-/// Linear-interpolation percentile (numpy's default) of unsorted values.
-pub fn percentile(values: &[f64], q: f64) -> f64 {
-    if values.is_empty() {
-        return f64::NAN;
-    }
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let pos = q / 100.0 * (v.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
-}
-
 fn pearson(a: &[f64], b: &[f64]) -> Option<f64> {
     let n = a.len() as f64;
     if a.len() < 2 {
@@ -63,9 +52,9 @@ pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
     let o = data.targets.ncols();
     let abs_col =
         |j: usize| -> Vec<f64> { data.targets.column(j).iter().map(|v| v.abs()).collect() };
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let mean_abs = (0..o).map(|j| mean(&abs_col(j))).collect();
-    let p95_abs = (0..o).map(|j| percentile(&abs_col(j), 95.0)).collect();
+    let summary = summarize_abs(data);
+    let mean_abs = summary.iter().map(|c| c.mean_abs).collect();
+    let p95_abs = summary.iter().map(|c| c.p95_abs).collect();
 
     let index = |name: &str| data.input_names.iter().position(|n| n == name);
     let wheel_cols: Vec<usize> = data
@@ -119,13 +108,6 @@ pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn percentile_interpolates_like_numpy() {
-        let v = [4.0, 1.0, 3.0, 2.0];
-        assert_eq!(percentile(&v, 50.0), 2.5);
-        assert!((percentile(&v, 95.0) - 3.85).abs() < 1e-12);
-    }
 
     #[test]
     fn pearson_of_proportional_series_is_one() {

@@ -334,8 +334,7 @@ impl WeightedJacobianModel {
 
         let bounds = self.bounds(s, dt_secs, n_contacts);
         let v = if bounds.is_empty() {
-            h.clone()
-                .cholesky()
+            h.cholesky()
                 .ok_or_else(|| KinematicsError::Solve("normal equations are singular".into()))?
                 .solve(&g)
         } else {

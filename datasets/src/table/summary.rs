@@ -34,10 +34,18 @@ pub fn summarize_abs(data: &ResidualDataset) -> Vec<ColumnSummary> {
         .collect()
 }
 
+/// The `q`-th percentile (0–100) of unsorted `values`, as
+/// [`percentile_sorted`] (numpy's default); NaN when `values` is empty.
+pub fn percentile(values: &[f64], q: f64) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    percentile_sorted(&sorted, q)
+}
+
 /// The `q`-th percentile (0–100) of ascending `sorted` values, interpolating
 /// linearly between the order statistics at ranks `⌊h⌋` and `⌈h⌉`,
 /// `h = (n − 1)·q/100` (numpy's default). NaN when `sorted` is empty.
-fn percentile_sorted(sorted: &[f64], q: f64) -> f64 {
+pub fn percentile_sorted(sorted: &[f64], q: f64) -> f64 {
     let Some(last) = sorted.len().checked_sub(1) else {
         return f64::NAN;
     };
