@@ -25,6 +25,33 @@ pub enum RegressorError {
     /// There is nothing to score.
     #[error("cannot score an empty test set")]
     EmptyTestSet,
+    /// A kernel matrix stayed indefinite after the largest jitter.
+    #[error(
+        "kernel matrix of size {n} is not positive definite, even with a diagonal jitter of {jitter_tried:e}"
+    )]
+    NotPositiveDefinite {
+        /// Matrix size.
+        n: usize,
+        /// The largest jitter tried.
+        jitter_tried: f64,
+    },
+    /// The training data cannot be used (empty, non-finite, wrong width).
+    #[error("training data: {detail}")]
+    InvalidData {
+        /// What is wrong, naming the row and column where there is one.
+        detail: String,
+    },
+    /// The hyperparameter optimiser failed.
+    #[error("hyperparameter optimisation ({optimizer}): {detail}")]
+    Optimizer {
+        /// Which optimiser.
+        optimizer: String,
+        /// What went wrong.
+        detail: String,
+    },
+    /// Standardising the data failed.
+    #[error(transparent)]
+    Dataset(#[from] gpodo_datasets::DatasetError),
 }
 
 impl From<RegressorError> for gpodo_traits::Error {

@@ -13,11 +13,16 @@
 //! incremental local Gaussian regression (§VI) join the same spec enum as
 //! `kernels/`, `exact_gp/`, `sparse_gp/` and `ilgr/` modules.
 
+pub mod dense;
 mod error;
+pub mod exact_gp;
+pub mod kernels;
 pub mod metrics;
 pub mod spec;
 pub mod zero;
 
 pub use error::RegressorError;
+pub use exact_gp::{ExactGp, ExactGpParams};
+pub use kernels::{Kernel, KernelExpr};
 pub use spec::RegressorSpec;
 pub use zero::ZeroResidual;

@@ -5,6 +5,7 @@
 use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
+use crate::exact_gp::{ExactGp, ExactGpParams, OutputSharing};
 use crate::{RegressorError, ZeroResidual};
 
 /// A regressor as written in an experiment file.
@@ -18,6 +19,8 @@ pub enum RegressorSpec {
         #[serde(default)]
         variance: Option<f64>,
     },
+    /// The exact Gaussian process (§IV-A) with a kernel expression.
+    ExactGp(ExactGpParams),
 }
 
 impl RegressorSpec {
@@ -25,6 +28,10 @@ impl RegressorSpec {
     pub fn label(&self) -> String {
         match self {
             Self::Zero { .. } => "parametric only".into(),
+            Self::ExactGp(p) => match p.outputs {
+                OutputSharing::Shared => format!("exact GP: {}", p.kernel),
+                OutputSharing::Independent => format!("exact GP: {} (per output)", p.kernel),
+            },
         }
     }
 
@@ -42,6 +49,7 @@ impl RegressorSpec {
                 })
             }
             Self::Zero { .. } => Ok(()),
+            Self::ExactGp(p) => p.check(),
         }
     }
 
@@ -53,6 +61,45 @@ impl RegressorSpec {
         self.validate()?;
         Ok(match self {
             Self::Zero { variance } => Box::new(ZeroResidual::new(*variance)),
+            Self::ExactGp(p) => Box::new(ExactGp::new(p.clone())?),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(json: &str) -> Result<RegressorSpec, serde_json::Error> {
+        serde_json::from_str(json)
+    }
+
+    #[test]
+    fn exact_gp_reads_its_kernel_expression_and_defaults() {
+        let spec =
+            parse(r#"{"kind": "exact_gp", "kernel": "matern52 + linear", "restarts": 2}"#).unwrap();
+        let RegressorSpec::ExactGp(p) = &spec else {
+            panic!("not an exact GP: {spec:?}")
+        };
+        assert_eq!(p.kernel.to_string(), "matern52 + linear");
+        assert_eq!(p.restarts, 2);
+        assert_eq!(p.max_iters, ExactGpParams::default().max_iters);
+        assert_eq!(spec.label(), "exact GP: matern52 + linear");
+        assert!(spec.build().is_ok());
+    }
+
+    #[test]
+    fn unknown_fields_and_bad_kernels_are_rejected() {
+        let err = parse(r#"{"kind": "exact_gp", "kernal": "rbf"}"#).unwrap_err();
+        assert!(err.to_string().contains("kernal"), "{err}");
+        let err = parse(r#"{"kind": "exact_gp", "kernel": "rbf + lin"}"#).unwrap_err();
+        assert!(err.to_string().contains("found `lin`"), "{err}");
+        let spec = parse(r#"{"kind": "exact_gp", "noise_variance": 0.0}"#).unwrap();
+        assert!(
+            spec.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("noise_variance")
+        );
     }
 }

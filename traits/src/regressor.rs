@@ -96,6 +96,10 @@ pub struct FitReport {
     pub evaluations: Option<usize>,
     /// Diagonal jitter added to make a factorisation succeed, if any.
     pub jitter: Option<f64>,
+    /// Learned hyperparameters by name (e.g. `rbf.lengthscale[pitch]`), in
+    /// natural units; empty for models without any.
+    #[serde(default)]
+    pub parameters: Vec<(String, f64)>,
 }
 
 /// A regressor of odometry residuals.

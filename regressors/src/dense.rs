@@ -1,0 +1,90 @@
+//! Conversions between the row-major [`SampleMatrix`] of the trait crate and
+//! faer's column-major [`Mat`], plus the few element-wise helpers the kernel
+//! code needs. Conversions happen at the crate boundary only (STYLE.md).
+
+use faer::{Mat, MatRef};
+use gpodo_traits::SampleMatrix;
+
+/// Copies a row-major sample matrix into a faer matrix.
+pub fn to_faer(m: &SampleMatrix) -> Mat<f64> {
+    Mat::from_fn(m.nrows(), m.ncols(), |i, j| m.get(i, j))
+}
+
+/// Copies a faer matrix into a row-major sample matrix.
+pub fn from_faer(m: MatRef<'_, f64>) -> SampleMatrix {
+    let (n, d) = (m.nrows(), m.ncols());
+    let mut data = Vec::with_capacity(n * d);
+    for i in 0..n {
+        for j in 0..d {
+            data.push(m[(i, j)]);
+        }
+    }
+    // Shapes agree by construction.
+    SampleMatrix::from_row_major(n, d, data).unwrap_or_else(|_| SampleMatrix::zeros(n, d))
+}
+
+/// `Σ_ij a_ij b_ij`.
+pub fn frobenius_dot(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
+    debug_assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
+    let mut total = 0.0;
+    for j in 0..a.ncols() {
+        let (ca, cb) = (column(a, j), column(b, j));
+        total += ca.iter().zip(cb.iter()).map(|(x, y)| x * y).sum::<f64>();
+    }
+    total
+}
+
+/// `a ∘ b` (element-wise product).
+pub fn hadamard(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    debug_assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
+    let mut out = Mat::zeros(a.nrows(), a.ncols());
+    for j in 0..a.ncols() {
+        let (ca, cb) = (column(a, j), column(b, j));
+        for ((o, x), y) in column_mut(&mut out, j)
+            .iter_mut()
+            .zip(ca.iter())
+            .zip(cb.iter())
+        {
+            *o = x * y;
+        }
+    }
+    out
+}
+
+/// The trace of a square matrix.
+pub fn trace(a: MatRef<'_, f64>) -> f64 {
+    (0..a.nrows().min(a.ncols())).map(|i| a[(i, i)]).sum()
+}
+
+/// Column `j` of a column-major matrix as a slice.
+///
+/// Every matrix in this crate is allocated by faer with unit row stride, so
+/// the slice always exists; the fallback copies for foreign views.
+pub fn column(a: MatRef<'_, f64>, j: usize) -> std::borrow::Cow<'_, [f64]> {
+    match a.col(j).try_as_col_major() {
+        Some(c) => std::borrow::Cow::Borrowed(c.as_slice()),
+        None => std::borrow::Cow::Owned(a.col(j).iter().copied().collect()),
+    }
+}
+
+/// Column `j` of an owned matrix as a mutable slice.
+pub fn column_mut(a: &mut Mat<f64>, j: usize) -> &mut [f64] {
+    a.col_as_slice_mut(j)
+}
+
+/// Copies the lower triangle onto the upper one.
+pub fn symmetrize_from_lower(a: &mut Mat<f64>) {
+    let n = a.nrows();
+    for j in 0..n {
+        for i in 0..j {
+            a[(i, j)] = a[(j, i)];
+        }
+    }
+}
+
+/// The parallelism used by the dense kernels: faer's global setting, so a
+/// sweep that already runs regressors on every core can set it to
+/// `Par::Seq` once (`faer::set_global_parallelism`).
+pub fn par() -> faer::Par {
+    faer::get_global_parallelism()
+}

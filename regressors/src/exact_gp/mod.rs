@@ -1,0 +1,15 @@
+//! The exact Gaussian process (paper §IV-A, eq. 7–9): Cholesky with faer
+//! ([`cholesky`]), the log marginal likelihood and its gradient
+//! ([`likelihood`]), hyperparameter learning with argmin ([`optimize`]), the
+//! posterior ([`posterior`]) and the regressor behind the trait ([`model`]).
+
+pub mod cholesky;
+pub mod likelihood;
+pub mod model;
+pub mod optimize;
+pub mod params;
+pub mod posterior;
+pub mod transform;
+
+pub use model::{ExactGp, ExactGpState, GpPredictions, GroupState};
+pub use params::{Bounds, ExactGpParams, Optimizer, OutputSharing};

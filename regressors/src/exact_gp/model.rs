@@ -1,0 +1,353 @@
+//! [`ExactGp`]: the exact GP regressor of the paper (§IV-A), behind
+//! [`ResidualRegressor`]. Standardises inputs and outputs with training
+//! statistics, learns hyperparameters per output group (all outputs
+//! sharing one kernel, or one GP per output), and predicts means and
+//! variances mapped back to target units (variance × std²). A trained model
+//! round-trips through [`ExactGpState`] (serde) for on-board prediction.
+
+use std::time::Instant;
+
+use faer::Mat;
+use gpodo_datasets::standardize::Standardizer;
+use gpodo_traits::{
+    Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+};
+use serde::{Deserialize, Serialize};
+
+use super::optimize::maximize_lml;
+use super::params::{ExactGpParams, OutputSharing};
+use super::posterior::Posterior;
+use crate::RegressorError;
+use crate::dense::{from_faer, to_faer};
+use crate::kernels::Kernel;
+
+/// One output group's learned model, serialisable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupState {
+    /// The output columns this GP predicts.
+    pub outputs: Vec<usize>,
+    /// Kernel with learned hyperparameters (standardised units).
+    pub kernel: Kernel,
+    /// Learned noise variance (standardised units).
+    pub noise_variance: f64,
+}
+
+/// Everything needed to rebuild a trained exact GP without refitting.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExactGpState {
+    /// The settings it was trained with.
+    pub params: ExactGpParams,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Output column names.
+    pub target_names: Vec<String>,
+    /// Input scaling (None when `standardize` is off).
+    pub input_scaler: Option<Standardizer>,
+    /// Output scaling (None when `standardize` is off).
+    pub output_scaler: Option<Standardizer>,
+    /// Training inputs after scaling.
+    pub x_train: SampleMatrix,
+    /// Training targets after scaling.
+    pub y_train: SampleMatrix,
+    /// One entry per output group.
+    pub groups: Vec<GroupState>,
+}
+
+/// Predictions with the latent variance kept apart from the noise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GpPredictions {
+    /// Predictive mean, target units.
+    pub mean: SampleMatrix,
+    /// Variance of the latent function, target units.
+    pub latent_variance: SampleMatrix,
+    /// Variance of a noisy target (latent + noise), target units.
+    pub variance: SampleMatrix,
+}
+
+#[derive(Debug, Clone)]
+struct Fitted {
+    state: ExactGpState,
+    posteriors: Vec<Posterior>,
+}
+
+/// The exact Gaussian process regressor.
+#[derive(Debug, Clone)]
+pub struct ExactGp {
+    params: ExactGpParams,
+    fitted: Option<Fitted>,
+}
+
+fn backend(e: RegressorError) -> Error {
+    e.into()
+}
+
+fn columns(m: &Mat<f64>, cols: &[usize]) -> Mat<f64> {
+    Mat::from_fn(m.nrows(), cols.len(), |i, j| m[(i, cols[j])])
+}
+
+fn check_finite(what: &str, m: &SampleMatrix) -> Result<(), RegressorError> {
+    for (i, row) in m.rows().enumerate() {
+        if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+            return Err(RegressorError::InvalidData {
+                detail: format!("{what}: non-finite value at row {i}, column {j}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+impl ExactGp {
+    /// A GP with checked settings.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the bad field.
+    pub fn new(params: ExactGpParams) -> Result<Self, RegressorError> {
+        params.check()?;
+        Ok(Self {
+            params,
+            fitted: None,
+        })
+    }
+
+    /// The settings.
+    pub fn params(&self) -> &ExactGpParams {
+        &self.params
+    }
+
+    /// The trained model as serialisable state (None before `fit`).
+    pub fn state(&self) -> Option<&ExactGpState> {
+        self.fitted.as_ref().map(|f| &f.state)
+    }
+
+    /// Log marginal likelihood of each output group (standardised units).
+    pub fn log_marginal_likelihoods(&self) -> Vec<f64> {
+        self.fitted
+            .as_ref()
+            .map(|f| f.posteriors.iter().map(|p| p.lml).collect())
+            .unwrap_or_default()
+    }
+
+    /// Rebuilds a trained GP from its state (one factorisation per group).
+    ///
+    /// # Errors
+    /// As [`ExactGpParams::check`], or when the state is inconsistent or its
+    /// kernel matrix cannot be factorised.
+    pub fn from_state(state: ExactGpState) -> Result<Self, RegressorError> {
+        state.params.check()?;
+        check_finite("saved x_train", &state.x_train)?;
+        check_finite("saved y_train", &state.y_train)?;
+        let x = to_faer(&state.x_train);
+        let y = to_faer(&state.y_train);
+        let mut posteriors = Vec::with_capacity(state.groups.len());
+        for g in &state.groups {
+            if g.outputs.iter().any(|&c| c >= y.ncols())
+                || g.kernel.input_dim().is_some_and(|d| d != x.ncols())
+            {
+                return Err(RegressorError::InvalidData {
+                    detail: "saved GP state: a group's outputs or kernel width do not match the training data".into(),
+                });
+            }
+            posteriors.push(Posterior::new(
+                g.kernel.clone(),
+                g.noise_variance,
+                x.clone(),
+                columns(&y, &g.outputs),
+            )?);
+        }
+        Ok(Self {
+            params: state.params.clone(),
+            fitted: Some(Fitted { state, posteriors }),
+        })
+    }
+
+    fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        let (n, d, p) = (data.len(), data.inputs.ncols(), data.targets.ncols());
+        if n == 0 || d == 0 || p == 0 {
+            return Err(RegressorError::InvalidData {
+                detail: format!(
+                    "need samples, inputs and outputs; got {n} × {d} inputs, {p} outputs"
+                ),
+            });
+        }
+        check_finite("inputs", &data.inputs)?;
+        check_finite("targets", &data.targets)?;
+        let (input_scaler, output_scaler, xs, ys) = if self.params.standardize {
+            let si = Standardizer::fit(&data.inputs)?;
+            let so = Standardizer::fit(&data.targets)?;
+            let (xs, ys) = (si.transform(&data.inputs)?, so.transform(&data.targets)?);
+            (Some(si), Some(so), xs, ys)
+        } else {
+            (None, None, data.inputs.clone(), data.targets.clone())
+        };
+        let x = to_faer(&xs);
+        let y = to_faer(&ys);
+        let group_outputs: Vec<Vec<usize>> = match self.params.outputs {
+            OutputSharing::Shared => vec![(0..p).collect()],
+            OutputSharing::Independent => (0..p).map(|c| vec![c]).collect(),
+        };
+        let mut report = FitReport {
+            n_samples: n,
+            ..Default::default()
+        };
+        let (mut objective, mut evaluations, mut jitter) = (0.0, 0, 0.0f64);
+        let mut groups = Vec::new();
+        let mut posteriors = Vec::new();
+        for (g, outputs) in group_outputs.into_iter().enumerate() {
+            let yg = columns(&y, &outputs);
+            let kernel0 = self.params.kernel.build(d, &self.params.init);
+            let (kernel, noise) = if self.params.optimize {
+                let mut params = self.params.clone();
+                params.seed = params.seed.wrapping_add(g as u64);
+                let opt = maximize_lml(
+                    &kernel0,
+                    self.params.noise_variance,
+                    x.as_ref(),
+                    yg.as_ref(),
+                    &params,
+                )?;
+                evaluations += opt.evaluations;
+                tracing::debug!(
+                    group = g,
+                    lml = opt.lml,
+                    evaluations = opt.evaluations,
+                    iterations = opt.iterations,
+                    "exact GP hyperparameters learned"
+                );
+                (opt.kernel, opt.noise_variance)
+            } else {
+                (kernel0, self.params.noise_variance)
+            };
+            let posterior = Posterior::new(kernel.clone(), noise, x.clone(), yg)?;
+            objective += posterior.lml;
+            jitter = jitter.max(posterior.jitter());
+            let prefix = if matches!(self.params.outputs, OutputSharing::Independent) {
+                format!(
+                    "{}.",
+                    data.target_names
+                        .get(outputs[0])
+                        .cloned()
+                        .unwrap_or_default()
+                )
+            } else {
+                String::new()
+            };
+            let names = kernel.param_names(&data.input_names);
+            let values = kernel.log_params().into_iter().map(f64::exp);
+            report.parameters.extend(
+                names
+                    .into_iter()
+                    .zip(values)
+                    .map(|(k, v)| (format!("{prefix}{k}"), v)),
+            );
+            report
+                .parameters
+                .push((format!("{prefix}noise_variance"), noise));
+            groups.push(GroupState {
+                outputs,
+                kernel,
+                noise_variance: noise,
+            });
+            posteriors.push(posterior);
+        }
+        report.objective = Some(objective);
+        report.evaluations = self.params.optimize.then_some(evaluations);
+        report.jitter = Some(jitter);
+        report.duration_secs = start.elapsed().as_secs_f64();
+        self.fitted = Some(Fitted {
+            state: ExactGpState {
+                params: self.params.clone(),
+                input_names: data.input_names.clone(),
+                target_names: data.target_names.clone(),
+                input_scaler,
+                output_scaler,
+                x_train: xs,
+                y_train: ys,
+                groups,
+            },
+            posteriors,
+        });
+        Ok(report)
+    }
+
+    /// Mean, latent variance and noisy variance at `inputs`, in target units.
+    ///
+    /// # Errors
+    /// [`Error::NotFitted`] before `fit`; [`Error::DimensionMismatch`] for a
+    /// wrong input width; [`Error::InvalidInput`] for non-finite inputs.
+    pub fn predict_full(&self, inputs: &SampleMatrix) -> Result<GpPredictions, Error> {
+        let Some(fitted) = &self.fitted else {
+            return Err(Error::NotFitted {
+                model: self.name().into(),
+            });
+        };
+        let state = &fitted.state;
+        let d = state.x_train.ncols();
+        if inputs.ncols() != d {
+            return Err(Error::DimensionMismatch {
+                what: "exact GP inputs".into(),
+                expected: d,
+                found: inputs.ncols(),
+            });
+        }
+        check_finite("prediction inputs", inputs)
+            .map_err(|e| Error::InvalidInput(e.to_string()))?;
+        let xs = match &state.input_scaler {
+            Some(s) => s.transform(inputs).map_err(|e| backend(e.into()))?,
+            None => inputs.clone(),
+        };
+        let xs = to_faer(&xs);
+        let (m, p) = (xs.nrows(), state.y_train.ncols());
+        let mut mean = Mat::<f64>::zeros(m, p);
+        let mut latent = Mat::<f64>::zeros(m, p);
+        let mut noisy = Mat::<f64>::zeros(m, p);
+        for (g, posterior) in state.groups.iter().zip(&fitted.posteriors) {
+            let moments = posterior.predict(xs.as_ref());
+            for (k, &c) in g.outputs.iter().enumerate() {
+                for i in 0..m {
+                    mean[(i, c)] = moments.mean[(i, k)];
+                    latent[(i, c)] = moments.latent_variance[i];
+                    noisy[(i, c)] = moments.latent_variance[i] + moments.noise_variance;
+                }
+            }
+        }
+        let (mean, latent, noisy) = (
+            from_faer(mean.as_ref()),
+            from_faer(latent.as_ref()),
+            from_faer(noisy.as_ref()),
+        );
+        let back = |r: Result<SampleMatrix, gpodo_datasets::DatasetError>| {
+            r.map_err(|e| backend(e.into()))
+        };
+        Ok(match &state.output_scaler {
+            Some(s) => GpPredictions {
+                mean: back(s.inverse_transform_mean(&mean))?,
+                latent_variance: back(s.inverse_transform_variance(&latent))?,
+                variance: back(s.inverse_transform_variance(&noisy))?,
+            },
+            None => GpPredictions {
+                mean,
+                latent_variance: latent,
+                variance: noisy,
+            },
+        })
+    }
+}
+
+impl ResidualRegressor for ExactGp {
+    fn name(&self) -> &str {
+        "exact_gp"
+    }
+
+    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
+        self.fit_impl(data).map_err(backend)
+    }
+
+    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let full = self.predict_full(inputs)?;
+        Ok(Predictions {
+            mean: full.mean,
+            variance: full.variance,
+        })
+    }
+}

@@ -1,0 +1,206 @@
+//! What an exact GP is asked to do, as written in YAML
+//! (`kind: exact_gp`), validated once when the configuration is read.
+
+use serde::{Deserialize, Serialize};
+
+use crate::RegressorError;
+use crate::kernels::{KernelExpr, KernelInit, ParamKind};
+
+/// How the output columns share hyperparameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputSharing {
+    /// One kernel and one noise for all outputs, one factorisation (GPy's
+    /// `GPRegression` on an `n × p` target; the authors' setting). Default.
+    #[default]
+    Shared,
+    /// One independent GP, with its own hyperparameters, per output.
+    Independent,
+}
+
+/// The optimiser of the log marginal likelihood.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Optimizer {
+    /// L-BFGS (memory 10) with a Moré–Thuente line search (default; the
+    /// authors' scripts used L-BFGS-B).
+    #[default]
+    Lbfgs,
+    /// Polak–Ribière nonlinear conjugate gradient with restarts (the paper's
+    /// wording, §V-A).
+    ConjugateGradient,
+}
+
+/// `[lower, upper]` bounds of each kind of hyperparameter, in the units of
+/// the standardised data.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Bounds {
+    /// Signal variances (default `[1e-6, 1e4]`).
+    pub variance: [f64; 2],
+    /// Lengthscales (default `[1e-3, 1e5]`).
+    pub lengthscale: [f64; 2],
+    /// Per-input variances of the linear kernel (default `[1e-8, 1e4]`).
+    pub linear_variance: [f64; 2],
+    /// Noise variance (default `[1e-8, 1e2]`).
+    pub noise_variance: [f64; 2],
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Self {
+            variance: [1e-6, 1e4],
+            lengthscale: [1e-3, 1e5],
+            linear_variance: [1e-8, 1e4],
+            noise_variance: [1e-8, 1e2],
+        }
+    }
+}
+
+impl Bounds {
+    /// The bounds of a kernel hyperparameter of this kind.
+    pub fn of(&self, kind: ParamKind) -> [f64; 2] {
+        match kind {
+            ParamKind::Variance => self.variance,
+            ParamKind::Lengthscale => self.lengthscale,
+            ParamKind::LinearVariance => self.linear_variance,
+        }
+    }
+}
+
+/// Exact GP settings. Every field has a default; see `experiments/README.md`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExactGpParams {
+    /// Kernel expression (default `rbf`), e.g. `rbf + linear`.
+    pub kernel: KernelExpr,
+    /// Output sharing (default `shared`).
+    pub outputs: OutputSharing,
+    /// Z-score inputs and outputs with training statistics (default true);
+    /// predictions are mapped back (variance × std²).
+    pub standardize: bool,
+    /// Initial kernel hyperparameters.
+    pub init: KernelInit,
+    /// Initial noise variance in standardised units (default 0.01, the
+    /// authors' `0.01·var(Y)`).
+    pub noise_variance: f64,
+    /// Learn the hyperparameters (default true); false keeps the initial ones.
+    pub optimize: bool,
+    /// Optimiser (default `lbfgs`).
+    pub optimizer: Optimizer,
+    /// Iteration limit per start (default 200).
+    pub max_iters: u64,
+    /// Extra starts from seeded random perturbations of the initial
+    /// hyperparameters (default 0); the best log marginal likelihood wins.
+    pub restarts: usize,
+    /// Seed of the restart perturbations (default 0).
+    pub seed: u64,
+    /// Stop when the gradient norm falls below this (default 1e-5).
+    pub gradient_tolerance: f64,
+    /// Stop when an iteration changes the objective by less than this
+    /// fraction of its initial magnitude (default 1e-10).
+    pub relative_cost_tolerance: f64,
+    /// Hyperparameter bounds.
+    pub bounds: Bounds,
+}
+
+impl Default for ExactGpParams {
+    fn default() -> Self {
+        Self {
+            kernel: KernelExpr::Leaf("rbf".into()),
+            outputs: OutputSharing::Shared,
+            standardize: true,
+            init: KernelInit::default(),
+            noise_variance: 0.01,
+            optimize: true,
+            optimizer: Optimizer::Lbfgs,
+            max_iters: 200,
+            restarts: 0,
+            seed: 0,
+            gradient_tolerance: 1e-5,
+            relative_cost_tolerance: 1e-10,
+            bounds: Bounds::default(),
+        }
+    }
+}
+
+impl ExactGpParams {
+    /// Parameters with the given kernel expression and defaults elsewhere.
+    pub fn with_kernel(kernel: KernelExpr) -> Self {
+        Self {
+            kernel,
+            ..Self::default()
+        }
+    }
+
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the field and the expected form.
+    pub fn check(&self) -> Result<(), RegressorError> {
+        let bad = |field: &str, expected: &str| {
+            Err(RegressorError::InvalidSpec {
+                regressor: "exact_gp".into(),
+                field: field.into(),
+                expected: expected.into(),
+            })
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let bounds = [
+            ("bounds.variance", self.bounds.variance),
+            ("bounds.lengthscale", self.bounds.lengthscale),
+            ("bounds.linear_variance", self.bounds.linear_variance),
+            ("bounds.noise_variance", self.bounds.noise_variance),
+        ];
+        for (field, [lo, hi]) in bounds {
+            if !(positive(lo) && positive(hi) && lo < hi) {
+                return bad(field, "[lower, upper] with 0 < lower < upper");
+            }
+        }
+        let within = |v: f64, [lo, hi]: [f64; 2]| v >= lo && v <= hi;
+        if !within(self.noise_variance, self.bounds.noise_variance) {
+            return bad(
+                "noise_variance",
+                "a positive variance within bounds.noise_variance",
+            );
+        }
+        if !within(self.init.variance, self.bounds.variance) {
+            return bad(
+                "init.variance",
+                "a positive variance within bounds.variance",
+            );
+        }
+        if !within(self.init.white_variance, self.bounds.variance) {
+            return bad(
+                "init.white_variance",
+                "a positive variance within bounds.variance",
+            );
+        }
+        if let Some(l) = self.init.lengthscale
+            && !within(l, self.bounds.lengthscale)
+        {
+            return bad(
+                "init.lengthscale",
+                "a positive lengthscale within bounds.lengthscale",
+            );
+        }
+        if let Some(v) = self.init.linear_variance
+            && !within(v, self.bounds.linear_variance)
+        {
+            return bad(
+                "init.linear_variance",
+                "a positive variance within bounds.linear_variance",
+            );
+        }
+        if self.max_iters == 0 && self.optimize {
+            return bad("max_iters", "at least 1 (or `optimize: false`)");
+        }
+        if !positive(self.gradient_tolerance) {
+            return bad("gradient_tolerance", "a positive number");
+        }
+        if !(self.relative_cost_tolerance.is_finite() && self.relative_cost_tolerance >= 0.0) {
+            return bad("relative_cost_tolerance", "a non-negative number");
+        }
+        Ok(())
+    }
+}

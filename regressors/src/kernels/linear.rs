@@ -1,0 +1,69 @@
+//! Linear kernel with one variance per input (paper eq. 13 with ARD, as
+//! GPy's `Linear(ARD=True)`): `k(x, x') = Σ_q v_q x_q x'_q`;
+//! `∂K/∂log v_q = v_q x_q x_qᵀ`, so `Σ_ij W_ij ∂K_ij/∂log v_q = v_q x_qᵀ W x_q`,
+//! all `q` from one product `W X`.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef};
+use serde::{Deserialize, Serialize};
+
+use crate::dense::par;
+
+/// Hyperparameters of the linear kernel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Linear {
+    /// One variance per input, `v_q`.
+    pub variances: Vec<f64>,
+}
+
+impl Linear {
+    /// A linear kernel with the given per-input variances.
+    pub fn new(variances: Vec<f64>) -> Self {
+        Self { variances }
+    }
+
+    /// `K(X1, X2) = X1 diag(v) X2ᵀ`.
+    pub fn cross(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
+        let scaled = Mat::from_fn(x1.nrows(), x1.ncols(), |i, q| {
+            x1[(i, q)] * self.variances[q]
+        });
+        let mut k = Mat::zeros(x1.nrows(), x2.nrows());
+        matmul(
+            k.as_mut(),
+            Accum::Replace,
+            scaled.as_ref(),
+            x2.transpose(),
+            1.0,
+            par(),
+        );
+        k
+    }
+
+    /// Adds `Σ_ij W_ij ∂K_ij/∂log v_q` to `out`.
+    pub fn accumulate_gradient(&self, x: MatRef<'_, f64>, w: MatRef<'_, f64>, out: &mut [f64]) {
+        let (n, d) = (x.nrows(), x.ncols());
+        let mut wx = Mat::<f64>::zeros(n, d);
+        matmul(wx.as_mut(), Accum::Replace, w, x, 1.0, par());
+        for (q, o) in out.iter_mut().enumerate().take(d) {
+            let quad: f64 = (0..n).map(|i| x[(i, q)] * wx[(i, q)]).sum();
+            *o += self.variances[q] * quad;
+        }
+    }
+}
+
+/// White noise as a kernel (GPy's `White`): `σ_w²` on the diagonal of
+/// `K(X, X)`, zero between distinct point sets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct White {
+    /// Variance `σ_w²`.
+    pub variance: f64,
+}
+
+impl White {
+    /// A white kernel with the given variance.
+    pub fn new(variance: f64) -> Self {
+        Self { variance }
+    }
+}

@@ -1,0 +1,348 @@
+//! Exact GP specification: the log marginal likelihood and its gradient,
+//! closed-form cases, interpolation, hyperparameter learning, scaling,
+//! saving and loading, and error handling.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod support;
+
+use faer::Mat;
+use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
+use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, ExactGpState, Optimizer, OutputSharing};
+use gpodo_regressors::kernels::{KernelExpr, KernelInit};
+use gpodo_traits::{ResidualRegressor, SampleMatrix};
+use support::*;
+
+fn fixed(expr: &str) -> ExactGpParams {
+    ExactGpParams {
+        optimize: false,
+        standardize: false,
+        ..ExactGpParams::with_kernel(KernelExpr::parse(expr).unwrap())
+    }
+}
+
+#[test]
+fn lml_gradient_matches_finite_differences() {
+    let mut rng = rng(21);
+    for expr in [
+        "rbf",
+        "matern52",
+        "matern32",
+        "linear",
+        "rbf + linear",
+        "matern52 + linear",
+        "rbf * linear",
+        "rbf + white",
+    ] {
+        for outputs in [1, 3] {
+            let x = inputs(&mut rng, 25, 3);
+            let y = targets(&mut rng, &x, 0.1);
+            let y = Mat::from_fn(25, outputs, |i, c| y[(i, c)]);
+            let kernel = random_kernel(&mut rng, expr, 3);
+            let noise = 0.05;
+            let eval =
+                log_marginal_likelihood(&kernel, noise, x.as_ref(), y.as_ref(), true).unwrap();
+            let analytic = eval.gradient.unwrap();
+            let mut theta = kernel.log_params();
+            theta.push(noise.ln());
+            let lml_at = |t: &[f64]| {
+                let mut k = kernel.clone();
+                k.set_log_params(&t[..t.len() - 1]);
+                log_marginal_likelihood(&k, t[t.len() - 1].exp(), x.as_ref(), y.as_ref(), false)
+                    .unwrap()
+                    .lml
+            };
+            let h = 1e-5;
+            for (k, a) in analytic.iter().enumerate() {
+                let mut tp = theta.clone();
+                tp[k] += h;
+                let up = lml_at(&tp);
+                tp[k] -= 2.0 * h;
+                let down = lml_at(&tp);
+                let fd = (up - down) / (2.0 * h);
+                let err = rel_err(*a, fd, 1e-4);
+                assert!(
+                    err < 1e-5,
+                    "{expr}, {outputs} outputs, parameter {k}: {a} vs {fd} ({err:e})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn one_and_two_point_cases_match_closed_forms() {
+    let (s2, ell, sn2) = (1.3_f64, 0.7_f64, 0.2_f64);
+    let mut kernel = KernelExpr::parse("rbf")
+        .unwrap()
+        .build(1, &KernelInit::default());
+    kernel.set_log_params(&[s2.ln(), ell.ln()]);
+    let ln2pi = (2.0 * std::f64::consts::PI).ln();
+
+    let x1 = Mat::from_fn(1, 1, |_, _| 0.4);
+    let y1 = Mat::from_fn(1, 1, |_, _| 0.9);
+    let lml = log_marginal_likelihood(&kernel, sn2, x1.as_ref(), y1.as_ref(), false)
+        .unwrap()
+        .lml;
+    let v = s2 + sn2;
+    assert!((lml - (-0.5 * 0.81 / v - 0.5 * v.ln() - 0.5 * ln2pi)).abs() < 1e-14);
+
+    // Two points: K_y = [[a, b], [b, a]].
+    let x2 = Mat::from_fn(2, 1, |i, _| [0.0, 0.5][i]);
+    let y2 = Mat::from_fn(2, 1, |i, _| [1.0, -0.5][i]);
+    let (a, b) = (s2 + sn2, s2 * (-0.5 * (0.5 / ell).powi(2)).exp());
+    let det = a * a - b * b;
+    let quad = (a * 1.0 + a * 0.25 - 2.0 * b * (1.0 * -0.5)) / det;
+    let expected = -0.5 * quad - 0.5 * det.ln() - ln2pi;
+    let lml = log_marginal_likelihood(&kernel, sn2, x2.as_ref(), y2.as_ref(), false)
+        .unwrap()
+        .lml;
+    assert!((lml - expected).abs() < 1e-13, "{lml} vs {expected}");
+
+    // Prediction from one point: mean k*·y/(σ²+σn²), variance σ² − k*²/(σ²+σn²).
+    let mut gp = ExactGp::new(ExactGpParams {
+        init: KernelInit {
+            variance: s2,
+            lengthscale: Some(ell),
+            ..KernelInit::default()
+        },
+        noise_variance: sn2,
+        ..fixed("rbf")
+    })
+    .unwrap();
+    gp.fit(&dataset(&x1, &y1)).unwrap();
+    let xs = SampleMatrix::from_row_major(1, 1, vec![1.0]).unwrap();
+    let p = gp.predict_full(&xs).unwrap();
+    let ks = s2 * (-0.5 * (0.6 / ell).powi(2)).exp();
+    assert!((p.mean.get(0, 0) - ks * 0.9 / v).abs() < 1e-14);
+    assert!((p.latent_variance.get(0, 0) - (s2 - ks * ks / v)).abs() < 1e-14);
+    assert!((p.variance.get(0, 0) - (s2 - ks * ks / v + sn2)).abs() < 1e-14);
+}
+
+#[test]
+fn prediction_at_training_points_interpolates_with_tiny_noise() {
+    let mut rng = rng(22);
+    let x = inputs(&mut rng, 20, 2);
+    let y = targets(&mut rng, &x, 0.0);
+    let mut gp = ExactGp::new(ExactGpParams {
+        noise_variance: 1e-8,
+        init: KernelInit {
+            lengthscale: Some(1.0),
+            ..KernelInit::default()
+        },
+        bounds: gpodo_regressors::exact_gp::Bounds {
+            noise_variance: [1e-10, 1.0],
+            ..Default::default()
+        },
+        ..fixed("matern52")
+    })
+    .unwrap();
+    gp.fit(&dataset(&x, &y)).unwrap();
+    let p = gp.predict_full(&sample_matrix(&x)).unwrap();
+    for i in 0..20 {
+        for c in 0..3 {
+            assert!(
+                (p.mean.get(i, c) - y[(i, c)]).abs() < 1e-5,
+                "row {i} output {c}"
+            );
+            assert!(p.latent_variance.get(i, c) < 1e-6);
+        }
+    }
+}
+
+fn sine_data(n: usize, seed: u64) -> (Mat<f64>, Mat<f64>) {
+    use rand::Rng;
+    let mut rng = rng(seed);
+    let x = Mat::from_fn(n, 1, |i, _| -3.0 + 6.0 * i as f64 / (n - 1) as f64);
+    let y = Mat::from_fn(n, 1, |i, _| {
+        let t = x[(i, 0)];
+        (1.5 * t).sin() - 0.2 * t * t + rng.random_range(-0.05..0.05)
+    });
+    (x, y)
+}
+
+#[test]
+fn learning_raises_the_likelihood_and_fits_a_sine_with_both_optimisers() {
+    let (x, y) = sine_data(60, 23);
+    let data = dataset(&x, &y);
+    let mut lmls = Vec::new();
+    for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
+        let mut gp = ExactGp::new(ExactGpParams {
+            optimizer,
+            ..ExactGpParams::default()
+        })
+        .unwrap();
+        let mut fixed_gp = ExactGp::new(ExactGpParams {
+            optimize: false,
+            ..ExactGpParams::default()
+        })
+        .unwrap();
+        let report = gp.fit(&data).unwrap();
+        let initial = fixed_gp.fit(&data).unwrap().objective.unwrap();
+        let learned = report.objective.unwrap();
+        assert!(
+            learned > initial + 1.0,
+            "{optimizer:?}: {initial} → {learned}"
+        );
+        assert!(report.evaluations.unwrap() > 3);
+        assert!(
+            report
+                .parameters
+                .iter()
+                .any(|(n, _)| n == "rbf.lengthscale[x0]")
+        );
+        let xs = Mat::from_fn(25, 1, |i, _| -2.9 + 5.8 * i as f64 / 24.0);
+        let p = gp.predict_full(&sample_matrix(&xs)).unwrap();
+        let rmse = ((0..25)
+            .map(|i| {
+                let t = xs[(i, 0)];
+                (p.mean.get(i, 0) - ((1.5 * t).sin() - 0.2 * t * t)).powi(2)
+            })
+            .sum::<f64>()
+            / 25.0)
+            .sqrt();
+        assert!(rmse < 0.05, "{optimizer:?}: rmse {rmse}");
+        lmls.push(learned);
+    }
+    assert!(
+        rel_err(lmls[0], lmls[1], 1.0) < 1e-3,
+        "L-BFGS {} vs CG {}",
+        lmls[0],
+        lmls[1]
+    );
+}
+
+#[test]
+fn predictions_scale_with_the_targets() {
+    let (x, y) = sine_data(30, 24);
+    let scaled = Mat::from_fn(30, 1, |i, _| 1000.0 * y[(i, 0)] + 5.0);
+    let mut a = ExactGp::new(ExactGpParams::default()).unwrap();
+    let mut b = ExactGp::new(ExactGpParams::default()).unwrap();
+    a.fit(&dataset(&x, &y)).unwrap();
+    b.fit(&dataset(&x, &scaled)).unwrap();
+    let xs = SampleMatrix::from_row_major(3, 1, vec![-1.0, 0.3, 2.2]).unwrap();
+    let (pa, pb) = (a.predict_full(&xs).unwrap(), b.predict_full(&xs).unwrap());
+    for i in 0..3 {
+        assert!((1000.0 * pa.mean.get(i, 0) + 5.0 - pb.mean.get(i, 0)).abs() < 1e-6 * 1000.0);
+        assert!(rel_err(1e6 * pa.variance.get(i, 0), pb.variance.get(i, 0), 1e-12) < 1e-6);
+    }
+}
+
+#[test]
+fn saved_state_reloads_to_identical_predictions() {
+    let mut rng = rng(25);
+    let x = inputs(&mut rng, 40, 3);
+    let y = targets(&mut rng, &x, 0.05);
+    let mut gp = ExactGp::new(ExactGpParams::with_kernel(
+        KernelExpr::parse("rbf + linear").unwrap(),
+    ))
+    .unwrap();
+    gp.fit(&dataset(&x, &y)).unwrap();
+    let json = serde_json::to_string(gp.state().unwrap()).unwrap();
+    let state: ExactGpState = serde_json::from_str(&json).unwrap();
+    let reloaded = ExactGp::from_state(state).unwrap();
+    let xs = sample_matrix(&inputs(&mut rng, 5, 3));
+    let (a, b) = (
+        gp.predict_full(&xs).unwrap(),
+        reloaded.predict_full(&xs).unwrap(),
+    );
+    assert_eq!(a, b);
+}
+
+#[test]
+fn independent_outputs_equal_separate_single_output_fits() {
+    let mut rng = rng(26);
+    let x = inputs(&mut rng, 30, 2);
+    let y = targets(&mut rng, &x, 0.05);
+    let mut joint = ExactGp::new(ExactGpParams {
+        outputs: OutputSharing::Independent,
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    let report = joint.fit(&dataset(&x, &y)).unwrap();
+    assert!(
+        report
+            .parameters
+            .iter()
+            .any(|(n, _)| n == "y2.noise_variance")
+    );
+    let xs = sample_matrix(&inputs(&mut rng, 4, 2));
+    let pj = joint.predict_full(&xs).unwrap();
+    for c in 0..3 {
+        let yc = Mat::from_fn(30, 1, |i, _| y[(i, c)]);
+        let mut single = ExactGp::new(ExactGpParams {
+            seed: c as u64,
+            ..ExactGpParams::default()
+        })
+        .unwrap();
+        single.fit(&dataset(&x, &yc)).unwrap();
+        let ps = single.predict_full(&xs).unwrap();
+        for i in 0..4 {
+            assert!((pj.mean.get(i, c) - ps.mean.get(i, 0)).abs() < 1e-9);
+            assert!(rel_err(pj.variance.get(i, c), ps.variance.get(i, 0), 1e-12) < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn restarts_are_reproducible_and_never_worse() {
+    let (x, y) = sine_data(40, 27);
+    let data = dataset(&x, &y);
+    let fit = |restarts, seed| {
+        let mut gp = ExactGp::new(ExactGpParams {
+            restarts,
+            seed,
+            ..ExactGpParams::default()
+        })
+        .unwrap();
+        gp.fit(&data).unwrap()
+    };
+    let (one, a, b) = (fit(0, 5), fit(3, 5), fit(3, 5));
+    assert_eq!(a.objective, b.objective);
+    assert_eq!(a.parameters, b.parameters);
+    assert!(a.objective.unwrap() >= one.objective.unwrap() - 1e-9);
+}
+
+#[test]
+fn bad_data_and_misuse_give_clear_errors() {
+    let mut rng = rng(28);
+    let x = inputs(&mut rng, 10, 2);
+    let mut y = targets(&mut rng, &x, 0.1);
+    let mut gp = ExactGp::new(ExactGpParams::default()).unwrap();
+    let xs = SampleMatrix::from_row_major(1, 2, vec![0.0, 0.0]).unwrap();
+    assert!(
+        gp.predict(&xs)
+            .unwrap_err()
+            .to_string()
+            .contains("not been fitted")
+    );
+    y[(4, 1)] = f64::NAN;
+    let err = gp.fit(&dataset(&x, &y)).unwrap_err().to_string();
+    assert!(err.contains("row 4") && err.contains("column 1"), "{err}");
+    y[(4, 1)] = 0.0;
+    gp.fit(&dataset(&x, &y)).unwrap();
+    let wide = SampleMatrix::from_row_major(1, 3, vec![0.0; 3]).unwrap();
+    assert!(
+        gp.predict(&wide)
+            .unwrap_err()
+            .to_string()
+            .contains("expected dimension 2")
+    );
+    let bad = ExactGpParams {
+        noise_variance: -1.0,
+        ..ExactGpParams::default()
+    };
+    assert!(
+        ExactGp::new(bad)
+            .unwrap_err()
+            .to_string()
+            .contains("noise_variance")
+    );
+}
+
+#[test]
+fn regressors_are_send_and_sync() {
+    fn check<T: Send + Sync>() {}
+    check::<ExactGp>();
+    check::<ExactGpState>();
+}
