@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::calibration::ResidualStatistics;
 use crate::config::DatasetSpec;
-use crate::pipeline::ExperimentResults;
+use crate::pipeline::{ExperimentResults, RegressorResult};
 
 /// Writes `contents` to `path` atomically (temporary file + rename).
 ///
@@ -90,6 +90,7 @@ pub fn markdown(r: &ExperimentResults) -> String {
     );
     runs_section(&mut s, r);
     table_one(&mut s, r);
+    hyperparameter_section(&mut s, r);
     dead_reckoning_section(&mut s, r);
     statistics_section(&mut s, r);
     s
@@ -138,7 +139,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
     }
     let _ = writeln!(
         s,
-        "\nPer output (× 1000), predictive quality and fit:\n\n| Regressor | RMSE per output | MAE per output | NLPD | 95% coverage | fit [s] |\n|---|---|---|---:|---:|---:|"
+        "\nPer output (× 1000), predictive quality and fit (log marginal likelihood on the standardised training rows; evaluations of the objective and its gradient):\n\n| Regressor | RMSE per output | MAE per output | NLPD | 95% coverage | fit [s] | LML | evaluations | jitter |\n|---|---|---|---:|---:|---:|---:|---:|---:|"
     );
     for reg in &r.regressors {
         let per = &reg.evaluation.per_output;
@@ -146,13 +147,75 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
         let mae: Vec<String> = per.iter().map(|p| mm(p.mae)).collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {} |",
             reg.label,
             rmse.join(" / "),
             mae.join(" / "),
             reg.evaluation.pooled.nlpd,
             reg.evaluation.pooled.coverage95,
-            reg.fit.duration_secs
+            reg.fit.duration_secs,
+            opt(reg.fit.objective, 1.0, 2),
+            reg.fit.evaluations.map_or("–".into(), |e| e.to_string()),
+            reg.fit.jitter.map_or("–".into(), |j| format!("{j:.1e}")),
+        );
+    }
+    s.push('\n');
+}
+
+/// How many of the shortest lengthscales to list per model.
+const RELEVANT_INPUTS: usize = 6;
+
+fn hyperparameter_section(s: &mut String, r: &ExperimentResults) {
+    let fitted: Vec<&RegressorResult> = r
+        .regressors
+        .iter()
+        .filter(|reg| !reg.fit.parameters.is_empty())
+        .collect();
+    if fitted.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "## Learned hyperparameters\n\nStandardised units. The shortest lengthscales mark the inputs the model relies on most (all values in `metrics.json`).\n\n| Regressor | noise variance | signal variance | shortest lengthscales |\n|---|---:|---:|---|"
+    );
+    for reg in fitted {
+        let find = |suffix: &str| {
+            reg.fit
+                .parameters
+                .iter()
+                .filter(|(n, _)| {
+                    n.ends_with(suffix) && !n.contains("linear") && !n.contains("white")
+                })
+                .map(|(_, v)| format!("{v:.3e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let mut lengthscales: Vec<(&str, f64)> = reg
+            .fit
+            .parameters
+            .iter()
+            .filter_map(|(n, v)| {
+                let start = n.find(".lengthscale[")?;
+                Some((&n[start + ".lengthscale[".len()..n.len() - 1], *v))
+            })
+            .collect();
+        lengthscales.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let shortest: Vec<String> = lengthscales
+            .iter()
+            .take(RELEVANT_INPUTS)
+            .map(|(name, v)| format!("{name} {v:.2}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            reg.label,
+            find("noise_variance"),
+            find(".variance"),
+            if shortest.is_empty() {
+                "–".into()
+            } else {
+                shortest.join(", ")
+            }
         );
     }
     s.push('\n');

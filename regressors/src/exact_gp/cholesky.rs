@@ -42,6 +42,9 @@ impl Cholesky {
             par(),
             Default::default(),
         ));
+        // A failed attempt leaves a partly overwritten matrix (faer zeroes
+        // the failing column, upper part included), so every attempt starts
+        // from a fresh copy of `k`.
         let mut work = k.clone();
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;
@@ -147,8 +150,12 @@ mod tests {
         // Rank one: v vᵀ.
         let v = [1.0, 2.0, 3.0, 4.0];
         let a = Mat::from_fn(4, 4, |i, j| v[i] * v[j]);
-        let c = Cholesky::factor(a).unwrap();
+        let c = Cholesky::factor(a.clone()).unwrap();
         assert!(c.jitter > 0.0, "a rank-one matrix needs jitter");
+        // The retry started from the original matrix: L Lᵀ = A + jitter·I.
+        let rebuilt = &c.l * c.l.transpose();
+        let expected = &a + Mat::<f64>::identity(4, 4) * c.jitter;
+        assert!((&rebuilt - &expected).norm_max() < 1e-9);
         assert!(c.jitter < 1e-2 * 7.5);
     }
 

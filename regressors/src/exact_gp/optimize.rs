@@ -1,5 +1,5 @@
 //! Hyperparameter learning: maximise the log marginal likelihood with its
-//! analytic gradient, in the bounded log space of [`BoundedLog`], with
+//! analytic gradient, in log space with the bounds of [`LogBounds`], with
 //! argmin's L-BFGS or nonlinear conjugate gradient (Moré–Thuente line
 //! search), from the initial hyperparameters and optional seeded restarts.
 
@@ -20,7 +20,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use super::likelihood::log_marginal_likelihood;
 use super::params::{ExactGpParams, Optimizer};
-use super::transform::BoundedLog;
+use super::transform::LogBounds;
 use crate::RegressorError;
 use crate::kernels::Kernel;
 
@@ -49,9 +49,14 @@ type Evaluated = (Vec<f64>, f64, Vec<f64>);
 /// the best point evaluated.
 struct NegativeLml<'a> {
     template: Kernel,
-    transforms: Vec<BoundedLog>,
+    transforms: Vec<LogBounds>,
     x: MatRef<'a, f64>,
     y: MatRef<'a, f64>,
+    /// Objective scale: `1/(n·p)`, further divided by the gradient norm at
+    /// the start when that exceeds 1, so that the optimiser's first step
+    /// (along the raw gradient) is at most about one unit of `log θ`, as
+    /// L-BFGS-B's first step is — whatever the data size.
+    scale: Cell<f64>,
     last: RefCell<Option<Evaluated>>,
     best: &'a RefCell<Option<(Vec<f64>, f64)>>,
     evaluations: &'a Cell<usize>,
@@ -86,17 +91,39 @@ impl NegativeLml<'_> {
         let (kernel, noise) = self.hyperparameters(u);
         let eval = log_marginal_likelihood(&kernel, noise, self.x, self.y, true)?;
         self.evaluations.set(self.evaluations.get() + 1);
-        let cost = -eval.lml;
-        let grad: Vec<f64> = eval
+        tracing::trace!(
+            evaluation = self.evaluations.get(),
+            lml = eval.lml,
+            "exact GP objective"
+        );
+        let likelihood_cost = -eval.lml * self.scale.get();
+        let mut cost = likelihood_cost;
+        let mut grad: Vec<f64> = eval
             .gradient
             .unwrap_or_default()
             .iter()
             .zip(u.iter().zip(&self.transforms))
-            .map(|(g, (u, t))| -g * t.derivative(*u))
+            .map(|(g, (u, t))| -g * t.derivative(*u) * self.scale.get())
             .collect();
-        let improved = self.best.borrow().as_ref().is_none_or(|(_, c)| cost < *c);
+        for ((g, u), t) in grad.iter_mut().zip(u).zip(&self.transforms) {
+            let (p, dp) = t.penalty(*u);
+            cost += p;
+            *g += dp;
+        }
+        // The best point is kept by likelihood alone, at its clamped
+        // coordinates (where the hyperparameters were evaluated).
+        let improved = self
+            .best
+            .borrow()
+            .as_ref()
+            .is_none_or(|(_, c)| likelihood_cost < *c);
         if improved {
-            *self.best.borrow_mut() = Some((u.to_vec(), cost));
+            let clamped = u
+                .iter()
+                .zip(&self.transforms)
+                .map(|(u, t)| t.to_log(*u))
+                .collect();
+            *self.best.borrow_mut() = Some((clamped, likelihood_cost));
         }
         *self.last.borrow_mut() = Some((u.to_vec(), cost, grad.clone()));
         Ok((cost, grad))
@@ -237,12 +264,12 @@ pub fn maximize_lml(
     y: MatRef<'_, f64>,
     params: &ExactGpParams,
 ) -> Result<Optimized, RegressorError> {
-    let mut transforms: Vec<BoundedLog> = kernel
+    let mut transforms: Vec<LogBounds> = kernel
         .param_kinds()
         .into_iter()
-        .map(|k| BoundedLog::new(params.bounds.of(k)))
+        .map(|k| LogBounds::new(params.bounds.of(k)))
         .collect();
-    transforms.push(BoundedLog::new(params.bounds.noise_variance));
+    transforms.push(LogBounds::new(params.bounds.noise_variance));
     let mut log_theta0 = kernel.log_params();
     log_theta0.push(noise_variance.ln());
     let u0: Vec<f64> = log_theta0
@@ -251,6 +278,7 @@ pub fn maximize_lml(
         .map(|(l, t)| t.from_log(*l))
         .collect();
 
+    let per_value = 1.0 / (y.nrows() * y.ncols()).max(1) as f64;
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let mut best: Option<(Vec<f64>, f64)> = None;
     let mut start_lml = Vec::new();
@@ -276,17 +304,33 @@ pub fn maximize_lml(
             transforms: transforms.clone(),
             x,
             y,
+            scale: Cell::new(per_value),
             last: RefCell::new(None),
             best: &record.best,
             evaluations: &record.evaluations,
         };
         let initial = match problem.evaluate(&start_u) {
-            Ok((cost, _)) => cost,
+            Ok((_, grad)) => {
+                let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+                if norm > 1.0 {
+                    problem.scale.set(per_value / norm);
+                    *problem.last.borrow_mut() = None;
+                    *record.best.borrow_mut() = None;
+                }
+                match problem.evaluate(&start_u) {
+                    Ok((cost, _)) => cost,
+                    Err(e) => {
+                        last_error = Some(e);
+                        continue;
+                    }
+                }
+            }
             Err(e) => {
                 last_error = Some(e);
                 continue;
             }
         };
+        let scale = problem.scale.get();
         let tol_cost = params.relative_cost_tolerance * initial.abs().max(1.0);
         match run_start(problem, start_u, params, tol_cost) {
             Ok(n) => iterations += n,
@@ -294,13 +338,15 @@ pub fn maximize_lml(
         }
         evaluations += record.evaluations.get();
         if let Some((u, cost)) = record.best.into_inner() {
-            start_lml.push(-cost);
-            if best.as_ref().is_none_or(|(_, c)| cost < *c) {
-                best = Some((u, cost));
+            // The best point is inside the bounds (no penalty there).
+            let lml = -cost / scale;
+            start_lml.push(lml);
+            if best.as_ref().is_none_or(|(_, l)| lml > *l) {
+                best = Some((u, lml));
             }
         }
     }
-    let Some((u, cost)) = best else {
+    let Some((u, lml)) = best else {
         return Err(last_error.unwrap_or_else(|| optimizer_error(params, "no start was evaluated")));
     };
     let record = StartRecord::default();
@@ -309,6 +355,7 @@ pub fn maximize_lml(
         transforms,
         x,
         y,
+        scale: Cell::new(per_value),
         last: RefCell::new(None),
         best: &record.best,
         evaluations: &record.evaluations,
@@ -317,7 +364,7 @@ pub fn maximize_lml(
     Ok(Optimized {
         kernel,
         noise_variance,
-        lml: -cost,
+        lml,
         evaluations,
         iterations,
         start_lml,

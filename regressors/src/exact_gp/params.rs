@@ -95,10 +95,13 @@ pub struct ExactGpParams {
     pub restarts: usize,
     /// Seed of the restart perturbations (default 0).
     pub seed: u64,
-    /// Stop when the gradient norm falls below this (default 1e-5).
+    /// Stop when the norm of the gradient of the mean log likelihood per
+    /// target value (in the optimiser's coordinates) falls below this
+    /// (default 1e-5).
     pub gradient_tolerance: f64,
     /// Stop when an iteration changes the objective by less than this
-    /// fraction of its initial magnitude (default 1e-10).
+    /// fraction of its initial magnitude (default 1e-10, about scipy's
+    /// L-BFGS-B `factr = 1e7` that GPy uses).
     pub relative_cost_tolerance: f64,
     /// Hyperparameter bounds.
     pub bounds: Bounds,

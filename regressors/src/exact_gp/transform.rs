@@ -1,20 +1,19 @@
-//! The bounded log transform the optimiser works in: an unconstrained `u`
-//! maps to `log θ = a + (b − a)·σ(u)` with `[a, b] = [log lower, log upper]`
-//! and `σ` the logistic function — log space in the interior, smooth, and
-//! never outside the bounds (GPy's `Logistic` constraint, on `log θ`).
+//! Bounds on the hyperparameters in the log space the optimiser works in.
+//! Inside `[log lower, log upper]` the objective is exactly the negative log
+//! marginal likelihood in `log θ`; outside, it is evaluated at the nearest
+//! bound plus a quadratic penalty `(u − clamp(u))²` that points back inside.
+//! (A logistic squashing of `log θ` would also keep `θ` in bounds, but its
+//! gradient vanishes near them, and an early long step parks the optimiser
+//! in that flat corner.)
 
 /// Bounds of one hyperparameter, as logarithms.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BoundedLog {
+pub struct LogBounds {
     lo: f64,
     hi: f64,
 }
 
-fn sigmoid(u: f64) -> f64 {
-    1.0 / (1.0 + (-u).exp())
-}
-
-impl BoundedLog {
+impl LogBounds {
     /// Bounds `[lower, upper]` in natural units (both positive).
     pub fn new([lower, upper]: [f64; 2]) -> Self {
         Self {
@@ -23,21 +22,29 @@ impl BoundedLog {
         }
     }
 
-    /// `log θ` from `u`.
+    /// `log θ` used for the optimiser's coordinate `u`: `u` clamped.
     pub fn to_log(&self, u: f64) -> f64 {
-        (self.lo + (self.hi - self.lo) * sigmoid(u)).clamp(self.lo, self.hi)
+        u.clamp(self.lo, self.hi)
     }
 
-    /// `u` from `log θ` (clamped just inside the bounds).
+    /// The optimiser's coordinate for `log θ` (clamped into the bounds).
     pub fn from_log(&self, log_theta: f64) -> f64 {
-        let t = ((log_theta - self.lo) / (self.hi - self.lo)).clamp(1e-9, 1.0 - 1e-9);
-        (t / (1.0 - t)).ln()
+        log_theta.clamp(self.lo, self.hi)
     }
 
-    /// `d log θ / du`.
+    /// `d log θ / du`: 1 inside the bounds, 0 outside.
     pub fn derivative(&self, u: f64) -> f64 {
-        let s = sigmoid(u);
-        (self.hi - self.lo) * s * (1.0 - s)
+        if (self.lo..=self.hi).contains(&u) {
+            1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// The penalty `(u − clamp(u))²` and its derivative.
+    pub fn penalty(&self, u: f64) -> (f64, f64) {
+        let excess = u - self.to_log(u);
+        (excess * excess, 2.0 * excess)
     }
 }
 
@@ -46,15 +53,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn round_trips_and_differentiates() {
-        let t = BoundedLog::new([1e-3, 1e5]);
-        for log_theta in [-6.0, -1.0, 0.0, 2.5, 11.0] {
-            assert!((t.to_log(t.from_log(log_theta)) - log_theta).abs() < 1e-9);
-        }
-        let u = 0.3;
-        let h = 1e-6;
-        let fd = (t.to_log(u + h) - t.to_log(u - h)) / (2.0 * h);
-        assert!((fd - t.derivative(u)).abs() < 1e-8);
-        assert!(t.to_log(-50.0) >= 1e-3f64.ln() && t.to_log(50.0) <= 1e5f64.ln());
+    fn clamps_and_penalises_outside_only() {
+        let b = LogBounds::new([1e-3, 1e5]);
+        assert_eq!(b.to_log(0.5), 0.5);
+        assert_eq!(b.penalty(0.5), (0.0, 0.0));
+        assert_eq!(b.derivative(0.5), 1.0);
+        let above = 1e5f64.ln() + 2.0;
+        assert!((b.to_log(above) - 1e5f64.ln()).abs() < 1e-12);
+        let (p, g) = b.penalty(above);
+        assert!((p - 4.0).abs() < 1e-9 && (g - 4.0).abs() < 1e-9);
+        assert_eq!(b.derivative(above), 0.0);
+        assert!((b.from_log(-20.0) - 1e-3f64.ln()).abs() < 1e-12);
     }
 }

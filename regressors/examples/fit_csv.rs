@@ -1,0 +1,82 @@
+//! The gpodo side of the peer benchmark (`bench/peers/`): fits the exact GP
+//! (RBF-ARD, outputs sharing kernel and noise, L-BFGS) on a CSV written by
+//! `fit_peers.py --write-data` (columns `x0..x{D-1}, y0, y1, y2`, already
+//! z-scored) from the peers' starting point (variance 1, lengthscales √D,
+//! noise 0.01), and prints one JSON line like the peers do.
+//!
+//! `cargo run --release -p gpodo-regressors --example fit_csv -- FILE.csv`
+
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
+use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
+
+fn main() -> anyhow::Result<()> {
+    let Some(path) = std::env::args().nth(1) else {
+        bail!("usage: fit_csv FILE.csv (written by bench/peers/fit_peers.py --write-data)");
+    };
+    let mut reader = csv::Reader::from_path(&path).with_context(|| format!("opening {path}"))?;
+    let header: Vec<String> = reader.headers()?.iter().map(str::to_string).collect();
+    let d = header.iter().filter(|h| h.starts_with('x')).count();
+    let p = header.len() - d;
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    for (line, record) in reader.records().enumerate() {
+        let record = record.with_context(|| format!("{path}: line {}", line + 2))?;
+        for (j, field) in record.iter().enumerate() {
+            let v: f64 = field.parse().with_context(|| {
+                format!(
+                    "{path}: line {}, column {}: expected a number",
+                    line + 2,
+                    j + 1
+                )
+            })?;
+            if j < d { xs.push(v) } else { ys.push(v) }
+        }
+    }
+    let n = xs.len() / d;
+    let data = ResidualDataset::new(
+        SampleMatrix::from_row_major(n, d, xs)?,
+        SampleMatrix::from_row_major(n, p, ys)?,
+        header[..d].to_vec(),
+        header[d..].to_vec(),
+    )?;
+    let mut params = ExactGpParams {
+        max_iters: 1000,
+        ..ExactGpParams::default()
+    };
+    if let Ok(tol) = std::env::var("GPODO_GRAD_TOL") {
+        params.gradient_tolerance = tol.parse()?;
+    }
+    if let Ok(tol) = std::env::var("GPODO_COST_TOL") {
+        params.relative_cost_tolerance = tol.parse()?;
+    }
+    let mut gp = ExactGp::new(params)?;
+    let start = Instant::now();
+    let report = gp.fit(&data)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let lengthscales: Vec<f64> = report
+        .parameters
+        .iter()
+        .filter(|(k, _)| k.contains("lengthscale"))
+        .map(|(_, v)| *v)
+        .collect();
+    let get = |name: &str| {
+        report
+            .parameters
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| *v)
+    };
+    println!(
+        "{}",
+        serde_json::json!({
+            "impl": format!("gpodo {}", env!("CARGO_PKG_VERSION")),
+            "n": n, "d": d, "seconds": seconds,
+            "lml": report.objective, "evaluations": report.evaluations,
+            "variance": get("rbf.variance"), "noise_variance": get("noise_variance"),
+            "lengthscales": lengthscales,
+        })
+    );
+    Ok(())
+}
