@@ -16,13 +16,17 @@
 pub mod dense;
 mod error;
 pub mod exact_gp;
+pub mod hyperopt;
 pub mod kernels;
 pub mod metrics;
+pub mod scaling;
+pub mod sparse_gp;
 pub mod spec;
 pub mod zero;
 
 pub use error::RegressorError;
 pub use exact_gp::{ExactGp, ExactGpParams};
 pub use kernels::{Kernel, KernelExpr};
+pub use sparse_gp::{SparseGp, SparseGpParams};
 pub use spec::RegressorSpec;
 pub use zero::ZeroResidual;

@@ -6,6 +6,7 @@ use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
 use crate::exact_gp::{ExactGp, ExactGpParams, OutputSharing};
+use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
 use crate::{RegressorError, ZeroResidual};
 
 /// A regressor as written in an experiment file.
@@ -21,6 +22,8 @@ pub enum RegressorSpec {
     },
     /// The exact Gaussian process (§IV-A) with a kernel expression.
     ExactGp(ExactGpParams),
+    /// The sparse GP (VFE or FITC) with a kernel expression.
+    SparseGp(SparseGpParams),
 }
 
 impl RegressorSpec {
@@ -32,6 +35,13 @@ impl RegressorSpec {
                 OutputSharing::Shared => format!("exact GP: {}", p.kernel),
                 OutputSharing::Independent => format!("exact GP: {} (per output)", p.kernel),
             },
+            Self::SparseGp(p) => {
+                let method = match p.approximation {
+                    Approximation::Vfe => "VFE",
+                    Approximation::Fitc => "FITC",
+                };
+                format!("sparse GP ({method}, m={}): {}", p.inducing.count, p.kernel)
+            }
         }
     }
 
@@ -50,6 +60,7 @@ impl RegressorSpec {
             }
             Self::Zero { .. } => Ok(()),
             Self::ExactGp(p) => p.check(),
+            Self::SparseGp(p) => p.check(),
         }
     }
 
@@ -62,6 +73,7 @@ impl RegressorSpec {
         Ok(match self {
             Self::Zero { variance } => Box::new(ZeroResidual::new(*variance)),
             Self::ExactGp(p) => Box::new(ExactGp::new(p.clone())?),
+            Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
         })
     }
 }
@@ -86,6 +98,25 @@ mod tests {
         assert_eq!(p.max_iters, ExactGpParams::default().max_iters);
         assert_eq!(spec.label(), "exact GP: matern52 + linear");
         assert!(spec.build().is_ok());
+    }
+
+    #[test]
+    fn sparse_gp_reads_its_inducing_settings() {
+        let spec = parse(
+            r#"{"kind": "sparse_gp", "approximation": "fitc", "inducing": {"count": 50, "init": "random_subset"}}"#,
+        )
+        .unwrap();
+        assert_eq!(spec.label(), "sparse GP (FITC, m=50): rbf");
+        assert!(spec.build().is_ok());
+        let err = parse(r#"{"kind": "sparse_gp", "inducing": {"cnt": 5}}"#).unwrap_err();
+        assert!(err.to_string().contains("cnt"), "{err}");
+        let spec = parse(r#"{"kind": "sparse_gp", "inducing": {"count": 0}}"#).unwrap();
+        assert!(
+            spec.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("inducing.count")
+        );
     }
 
     #[test]

@@ -5,7 +5,9 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
 use faer::{Mat, MatRef};
 
 use crate::RegressorError;
@@ -108,6 +110,13 @@ impl Cholesky {
         x
     }
 
+    /// `L⁻ᵀ B`.
+    pub fn solve_upper(&self, b: MatRef<'_, f64>) -> Mat<f64> {
+        let mut x = b.to_owned();
+        solve_upper_triangular_in_place(self.l.transpose(), x.as_mut(), par());
+        x
+    }
+
     /// `K⁻¹` (full, symmetric).
     pub fn inverse(&self) -> Mat<f64> {
         let n = self.l.nrows();
@@ -143,6 +152,8 @@ mod tests {
         assert!((&eye - Mat::<f64>::identity(n, n)).norm_max() < 1e-12);
         let b = Mat::from_fn(n, 2, |i, j| (i + 3 * j) as f64);
         assert!((&a * c.solve(b.as_ref()) - &b).norm_max() < 1e-11);
+        let two_step = c.solve_upper(c.solve_lower(b.as_ref()).as_ref());
+        assert!((&two_step - c.solve(b.as_ref())).norm_max() < 1e-11);
     }
 
     #[test]

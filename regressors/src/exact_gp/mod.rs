@@ -9,7 +9,7 @@ pub mod model;
 pub mod optimize;
 pub mod params;
 pub mod posterior;
-pub mod transform;
 
-pub use model::{ExactGp, ExactGpState, GpPredictions, GroupState};
+pub use crate::scaling::GpPredictions;
+pub use model::{ExactGp, ExactGpState, GroupState};
 pub use params::{Bounds, ExactGpParams, Optimizer, OutputSharing};

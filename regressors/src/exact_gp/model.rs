@@ -18,8 +18,11 @@ use super::optimize::maximize_lml;
 use super::params::{ExactGpParams, OutputSharing};
 use super::posterior::Posterior;
 use crate::RegressorError;
-use crate::dense::{from_faer, to_faer};
+use crate::dense::to_faer;
 use crate::kernels::Kernel;
+use crate::scaling::{
+    GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
+};
 
 /// One output group's learned model, serialisable.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -53,17 +56,6 @@ pub struct ExactGpState {
     pub groups: Vec<GroupState>,
 }
 
-/// Predictions with the latent variance kept apart from the noise.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GpPredictions {
-    /// Predictive mean, target units.
-    pub mean: SampleMatrix,
-    /// Variance of the latent function, target units.
-    pub latent_variance: SampleMatrix,
-    /// Variance of a noisy target (latent + noise), target units.
-    pub variance: SampleMatrix,
-}
-
 #[derive(Debug, Clone)]
 struct Fitted {
     state: ExactGpState,
@@ -83,17 +75,6 @@ fn backend(e: RegressorError) -> Error {
 
 fn columns(m: &Mat<f64>, cols: &[usize]) -> Mat<f64> {
     Mat::from_fn(m.nrows(), cols.len(), |i, j| m[(i, cols[j])])
-}
-
-fn check_finite(what: &str, m: &SampleMatrix) -> Result<(), RegressorError> {
-    for (i, row) in m.rows().enumerate() {
-        if let Some(j) = row.iter().position(|v| !v.is_finite()) {
-            return Err(RegressorError::InvalidData {
-                detail: format!("{what}: non-finite value at row {i}, column {j}"),
-            });
-        }
-    }
-    Ok(())
 }
 
 impl ExactGp {
@@ -163,23 +144,12 @@ impl ExactGp {
     fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
         let start = Instant::now();
         let (n, d, p) = (data.len(), data.inputs.ncols(), data.targets.ncols());
-        if n == 0 || d == 0 || p == 0 {
-            return Err(RegressorError::InvalidData {
-                detail: format!(
-                    "need samples, inputs and outputs; got {n} × {d} inputs, {p} outputs"
-                ),
-            });
-        }
-        check_finite("inputs", &data.inputs)?;
-        check_finite("targets", &data.targets)?;
-        let (input_scaler, output_scaler, xs, ys) = if self.params.standardize {
-            let si = Standardizer::fit(&data.inputs)?;
-            let so = Standardizer::fit(&data.targets)?;
-            let (xs, ys) = (si.transform(&data.inputs)?, so.transform(&data.targets)?);
-            (Some(si), Some(so), xs, ys)
-        } else {
-            (None, None, data.inputs.clone(), data.targets.clone())
-        };
+        let ScaledTraining {
+            input_scaler,
+            output_scaler,
+            x: xs,
+            y: ys,
+        } = ScaledTraining::new(data, self.params.standardize)?;
         let x = to_faer(&xs);
         let y = to_faer(&ys);
         let group_outputs: Vec<Vec<usize>> = match self.params.outputs {
@@ -282,21 +252,12 @@ impl ExactGp {
             });
         };
         let state = &fitted.state;
-        let d = state.x_train.ncols();
-        if inputs.ncols() != d {
-            return Err(Error::DimensionMismatch {
-                what: "exact GP inputs".into(),
-                expected: d,
-                found: inputs.ncols(),
-            });
-        }
-        check_finite("prediction inputs", inputs)
-            .map_err(|e| Error::InvalidInput(e.to_string()))?;
-        let xs = match &state.input_scaler {
-            Some(s) => s.transform(inputs).map_err(|e| backend(e.into()))?,
-            None => inputs.clone(),
-        };
-        let xs = to_faer(&xs);
+        let xs = scale_queries(
+            self.name(),
+            inputs,
+            state.x_train.ncols(),
+            state.input_scaler.as_ref(),
+        )?;
         let (m, p) = (xs.nrows(), state.y_train.ncols());
         let mut mean = Mat::<f64>::zeros(m, p);
         let mut latent = Mat::<f64>::zeros(m, p);
@@ -311,26 +272,12 @@ impl ExactGp {
                 }
             }
         }
-        let (mean, latent, noisy) = (
-            from_faer(mean.as_ref()),
-            from_faer(latent.as_ref()),
-            from_faer(noisy.as_ref()),
-        );
-        let back = |r: Result<SampleMatrix, gpodo_datasets::DatasetError>| {
-            r.map_err(|e| backend(e.into()))
-        };
-        Ok(match &state.output_scaler {
-            Some(s) => GpPredictions {
-                mean: back(s.inverse_transform_mean(&mean))?,
-                latent_variance: back(s.inverse_transform_variance(&latent))?,
-                variance: back(s.inverse_transform_variance(&noisy))?,
-            },
-            None => GpPredictions {
-                mean,
-                latent_variance: latent,
-                variance: noisy,
-            },
-        })
+        unscale_predictions(
+            mean.as_ref(),
+            latent.as_ref(),
+            noisy.as_ref(),
+            state.output_scaler.as_ref(),
+        )
     }
 }
 

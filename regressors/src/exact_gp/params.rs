@@ -4,6 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
+pub use crate::hyperopt::Optimizer;
+use crate::hyperopt::OptimizerSettings;
 use crate::kernels::{KernelExpr, KernelInit, ParamKind};
 
 /// How the output columns share hyperparameters.
@@ -16,19 +18,6 @@ pub enum OutputSharing {
     Shared,
     /// One independent GP, with its own hyperparameters, per output.
     Independent,
-}
-
-/// The optimiser of the log marginal likelihood.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Optimizer {
-    /// L-BFGS (memory 10) with a Moré–Thuente line search (default; the
-    /// authors' scripts used L-BFGS-B).
-    #[default]
-    Lbfgs,
-    /// Polak–Ribière nonlinear conjugate gradient with restarts (the paper's
-    /// wording, §V-A).
-    ConjugateGradient,
 }
 
 /// `[lower, upper]` bounds of each kind of hyperparameter, in the units of
@@ -57,7 +46,85 @@ impl Default for Bounds {
     }
 }
 
+fn invalid(regressor: &str, field: &str, expected: &str) -> RegressorError {
+    RegressorError::InvalidSpec {
+        regressor: regressor.into(),
+        field: field.into(),
+        expected: expected.into(),
+    }
+}
+
 impl Bounds {
+    /// Checks that every bound is `[lower, upper]` with `0 < lower < upper`.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the bound, for `regressor`.
+    pub fn check(&self, regressor: &str) -> Result<(), RegressorError> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let bounds = [
+            ("bounds.variance", self.variance),
+            ("bounds.lengthscale", self.lengthscale),
+            ("bounds.linear_variance", self.linear_variance),
+            ("bounds.noise_variance", self.noise_variance),
+        ];
+        for (field, [lo, hi]) in bounds {
+            if !(positive(lo) && positive(hi) && lo < hi) {
+                return Err(invalid(
+                    regressor,
+                    field,
+                    "[lower, upper] with 0 < lower < upper",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that the initial kernel hyperparameters are within the bounds.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the `init.*` field.
+    pub fn check_init(&self, init: &KernelInit, regressor: &str) -> Result<(), RegressorError> {
+        let within = |v: f64, [lo, hi]: [f64; 2]| v >= lo && v <= hi;
+        let checks = [
+            (
+                "init.variance",
+                Some(init.variance),
+                self.variance,
+                "variance",
+            ),
+            (
+                "init.white_variance",
+                Some(init.white_variance),
+                self.variance,
+                "variance",
+            ),
+            (
+                "init.lengthscale",
+                init.lengthscale,
+                self.lengthscale,
+                "lengthscale",
+            ),
+            (
+                "init.linear_variance",
+                init.linear_variance,
+                self.linear_variance,
+                "linear_variance",
+            ),
+        ];
+        for (field, value, range, bound) in checks {
+            if let Some(v) = value
+                && !within(v, range)
+            {
+                return Err(invalid(
+                    regressor,
+                    field,
+                    &format!("a positive value within bounds.{bound}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The bounds of a kernel hyperparameter of this kind.
     pub fn of(&self, kind: ParamKind) -> [f64; 2] {
         match kind {
@@ -141,69 +208,28 @@ impl ExactGpParams {
     /// # Errors
     /// [`RegressorError::InvalidSpec`] naming the field and the expected form.
     pub fn check(&self) -> Result<(), RegressorError> {
-        let bad = |field: &str, expected: &str| {
-            Err(RegressorError::InvalidSpec {
-                regressor: "exact_gp".into(),
-                field: field.into(),
-                expected: expected.into(),
-            })
-        };
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        let bounds = [
-            ("bounds.variance", self.bounds.variance),
-            ("bounds.lengthscale", self.bounds.lengthscale),
-            ("bounds.linear_variance", self.bounds.linear_variance),
-            ("bounds.noise_variance", self.bounds.noise_variance),
-        ];
-        for (field, [lo, hi]) in bounds {
-            if !(positive(lo) && positive(hi) && lo < hi) {
-                return bad(field, "[lower, upper] with 0 < lower < upper");
-            }
-        }
-        let within = |v: f64, [lo, hi]: [f64; 2]| v >= lo && v <= hi;
-        if !within(self.noise_variance, self.bounds.noise_variance) {
-            return bad(
+        self.bounds.check("exact_gp")?;
+        let [lo, hi] = self.bounds.noise_variance;
+        if !(self.noise_variance >= lo && self.noise_variance <= hi) {
+            return Err(invalid(
+                "exact_gp",
                 "noise_variance",
                 "a positive variance within bounds.noise_variance",
-            );
+            ));
         }
-        if !within(self.init.variance, self.bounds.variance) {
-            return bad(
-                "init.variance",
-                "a positive variance within bounds.variance",
-            );
+        self.bounds.check_init(&self.init, "exact_gp")?;
+        self.settings().check("exact_gp", self.optimize)
+    }
+
+    /// The optimiser settings.
+    pub fn settings(&self) -> OptimizerSettings {
+        OptimizerSettings {
+            optimizer: self.optimizer,
+            max_iters: self.max_iters,
+            restarts: self.restarts,
+            seed: self.seed,
+            gradient_tolerance: self.gradient_tolerance,
+            relative_cost_tolerance: self.relative_cost_tolerance,
         }
-        if !within(self.init.white_variance, self.bounds.variance) {
-            return bad(
-                "init.white_variance",
-                "a positive variance within bounds.variance",
-            );
-        }
-        if let Some(l) = self.init.lengthscale
-            && !within(l, self.bounds.lengthscale)
-        {
-            return bad(
-                "init.lengthscale",
-                "a positive lengthscale within bounds.lengthscale",
-            );
-        }
-        if let Some(v) = self.init.linear_variance
-            && !within(v, self.bounds.linear_variance)
-        {
-            return bad(
-                "init.linear_variance",
-                "a positive variance within bounds.linear_variance",
-            );
-        }
-        if self.max_iters == 0 && self.optimize {
-            return bad("max_iters", "at least 1 (or `optimize: false`)");
-        }
-        if !positive(self.gradient_tolerance) {
-            return bad("gradient_tolerance", "a positive number");
-        }
-        if !(self.relative_cost_tolerance.is_finite() && self.relative_cost_tolerance >= 0.0) {
-            return bad("relative_cost_tolerance", "a non-negative number");
-        }
-        Ok(())
     }
 }

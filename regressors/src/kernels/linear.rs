@@ -40,14 +40,36 @@ impl Linear {
         k
     }
 
-    /// Adds `Σ_ij W_ij ∂K_ij/∂log v_q` to `out`.
+    /// Adds `Σ_ij W_ij ∂K_ij/∂log v_q` to `out` (Gram matrix of `x`).
     pub fn accumulate_gradient(&self, x: MatRef<'_, f64>, w: MatRef<'_, f64>, out: &mut [f64]) {
-        let (n, d) = (x.nrows(), x.ncols());
-        let mut wx = Mat::<f64>::zeros(n, d);
-        matmul(wx.as_mut(), Accum::Replace, w, x, 1.0, par());
-        for (q, o) in out.iter_mut().enumerate().take(d) {
-            let quad: f64 = (0..n).map(|i| x[(i, q)] * wx[(i, q)]).sum();
-            *o += self.variances[q] * quad;
+        self.accumulate_cross_gradient(x, x, w, Some(out), None);
+    }
+
+    /// Adds `Σ_ij W_ij ∂K(X1, X2)_ij/∂log v_q` to `out` and, when asked,
+    /// `input_factor · Σ_j W_ij ∂K_ij/∂X1_iq` to `dx1`.
+    pub fn accumulate_cross_gradient(
+        &self,
+        x1: MatRef<'_, f64>,
+        x2: MatRef<'_, f64>,
+        w: MatRef<'_, f64>,
+        out: Option<&mut [f64]>,
+        dx1: Option<(&mut Mat<f64>, f64)>,
+    ) {
+        let (n1, d) = (x1.nrows(), x1.ncols());
+        let mut wx2 = Mat::<f64>::zeros(n1, d);
+        matmul(wx2.as_mut(), Accum::Replace, w, x2, 1.0, par());
+        if let Some(out) = out {
+            for (q, o) in out.iter_mut().enumerate().take(d) {
+                let quad: f64 = (0..n1).map(|i| x1[(i, q)] * wx2[(i, q)]).sum();
+                *o += self.variances[q] * quad;
+            }
+        }
+        if let Some((dx1, factor)) = dx1 {
+            for q in 0..d {
+                for i in 0..n1 {
+                    dx1[(i, q)] += factor * self.variances[q] * wx2[(i, q)];
+                }
+            }
         }
     }
 }

@@ -7,7 +7,8 @@
 //! configurations ([`KernelExpr`]), not code. Hyperparameters are exposed as
 //! one flat vector of logarithms, leaf by leaf in expression order.
 
-mod distance;
+mod cross;
+pub(crate) mod distance;
 pub mod expr;
 mod linear;
 mod stationary;
@@ -70,6 +71,26 @@ impl GramCache {
             k,
             s,
             children: Vec::new(),
+        }
+    }
+
+    /// A sum or product node over its children's caches.
+    fn combine(is_sum: bool, children: Vec<GramCache>) -> Self {
+        let (n1, n2) = children
+            .first()
+            .map_or((0, 0), |c| (c.k.nrows(), c.k.ncols()));
+        let mut k = Mat::from_fn(n1, n2, |_, _| if is_sum { 0.0 } else { 1.0 });
+        for child in &children {
+            k = if is_sum {
+                k + &child.k
+            } else {
+                hadamard(k.as_ref(), child.k.as_ref())
+            };
+        }
+        Self {
+            k,
+            s: None,
+            children,
         }
     }
 }
@@ -306,21 +327,8 @@ impl Kernel {
                 None,
             ),
             Self::Sum(c) | Self::Product(c) => {
-                let is_sum = matches!(self, Self::Sum(_));
                 let children: Vec<GramCache> = c.iter().map(|k| k.gram_with_cache(x)).collect();
-                let mut k = Mat::from_fn(n, n, |_, _| if is_sum { 0.0 } else { 1.0 });
-                for child in &children {
-                    k = if is_sum {
-                        k + &child.k
-                    } else {
-                        hadamard(k.as_ref(), child.k.as_ref())
-                    };
-                }
-                GramCache {
-                    k,
-                    s: None,
-                    children,
-                }
+                GramCache::combine(matches!(self, Self::Sum(_)), children)
             }
             _ => GramCache::leaf(Mat::zeros(n, n), None),
         }

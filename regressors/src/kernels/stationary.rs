@@ -85,7 +85,19 @@ impl Stationary {
     /// `K(X, X)` and `S = σ² (−κ'(r)/r)` for the gradient (`None` for the
     /// RBF, where `S = K`).
     pub fn gram(&self, family: Family, x: MatRef<'_, f64>) -> (Mat<f64>, Option<Mat<f64>>) {
-        let mut k = scaled_sq_dist(x, x, &self.lengthscales, true);
+        self.cross_with_s(family, x, x, true)
+    }
+
+    /// `K(X1, X2)` and `S` as in [`Stationary::gram`]; `same` when `X1` is
+    /// `X2` (exact zeros on the distance diagonal).
+    pub fn cross_with_s(
+        &self,
+        family: Family,
+        x1: MatRef<'_, f64>,
+        x2: MatRef<'_, f64>,
+        same: bool,
+    ) -> (Mat<f64>, Option<Mat<f64>>) {
+        let mut k = scaled_sq_dist(x1, x2, &self.lengthscales, same);
         let mut s = match family {
             Family::Rbf => None,
             _ => Some(Mat::zeros(k.nrows(), k.ncols())),
@@ -117,7 +129,8 @@ impl Stationary {
         }
     }
 
-    /// Adds `Σ_ij W_ij ∂K_ij/∂θ` for `θ = (log σ², log ℓ_1, …)` to `out`.
+    /// Adds `Σ_ij W_ij ∂K_ij/∂θ` for `θ = (log σ², log ℓ_1, …)` to `out`,
+    /// for the Gram matrix `k = K(X, X)`.
     pub fn accumulate_gradient(
         &self,
         x: MatRef<'_, f64>,
@@ -126,34 +139,88 @@ impl Stationary {
         w: MatRef<'_, f64>,
         out: &mut [f64],
     ) {
-        out[0] += frobenius_dot(w, k.as_ref());
+        self.accumulate_cross_gradient(x, x, k, s, w, Some(out), None);
+    }
+
+    /// For `K(X1, X2)` with value `k` and derivative matrix `s` (see
+    /// [`Stationary::cross_with_s`]): adds `Σ_ij W_ij ∂K_ij/∂θ` to `out`
+    /// and, when asked, `Σ_j W_ij ∂K_ij/∂X1_iq` to `dx1` (scaled by
+    /// `input_factor`, 2 for a Gram matrix with symmetric `W`, whose every
+    /// entry depends on both of its points).
+    #[allow(clippy::too_many_arguments)]
+    pub fn accumulate_cross_gradient(
+        &self,
+        x1: MatRef<'_, f64>,
+        x2: MatRef<'_, f64>,
+        k: &Mat<f64>,
+        s: Option<&Mat<f64>>,
+        w: MatRef<'_, f64>,
+        out: Option<&mut [f64]>,
+        dx1: Option<(&mut Mat<f64>, f64)>,
+    ) {
         let s = s.unwrap_or(k);
         let m = hadamard(w, s.as_ref());
-        let sums = distance_weighted_sums(x, m.as_ref());
-        for (q, (o, total)) in out[1..].iter_mut().zip(sums).enumerate() {
-            *o += total / (self.lengthscales[q] * self.lengthscales[q]);
+        let sums = CrossSums::new(x1, x2, m.as_ref());
+        if let Some(out) = out {
+            out[0] += frobenius_dot(w, k.as_ref());
+            for (q, o) in out[1..].iter_mut().enumerate() {
+                *o += sums.squared_distance_sum(q) / (self.lengthscales[q] * self.lengthscales[q]);
+            }
+        }
+        if let Some((dx1, factor)) = dx1 {
+            // ∂K_ij/∂x1_iq = −S_ij (x1_iq − x2_jq)/ℓ_q².
+            for q in 0..x1.ncols() {
+                let l2 = self.lengthscales[q] * self.lengthscales[q];
+                for i in 0..x1.nrows() {
+                    dx1[(i, q)] -=
+                        factor * (sums.x1c[(i, q)] * sums.row_sums[i] - sums.mx2[(i, q)]) / l2;
+                }
+            }
         }
     }
 }
 
-/// `Σ_ij M_ij (x_iq − x_jq)²` for every column `q`, via
-/// `Σ_i x_iq² (M1)_i + Σ_j x_jq² (Mᵀ1)_j − 2 x_qᵀ M x_q` on centred inputs.
-pub fn distance_weighted_sums(x: MatRef<'_, f64>, m: MatRef<'_, f64>) -> Vec<f64> {
-    let (n, d) = (x.nrows(), x.ncols());
-    let ones = vec![1.0; d];
-    let xc = shift_scale(x, &column_means(x), &ones);
-    let mut mx = Mat::<f64>::zeros(n, d);
-    matmul(mx.as_mut(), Accum::Replace, m, xc.as_ref(), 1.0, par());
-    let row_sums: Vec<f64> = (0..n).map(|i| m.row(i).iter().sum()).collect();
-    let col_sums: Vec<f64> = (0..n).map(|j| m.col(j).iter().sum()).collect();
-    (0..d)
-        .map(|q| {
-            let mut total = 0.0;
-            for i in 0..n {
-                let xi = xc[(i, q)];
-                total += xi * xi * (row_sums[i] + col_sums[i]) - 2.0 * xi * mx[(i, q)];
-            }
-            total
-        })
-        .collect()
+/// The sums over `M` that the gradients of a stationary cross-covariance
+/// need, on inputs centred by the same shift: `M X2`, and `M`'s row and
+/// column sums.
+struct CrossSums {
+    x1c: Mat<f64>,
+    x2c: Mat<f64>,
+    mx2: Mat<f64>,
+    row_sums: Vec<f64>,
+    col_sums: Vec<f64>,
+}
+
+impl CrossSums {
+    fn new(x1: MatRef<'_, f64>, x2: MatRef<'_, f64>, m: MatRef<'_, f64>) -> Self {
+        let ones = vec![1.0; x2.ncols()];
+        let centre = column_means(x2);
+        let x1c = shift_scale(x1, &centre, &ones);
+        let x2c = shift_scale(x2, &centre, &ones);
+        let mut mx2 = Mat::<f64>::zeros(x1.nrows(), x2.ncols());
+        matmul(mx2.as_mut(), Accum::Replace, m, x2c.as_ref(), 1.0, par());
+        let row_sums = (0..m.nrows()).map(|i| m.row(i).iter().sum()).collect();
+        let col_sums = (0..m.ncols()).map(|j| m.col(j).iter().sum()).collect();
+        Self {
+            x1c,
+            x2c,
+            mx2,
+            row_sums,
+            col_sums,
+        }
+    }
+
+    /// `Σ_ij M_ij (x1_iq − x2_jq)²`.
+    fn squared_distance_sum(&self, q: usize) -> f64 {
+        let first: f64 = (0..self.x1c.nrows())
+            .map(|i| {
+                self.x1c[(i, q)].powi(2) * self.row_sums[i]
+                    - 2.0 * self.x1c[(i, q)] * self.mx2[(i, q)]
+            })
+            .sum();
+        let second: f64 = (0..self.x2c.nrows())
+            .map(|j| self.x2c[(j, q)].powi(2) * self.col_sums[j])
+            .sum();
+        first + second
+    }
 }

@@ -1,7 +1,8 @@
-//! Bounds on the hyperparameters in the log space the optimiser works in.
-//! Inside `[log lower, log upper]` the objective is exactly the negative log
-//! marginal likelihood in `log θ`; outside, it is evaluated at the nearest
-//! bound plus a quadratic penalty `(u − clamp(u))²` that points back inside.
+//! Bounds on the optimiser's coordinates (the logarithm of a positive
+//! hyperparameter, or a free coordinate such as an inducing input).
+//! Inside `[lower, upper]` the objective is exactly the model's; outside, it
+//! is evaluated at the nearest bound plus a quadratic penalty
+//! `(u − clamp(u))²` that points back inside.
 //! (A logistic squashing of `log θ` would also keep `θ` in bounds, but its
 //! gradient vanishes near them, and an early long step parks the optimiser
 //! in that flat corner.)
@@ -19,6 +20,14 @@ impl LogBounds {
         Self {
             lo: lower.ln(),
             hi: upper.ln(),
+        }
+    }
+
+    /// No bounds: a free coordinate used as it is.
+    pub fn unbounded() -> Self {
+        Self {
+            lo: f64::NEG_INFINITY,
+            hi: f64::INFINITY,
         }
     }
 
@@ -64,5 +73,8 @@ mod tests {
         assert!((p - 4.0).abs() < 1e-9 && (g - 4.0).abs() < 1e-9);
         assert_eq!(b.derivative(above), 0.0);
         assert!((b.from_log(-20.0) - 1e-3f64.ln()).abs() < 1e-12);
+        let free = LogBounds::unbounded();
+        assert_eq!(free.to_log(-1e300), -1e300);
+        assert_eq!(free.penalty(7.0), (0.0, 0.0));
     }
 }

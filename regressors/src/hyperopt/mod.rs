@@ -1,0 +1,368 @@
+//! Hyperparameter learning shared by the GP regressors: maximise an
+//! objective (a log marginal likelihood or a variational bound) with its
+//! analytic gradient, over coordinates that are the logarithms of positive
+//! hyperparameters (bounded, [`LogBounds`]) or free values (inducing
+//! inputs), with argmin's L-BFGS or nonlinear conjugate gradient
+//! (Moré–Thuente line search), from the initial point and optional seeded
+//! restarts. The best point evaluated wins, by objective alone.
+
+mod bounds;
+mod solver;
+
+use std::cell::{Cell, RefCell};
+
+use argmin::core::{CostFunction, Error as ArgminError, Gradient};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+pub use bounds::LogBounds;
+
+use crate::RegressorError;
+
+/// The optimiser of the objective.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Optimizer {
+    /// L-BFGS (memory 10) with a Moré–Thuente line search (default; the
+    /// authors' scripts used L-BFGS-B).
+    #[default]
+    Lbfgs,
+    /// Polak–Ribière nonlinear conjugate gradient with restarts (the paper's
+    /// wording, §V-A).
+    ConjugateGradient,
+}
+
+/// How to run the optimiser (the flat YAML fields of each GP's parameters).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OptimizerSettings {
+    /// Which optimiser.
+    pub optimizer: Optimizer,
+    /// Iteration limit per start.
+    pub max_iters: u64,
+    /// Extra starts from seeded perturbations of the initial point.
+    pub restarts: usize,
+    /// Seed of the perturbations.
+    pub seed: u64,
+    /// Stop when the gradient norm (normalised objective) falls below this.
+    pub gradient_tolerance: f64,
+    /// Stop when an iteration changes the objective by less than this
+    /// fraction of its initial magnitude.
+    pub relative_cost_tolerance: f64,
+}
+
+impl OptimizerSettings {
+    /// Checks the numeric fields, naming the bad one for `regressor`.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`].
+    pub fn check(&self, regressor: &str, optimize: bool) -> Result<(), RegressorError> {
+        let bad = |field: &str, expected: &str| {
+            Err(RegressorError::InvalidSpec {
+                regressor: regressor.into(),
+                field: field.into(),
+                expected: expected.into(),
+            })
+        };
+        if self.max_iters == 0 && optimize {
+            return bad("max_iters", "at least 1 (or `optimize: false`)");
+        }
+        if !(self.gradient_tolerance.is_finite() && self.gradient_tolerance > 0.0) {
+            return bad("gradient_tolerance", "a positive number");
+        }
+        if !(self.relative_cost_tolerance.is_finite() && self.relative_cost_tolerance >= 0.0) {
+            return bad("relative_cost_tolerance", "a non-negative number");
+        }
+        Ok(())
+    }
+}
+
+/// A differentiable objective to maximise.
+pub trait Objective {
+    /// The objective and its gradient at `coords` (already inside the
+    /// bounds).
+    ///
+    /// # Errors
+    /// When the objective cannot be evaluated there (e.g. a failed
+    /// factorisation).
+    fn evaluate(&self, coords: &[f64]) -> Result<(f64, Vec<f64>), RegressorError>;
+}
+
+/// The coordinates to optimise: where to start, their bounds, and which of
+/// them the seeded restarts perturb (by one unit of standard normal noise).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Coordinates {
+    /// The initial point.
+    pub start: Vec<f64>,
+    /// One bound per coordinate.
+    pub bounds: Vec<LogBounds>,
+    /// Whether restarts perturb each coordinate.
+    pub perturb: Vec<bool>,
+}
+
+/// The outcome of a maximisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Maximized {
+    /// The best point evaluated (inside the bounds).
+    pub coords: Vec<f64>,
+    /// The objective there.
+    pub value: f64,
+    /// Objective (+ gradient) evaluations over all starts.
+    pub evaluations: usize,
+    /// Optimiser iterations over all starts.
+    pub iterations: u64,
+    /// Best objective of each start.
+    pub start_values: Vec<f64>,
+}
+
+/// A point, the cost there and its gradient.
+type Evaluated = (Vec<f64>, f64, Vec<f64>);
+
+/// The negated, scaled objective in the optimiser's (unclamped)
+/// coordinates, caching the last point (argmin asks for the cost and the
+/// gradient separately) and remembering the best point evaluated.
+struct Negated<'a> {
+    objective: &'a dyn Objective,
+    bounds: &'a [LogBounds],
+    /// Objective scale: `value_scale` (e.g. `1/(n·p)`), further divided by
+    /// the gradient norm at the start when that exceeds 1, so that the
+    /// optimiser's first step (along the raw gradient) is at most about one
+    /// unit of `log θ`, as L-BFGS-B's first step is — whatever the data size.
+    scale: Cell<f64>,
+    last: RefCell<Option<Evaluated>>,
+    best: RefCell<Option<(Vec<f64>, f64)>>,
+    evaluations: Cell<usize>,
+}
+
+impl Negated<'_> {
+    fn clamp(&self, u: &[f64]) -> Vec<f64> {
+        u.iter()
+            .zip(self.bounds)
+            .map(|(u, b)| b.to_log(*u))
+            .collect()
+    }
+
+    fn evaluate(&self, u: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+        if let Some((at, cost, grad)) = self.last.borrow().as_ref()
+            && at.as_slice() == u
+        {
+            return Ok((*cost, grad.clone()));
+        }
+        let clamped = self.clamp(u);
+        let (value, gradient) = self.objective.evaluate(&clamped)?;
+        self.evaluations.set(self.evaluations.get() + 1);
+        tracing::trace!(
+            evaluation = self.evaluations.get(),
+            value,
+            "hyperparameter objective"
+        );
+        let scale = self.scale.get();
+        let objective_cost = -value * scale;
+        let mut cost = objective_cost;
+        let mut grad: Vec<f64> = gradient
+            .iter()
+            .zip(u.iter().zip(self.bounds))
+            .map(|(g, (u, b))| -g * b.derivative(*u) * scale)
+            .collect();
+        for ((g, u), b) in grad.iter_mut().zip(u).zip(self.bounds) {
+            let (p, dp) = b.penalty(*u);
+            cost += p;
+            *g += dp;
+        }
+        // The best point is kept by objective alone, at its clamped
+        // coordinates (where the objective was evaluated).
+        let improved = self
+            .best
+            .borrow()
+            .as_ref()
+            .is_none_or(|(_, c)| objective_cost < *c);
+        if improved {
+            *self.best.borrow_mut() = Some((clamped, objective_cost));
+        }
+        *self.last.borrow_mut() = Some((u.to_vec(), cost, grad.clone()));
+        Ok((cost, grad))
+    }
+
+    /// Forgets the cache and the best point (after a change of scale).
+    fn reset(&self) {
+        *self.last.borrow_mut() = None;
+        *self.best.borrow_mut() = None;
+    }
+}
+
+impl CostFunction for &Negated<'_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, u: &Self::Param) -> Result<f64, ArgminError> {
+        Ok(self.evaluate(u)?.0)
+    }
+}
+
+impl Gradient for &Negated<'_> {
+    type Param = Vec<f64>;
+    type Gradient = Vec<f64>;
+    fn gradient(&self, u: &Self::Param) -> Result<Vec<f64>, ArgminError> {
+        Ok(self.evaluate(u)?.1)
+    }
+}
+
+fn optimizer_error(settings: &OptimizerSettings, e: impl std::fmt::Display) -> RegressorError {
+    RegressorError::Optimizer {
+        optimizer: format!("{:?}", settings.optimizer),
+        detail: e.to_string(),
+    }
+}
+
+/// Maximises `objective` from `coords.start` and `settings.restarts` seeded
+/// perturbations of it. `value_scale` normalises the objective (e.g.
+/// `1/(n·p)` for a likelihood of `n·p` values) so that the tolerances mean
+/// the same at any data size.
+///
+/// # Errors
+/// [`RegressorError::Optimizer`], or the objective's own error, when no
+/// start produced a finite objective.
+pub fn maximize(
+    objective: &dyn Objective,
+    coords: &Coordinates,
+    value_scale: f64,
+    settings: &OptimizerSettings,
+) -> Result<Maximized, RegressorError> {
+    let start0: Vec<f64> = coords
+        .start
+        .iter()
+        .zip(&coords.bounds)
+        .map(|(c, b)| b.from_log(*c))
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let mut best: Option<(Vec<f64>, f64)> = None;
+    let mut start_values = Vec::new();
+    let (mut evaluations, mut iterations) = (0, 0);
+    let mut last_error = None;
+    for start in 0..=settings.restarts {
+        let start_u: Vec<f64> = if start == 0 {
+            start0.clone()
+        } else {
+            start0
+                .iter()
+                .zip(&coords.bounds)
+                .zip(&coords.perturb)
+                .map(|((c, b), &perturb)| {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    if perturb { b.from_log(c + z) } else { *c }
+                })
+                .collect()
+        };
+        let problem = Negated {
+            objective,
+            bounds: &coords.bounds,
+            scale: Cell::new(value_scale),
+            last: RefCell::new(None),
+            best: RefCell::new(None),
+            evaluations: Cell::new(0),
+        };
+        let initial = problem.evaluate(&start_u).and_then(|(_, grad)| {
+            let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+            if norm > 1.0 {
+                problem.scale.set(value_scale / norm);
+                problem.reset();
+            }
+            problem.evaluate(&start_u).map(|(cost, _)| cost)
+        });
+        let initial = match initial {
+            Ok(cost) => cost,
+            Err(e) => {
+                evaluations += problem.evaluations.get();
+                last_error = Some(e);
+                continue;
+            }
+        };
+        let scale = problem.scale.get();
+        let tol_cost = settings.relative_cost_tolerance * initial.abs().max(1.0);
+        let outcome = solver::run(&problem, start_u, settings, tol_cost);
+        match outcome {
+            Ok(n) => iterations += n,
+            Err(e) if problem.best.borrow().is_some() => {
+                // A failed line search still leaves the best point evaluated.
+                tracing::debug!(error = %e, "optimiser stopped early; keeping the best point");
+            }
+            Err(e) => last_error = Some(optimizer_error(settings, e)),
+        }
+        evaluations += problem.evaluations.get();
+        if let Some((u, cost)) = problem.best.into_inner() {
+            let value = -cost / scale;
+            start_values.push(value);
+            if best.as_ref().is_none_or(|(_, v)| value > *v) {
+                best = Some((u, value));
+            }
+        }
+    }
+    let Some((coords, value)) = best else {
+        return Err(
+            last_error.unwrap_or_else(|| optimizer_error(settings, "no start was evaluated"))
+        );
+    };
+    Ok(Maximized {
+        coords,
+        value,
+        evaluations,
+        iterations,
+        start_values,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `−Σ (c_i − t_i)²`, with a maximum at `t`.
+    struct Quadratic(Vec<f64>);
+
+    impl Objective for Quadratic {
+        fn evaluate(&self, c: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+            let value = -c
+                .iter()
+                .zip(&self.0)
+                .map(|(c, t)| (c - t).powi(2))
+                .sum::<f64>();
+            let grad = c.iter().zip(&self.0).map(|(c, t)| -2.0 * (c - t)).collect();
+            Ok((value, grad))
+        }
+    }
+
+    fn settings(optimizer: Optimizer) -> OptimizerSettings {
+        OptimizerSettings {
+            optimizer,
+            max_iters: 100,
+            restarts: 2,
+            seed: 3,
+            gradient_tolerance: 1e-10,
+            relative_cost_tolerance: 0.0,
+        }
+    }
+
+    #[test]
+    fn finds_the_maximum_inside_and_stops_at_a_bound() {
+        let objective = Quadratic(vec![0.5, -2.0, 3.0]);
+        let coords = Coordinates {
+            start: vec![0.0; 3],
+            bounds: vec![
+                LogBounds::unbounded(),
+                LogBounds::unbounded(),
+                LogBounds::new([1e-3, 1.0f64.exp()]),
+            ],
+            perturb: vec![true, false, true],
+        };
+        for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
+            let out = maximize(&objective, &coords, 1.0, &settings(optimizer)).unwrap();
+            assert!((out.coords[0] - 0.5).abs() < 1e-6, "{out:?}");
+            assert!((out.coords[1] + 2.0).abs() < 1e-6, "{out:?}");
+            assert!(
+                (out.coords[2] - 1.0).abs() < 1e-6,
+                "bounded at log e: {out:?}"
+            );
+            assert!((out.value + 4.0).abs() < 1e-6);
+            assert_eq!(out.start_values.len(), 3);
+        }
+    }
+}

@@ -1,0 +1,102 @@
+//! One optimiser start with argmin: L-BFGS or Polak–Ribière nonlinear
+//! conjugate gradient, both with a Moré–Thuente line search and the same
+//! stopping rules (gradient norm, change of the objective).
+
+use argmin::core::{
+    Error as ArgminError, Executor, IterState, KV, Problem, Solver, State, TerminationReason,
+    TerminationStatus,
+};
+use argmin::solver::conjugategradient::NonlinearConjugateGradient;
+use argmin::solver::conjugategradient::beta::PolakRibiere;
+use argmin::solver::linesearch::MoreThuenteLineSearch;
+use argmin::solver::quasinewton::LBFGS;
+
+use super::{Negated, Optimizer, OptimizerSettings};
+
+type HyperState = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
+
+/// Adds gradient-norm and cost-change stopping to a solver that has none
+/// (argmin's nonlinear CG runs to its iteration limit otherwise).
+struct Converging<S> {
+    inner: S,
+    tol_grad: f64,
+    tol_cost: f64,
+}
+
+impl<O, S: Solver<O, HyperState>> Solver<O, HyperState> for Converging<S> {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: HyperState,
+    ) -> Result<(HyperState, Option<KV>), ArgminError> {
+        self.inner.init(problem, state)
+    }
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: HyperState,
+    ) -> Result<(HyperState, Option<KV>), ArgminError> {
+        self.inner.next_iter(problem, state)
+    }
+    fn terminate(&mut self, state: &HyperState) -> TerminationStatus {
+        let status = self.inner.terminate(state);
+        if status.terminated() {
+            return status;
+        }
+        if let Some(g) = state.get_gradient()
+            && g.iter().map(|v| v * v).sum::<f64>().sqrt() < self.tol_grad
+        {
+            return TerminationStatus::Terminated(TerminationReason::SolverConverged);
+        }
+        if state.get_iter() > 0 && (state.get_prev_cost() - state.get_cost()).abs() < self.tol_cost
+        {
+            return TerminationStatus::Terminated(TerminationReason::SolverConverged);
+        }
+        TerminationStatus::NotTerminated
+    }
+}
+
+/// Runs one start from `u0`; returns the iterations. The best point seen is
+/// recorded by `problem` whatever happens.
+pub(super) fn run(
+    problem: &Negated<'_>,
+    u0: Vec<f64>,
+    settings: &OptimizerSettings,
+    tol_cost: f64,
+) -> Result<u64, ArgminError> {
+    let converging = |inner| Converging {
+        inner,
+        tol_grad: settings.gradient_tolerance,
+        tol_cost,
+    };
+    let converging_cg = |inner| Converging {
+        inner,
+        tol_grad: settings.gradient_tolerance,
+        tol_cost,
+    };
+    let line_search = MoreThuenteLineSearch::new();
+    match settings.optimizer {
+        Optimizer::Lbfgs => {
+            let solver = LBFGS::new(line_search, 10)
+                .with_tolerance_grad(settings.gradient_tolerance)?
+                .with_tolerance_cost(tol_cost)?;
+            Executor::new(problem, converging(solver))
+                .configure(|s| s.param(u0).max_iters(settings.max_iters))
+                .run()
+                .map(|r| r.state().get_iter())
+        }
+        Optimizer::ConjugateGradient => {
+            let line_search = line_search.with_c(1e-4, 0.1)?;
+            let solver = NonlinearConjugateGradient::new(line_search, PolakRibiere::new())
+                .restart_iters(u0.len() as u64)
+                .restart_orthogonality(0.1);
+            Executor::new(problem, converging_cg(solver))
+                .configure(|s| s.param(u0).max_iters(settings.max_iters))
+                .run()
+                .map(|r| r.state().get_iter())
+        }
+    }
+}

@@ -1,0 +1,115 @@
+//! Gradients of cross-covariances `K(X1, X2)` and of the diagonal
+//! `k(x_i, x_i)`, with respect to the hyperparameters and to the first
+//! point set — what a sparse GP needs for `K_uf`, `K_uu` and `diag K_ff`
+//! and for moving its inducing inputs `Z`.
+
+use faer::{Mat, MatRef};
+
+use super::{GramCache, Kernel};
+use crate::dense::hadamard;
+
+impl Kernel {
+    /// `K(X1, X2)` (white noise contributes 0) with what
+    /// [`Kernel::accumulate_cross_gradient`] needs.
+    pub fn cross_with_cache(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> GramCache {
+        if let Some((family, s)) = self.family() {
+            let (k, s) = s.cross_with_s(family, x1, x2, false);
+            return GramCache::leaf(k, s);
+        }
+        match self {
+            Self::Linear(l) => GramCache::leaf(l.cross(x1, x2), None),
+            Self::Sum(c) | Self::Product(c) => {
+                let children: Vec<GramCache> =
+                    c.iter().map(|k| k.cross_with_cache(x1, x2)).collect();
+                GramCache::combine(matches!(self, Self::Sum(_)), children)
+            }
+            _ => GramCache::leaf(Mat::zeros(x1.nrows(), x2.nrows()), None),
+        }
+    }
+
+    /// Adds `Σ_ij W_ij ∂K(X1, X2)_ij/∂θ_k` to `out` (one entry per
+    /// log-hyperparameter) and `factor · Σ_j W_ij ∂K_ij/∂X1_iq` to `dx1`,
+    /// from the cache of [`Kernel::cross_with_cache`] (or, with
+    /// `factor = 2` and a symmetric `W`, of [`Kernel::gram_with_cache`] at
+    /// `X1 = X2`: the input gradient of `Σ_ij W_ij K(X, X)_ij`).
+    pub fn accumulate_cross_gradient(
+        &self,
+        x1: MatRef<'_, f64>,
+        x2: MatRef<'_, f64>,
+        cache: &GramCache,
+        w: MatRef<'_, f64>,
+        out: Option<&mut [f64]>,
+        dx1: Option<(&mut Mat<f64>, f64)>,
+    ) {
+        if let Some((_, s)) = self.family() {
+            s.accumulate_cross_gradient(x1, x2, &cache.k, cache.s.as_ref(), w, out, dx1);
+            return;
+        }
+        match self {
+            Self::Linear(l) => l.accumulate_cross_gradient(x1, x2, w, out, dx1),
+            Self::Sum(children) | Self::Product(children) => {
+                let is_product = matches!(self, Self::Product(_));
+                let (mut out, mut dx1) = (out, dx1);
+                let mut at = 0;
+                for (i, (k, c)) in children.iter().zip(&cache.children).enumerate() {
+                    // ∂(K_1 ∘ … ∘ K_m) = ∂K_i ∘ Π_{j≠i} K_j.
+                    let wi = if is_product {
+                        let mut wi = w.to_owned();
+                        for (j, cj) in cache.children.iter().enumerate() {
+                            if j != i {
+                                wi = hadamard(wi.as_ref(), cj.k.as_ref());
+                            }
+                        }
+                        Some(wi)
+                    } else {
+                        None
+                    };
+                    let wi = wi.as_ref().map_or(w, |m| m.as_ref());
+                    let m = k.n_params();
+                    let child_out = out.as_deref_mut().map(|o| &mut o[at..at + m]);
+                    let child_dx = dx1.as_mut().map(|(d, f)| (&mut **d, *f));
+                    k.accumulate_cross_gradient(x1, x2, c, wi, child_out, child_dx);
+                    at += m;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Adds `Σ_i w_i ∂k(x_i, x_i)/∂θ_k` to `out`.
+    pub fn accumulate_diag_gradient(&self, x: MatRef<'_, f64>, w: &[f64], out: &mut [f64]) {
+        let total: f64 = w.iter().sum();
+        match self {
+            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => out[0] += s.variance * total,
+            Self::White(wk) => out[0] += wk.variance * total,
+            Self::Linear(l) => {
+                for (q, o) in out.iter_mut().enumerate().take(x.ncols()) {
+                    let quad: f64 = (0..x.nrows()).map(|i| w[i] * x[(i, q)].powi(2)).sum();
+                    *o += l.variances[q] * quad;
+                }
+            }
+            Self::Sum(children) | Self::Product(children) => {
+                let diags: Vec<Vec<f64>> = if matches!(self, Self::Product(_)) {
+                    children.iter().map(|k| k.diag(x)).collect()
+                } else {
+                    Vec::new()
+                };
+                let mut at = 0;
+                for (i, k) in children.iter().enumerate() {
+                    let wi: Vec<f64> = (0..w.len())
+                        .map(|r| {
+                            diags
+                                .iter()
+                                .enumerate()
+                                .filter(|(j, _)| *j != i)
+                                .fold(w[r], |acc, (_, d)| acc * d[r])
+                        })
+                        .collect();
+                    let m = k.n_params();
+                    k.accumulate_diag_gradient(x, &wi, &mut out[at..at + m]);
+                    at += m;
+                }
+            }
+        }
+    }
+}

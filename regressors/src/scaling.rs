@@ -1,0 +1,140 @@
+//! What the GP regressors share around their numerics: checking training
+//! and query data, z-scoring inputs and outputs with training statistics,
+//! and mapping predictions back to target units (mean × std + mean,
+//! variance × std²).
+
+use faer::{Mat, MatRef};
+use gpodo_datasets::standardize::Standardizer;
+use gpodo_traits::{Error, ResidualDataset, SampleMatrix};
+
+use crate::RegressorError;
+use crate::dense::{from_faer, to_faer};
+
+/// Predictions with the latent variance kept apart from the noise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GpPredictions {
+    /// Predictive mean, target units.
+    pub mean: SampleMatrix,
+    /// Variance of the latent function, target units.
+    pub latent_variance: SampleMatrix,
+    /// Variance of a noisy target (latent + noise), target units.
+    pub variance: SampleMatrix,
+}
+
+/// Fails on the first non-finite value, naming its row and column.
+///
+/// # Errors
+/// [`RegressorError::InvalidData`].
+pub fn check_finite(what: &str, m: &SampleMatrix) -> Result<(), RegressorError> {
+    for (i, row) in m.rows().enumerate() {
+        if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+            return Err(RegressorError::InvalidData {
+                detail: format!("{what}: non-finite value at row {i}, column {j}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Training data after the checks and the optional z-scoring.
+pub struct ScaledTraining {
+    /// Input scaling (None when standardisation is off).
+    pub input_scaler: Option<Standardizer>,
+    /// Output scaling (None when standardisation is off).
+    pub output_scaler: Option<Standardizer>,
+    /// Scaled inputs.
+    pub x: SampleMatrix,
+    /// Scaled targets.
+    pub y: SampleMatrix,
+}
+
+impl ScaledTraining {
+    /// Checks `data` (non-empty, finite) and z-scores it when `standardize`.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidData`] or a standardisation error.
+    pub fn new(data: &ResidualDataset, standardize: bool) -> Result<Self, RegressorError> {
+        let (n, d, p) = (data.len(), data.inputs.ncols(), data.targets.ncols());
+        if n == 0 || d == 0 || p == 0 {
+            return Err(RegressorError::InvalidData {
+                detail: format!(
+                    "need samples, inputs and outputs; got {n} × {d} inputs, {p} outputs"
+                ),
+            });
+        }
+        check_finite("inputs", &data.inputs)?;
+        check_finite("targets", &data.targets)?;
+        if !standardize {
+            return Ok(Self {
+                input_scaler: None,
+                output_scaler: None,
+                x: data.inputs.clone(),
+                y: data.targets.clone(),
+            });
+        }
+        let si = Standardizer::fit(&data.inputs)?;
+        let so = Standardizer::fit(&data.targets)?;
+        Ok(Self {
+            x: si.transform(&data.inputs)?,
+            y: so.transform(&data.targets)?,
+            input_scaler: Some(si),
+            output_scaler: Some(so),
+        })
+    }
+}
+
+fn backend(e: RegressorError) -> Error {
+    e.into()
+}
+
+/// Checks query inputs (width `d`, finite) and scales them like the
+/// training inputs.
+///
+/// # Errors
+/// [`Error::DimensionMismatch`], [`Error::InvalidInput`].
+pub fn scale_queries(
+    model: &str,
+    inputs: &SampleMatrix,
+    d: usize,
+    scaler: Option<&Standardizer>,
+) -> Result<Mat<f64>, Error> {
+    if inputs.ncols() != d {
+        return Err(Error::DimensionMismatch {
+            what: format!("{model} inputs"),
+            expected: d,
+            found: inputs.ncols(),
+        });
+    }
+    check_finite("prediction inputs", inputs).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    Ok(match scaler {
+        Some(s) => to_faer(&s.transform(inputs).map_err(|e| backend(e.into()))?),
+        None => to_faer(inputs),
+    })
+}
+
+/// Maps scaled predictive moments back to target units.
+///
+/// # Errors
+/// A standardisation error (shape mismatch), as a backend error.
+pub fn unscale_predictions(
+    mean: MatRef<'_, f64>,
+    latent: MatRef<'_, f64>,
+    noisy: MatRef<'_, f64>,
+    scaler: Option<&Standardizer>,
+) -> Result<GpPredictions, Error> {
+    let (mean, latent, noisy) = (from_faer(mean), from_faer(latent), from_faer(noisy));
+    let back =
+        |r: Result<SampleMatrix, gpodo_datasets::DatasetError>| r.map_err(|e| backend(e.into()));
+    Ok(match scaler {
+        Some(s) => GpPredictions {
+            mean: back(s.inverse_transform_mean(&mean))?,
+            latent_variance: back(s.inverse_transform_variance(&latent))?,
+            variance: back(s.inverse_transform_variance(&noisy))?,
+        },
+        None => GpPredictions {
+            mean,
+            latent_variance: latent,
+            variance: noisy,
+        },
+    })
+}

@@ -1,0 +1,323 @@
+//! [`SparseGp`] behind [`ResidualRegressor`]: standardises like the exact
+//! GP, places the inducing inputs, learns hyperparameters (and the inducing
+//! inputs unless fixed) on the VFE bound or the FITC likelihood, and keeps
+//! only the `O(m²)` posterior. A trained model round-trips through
+//! [`SparseGpState`] (serde) without the training data.
+
+use std::time::Instant;
+
+use faer::{Mat, MatRef};
+use gpodo_datasets::standardize::Standardizer;
+use gpodo_traits::{
+    Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+};
+use serde::{Deserialize, Serialize};
+
+use super::bound::sparse_objective;
+use super::inducing::place_inducing;
+use super::params::{Approximation, SparseGpParams};
+use super::posterior::SparsePosterior;
+use crate::RegressorError;
+use crate::dense::{from_faer, to_faer};
+use crate::hyperopt::{Coordinates, LogBounds, Objective, maximize};
+use crate::kernels::Kernel;
+use crate::scaling::{
+    GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
+};
+
+/// Everything needed to predict with a trained sparse GP: `O(m²)` numbers,
+/// no training data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SparseGpState {
+    /// The settings it was trained with.
+    pub params: SparseGpParams,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Output column names.
+    pub target_names: Vec<String>,
+    /// Input scaling (None when `standardize` is off).
+    pub input_scaler: Option<Standardizer>,
+    /// Output scaling (None when `standardize` is off).
+    pub output_scaler: Option<Standardizer>,
+    /// Kernel with learned hyperparameters (standardised units).
+    pub kernel: Kernel,
+    /// Learned noise variance (standardised units).
+    pub noise_variance: f64,
+    /// Inducing inputs `Z` (`m × d`, standardised units).
+    pub inducing: SampleMatrix,
+    /// `β` (`m × p`).
+    pub weights: SampleMatrix,
+    /// `P = K_uu⁻¹ − Σ⁻¹` (`m × m`).
+    pub variance_matrix: SampleMatrix,
+    /// The training objective (bound or FITC likelihood).
+    pub objective: f64,
+}
+
+/// The sparse Gaussian process regressor.
+#[derive(Debug, Clone)]
+pub struct SparseGp {
+    params: SparseGpParams,
+    fitted: Option<(SparseGpState, SparsePosterior)>,
+}
+
+/// The objective over `(log θ, log σ², Z)` (Z only when learned).
+struct SparseObjective<'a> {
+    template: &'a Kernel,
+    x: MatRef<'a, f64>,
+    y: MatRef<'a, f64>,
+    inducing: &'a Mat<f64>,
+    learn_inducing: bool,
+    approximation: Approximation,
+    jitter: f64,
+}
+
+impl SparseObjective<'_> {
+    fn unpack(&self, coords: &[f64]) -> (Kernel, f64, Mat<f64>) {
+        let k = self.template.n_params();
+        let mut kernel = self.template.clone();
+        kernel.set_log_params(&coords[..k]);
+        let (m, d) = (self.inducing.nrows(), self.inducing.ncols());
+        let z = if self.learn_inducing {
+            Mat::from_fn(m, d, |i, q| coords[k + 1 + i * d + q])
+        } else {
+            self.inducing.clone()
+        };
+        (kernel, coords[k].exp(), z)
+    }
+}
+
+impl Objective for SparseObjective<'_> {
+    fn evaluate(&self, coords: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+        let (kernel, noise, z) = self.unpack(coords);
+        let eval = sparse_objective(
+            &kernel,
+            noise,
+            z.as_ref(),
+            self.x,
+            self.y,
+            self.approximation,
+            self.jitter,
+            true,
+            self.learn_inducing,
+        )?;
+        let mut gradient = eval.gradient.unwrap_or_default();
+        if let Some(dz) = eval.inducing_gradient {
+            for i in 0..dz.nrows() {
+                gradient.extend((0..dz.ncols()).map(|q| dz[(i, q)]));
+            }
+        }
+        Ok((eval.value, gradient))
+    }
+}
+
+fn backend(e: RegressorError) -> Error {
+    e.into()
+}
+
+impl SparseGp {
+    /// A sparse GP with checked settings.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the bad field.
+    pub fn new(params: SparseGpParams) -> Result<Self, RegressorError> {
+        params.check()?;
+        Ok(Self {
+            params,
+            fitted: None,
+        })
+    }
+
+    /// The settings.
+    pub fn params(&self) -> &SparseGpParams {
+        &self.params
+    }
+
+    /// The trained model as serialisable state (None before `fit`).
+    pub fn state(&self) -> Option<&SparseGpState> {
+        self.fitted.as_ref().map(|(s, _)| s)
+    }
+
+    /// Rebuilds a trained sparse GP from its state (no refit, no data).
+    ///
+    /// # Errors
+    /// As [`SparseGpParams::check`], or when the state's shapes disagree or
+    /// hold non-finite values.
+    pub fn from_state(state: SparseGpState) -> Result<Self, RegressorError> {
+        state.params.check()?;
+        for (what, m) in [
+            ("saved inducing inputs", &state.inducing),
+            ("saved weights", &state.weights),
+            ("saved variance matrix", &state.variance_matrix),
+        ] {
+            check_finite(what, m)?;
+        }
+        let m = state.inducing.nrows();
+        let consistent = state.weights.nrows() == m
+            && state.variance_matrix.nrows() == m
+            && state.variance_matrix.ncols() == m
+            && state
+                .kernel
+                .input_dim()
+                .is_none_or(|d| d == state.inducing.ncols());
+        if !consistent {
+            return Err(RegressorError::InvalidData {
+                detail: "saved sparse GP state: inducing inputs, weights, variance matrix and kernel width disagree".into(),
+            });
+        }
+        let posterior = SparsePosterior {
+            kernel: state.kernel.clone(),
+            noise_variance: state.noise_variance,
+            inducing: to_faer(&state.inducing),
+            weights: to_faer(&state.weights),
+            variance_matrix: to_faer(&state.variance_matrix),
+            objective: state.objective,
+            extra_jitter: 0.0,
+        };
+        Ok(Self {
+            params: state.params.clone(),
+            fitted: Some((state, posterior)),
+        })
+    }
+
+    fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        let scaled = ScaledTraining::new(data, self.params.standardize)?;
+        let (x, y) = (to_faer(&scaled.x), to_faer(&scaled.y));
+        let p = &self.params;
+        let z0 = place_inducing(x.as_ref(), &p.inducing, p.seed);
+        let kernel0 = p.kernel.build(x.ncols(), &p.init);
+        let learn_inducing = p.optimize && !p.inducing.fixed;
+        let objective = SparseObjective {
+            template: &kernel0,
+            x: x.as_ref(),
+            y: y.as_ref(),
+            inducing: &z0,
+            learn_inducing,
+            approximation: p.approximation,
+            jitter: p.jitter,
+        };
+        let (kernel, noise, z, evaluations) = if p.optimize {
+            let mut bounds: Vec<LogBounds> = kernel0
+                .param_kinds()
+                .into_iter()
+                .map(|k| LogBounds::new(p.bounds.of(k)))
+                .collect();
+            bounds.push(LogBounds::new(p.bounds.noise_variance));
+            let mut start = kernel0.log_params();
+            start.push(p.noise_variance.ln());
+            let mut perturb = vec![true; start.len()];
+            if learn_inducing {
+                for i in 0..z0.nrows() {
+                    start.extend((0..z0.ncols()).map(|q| z0[(i, q)]));
+                }
+                bounds.resize(start.len(), LogBounds::unbounded());
+                perturb.resize(start.len(), false);
+            }
+            let coords = Coordinates {
+                start,
+                bounds,
+                perturb,
+            };
+            let value_scale = 1.0 / (y.nrows() * y.ncols()) as f64;
+            let out = maximize(&objective, &coords, value_scale, &p.settings())?;
+            tracing::debug!(
+                objective = out.value,
+                evaluations = out.evaluations,
+                iterations = out.iterations,
+                "sparse GP hyperparameters learned"
+            );
+            let (kernel, noise, z) = objective.unpack(&out.coords);
+            (kernel, noise, z, Some(out.evaluations))
+        } else {
+            (kernel0.clone(), p.noise_variance, z0.clone(), None)
+        };
+        let posterior = SparsePosterior::new(
+            kernel.clone(),
+            noise,
+            z,
+            x.as_ref(),
+            y.as_ref(),
+            p.approximation,
+            p.jitter,
+        )?;
+        let mut parameters: Vec<(String, f64)> = kernel
+            .param_names(&data.input_names)
+            .into_iter()
+            .zip(kernel.log_params().into_iter().map(f64::exp))
+            .collect();
+        parameters.push(("noise_variance".into(), noise));
+        parameters.push(("inducing_points".into(), posterior.inducing.nrows() as f64));
+        let report = FitReport {
+            n_samples: data.len(),
+            duration_secs: start.elapsed().as_secs_f64(),
+            objective: Some(posterior.objective),
+            evaluations,
+            jitter: Some(p.jitter + posterior.extra_jitter),
+            parameters,
+        };
+        let state = SparseGpState {
+            params: self.params.clone(),
+            input_names: data.input_names.clone(),
+            target_names: data.target_names.clone(),
+            input_scaler: scaled.input_scaler,
+            output_scaler: scaled.output_scaler,
+            kernel,
+            noise_variance: noise,
+            inducing: from_faer(posterior.inducing.as_ref()),
+            weights: from_faer(posterior.weights.as_ref()),
+            variance_matrix: from_faer(posterior.variance_matrix.as_ref()),
+            objective: posterior.objective,
+        };
+        self.fitted = Some((state, posterior));
+        Ok(report)
+    }
+
+    /// Mean, latent variance and noisy variance at `inputs`, in target units.
+    ///
+    /// # Errors
+    /// [`Error::NotFitted`] before `fit`; [`Error::DimensionMismatch`] for a
+    /// wrong input width; [`Error::InvalidInput`] for non-finite inputs.
+    pub fn predict_full(&self, inputs: &SampleMatrix) -> Result<GpPredictions, Error> {
+        let Some((state, posterior)) = &self.fitted else {
+            return Err(Error::NotFitted {
+                model: self.name().into(),
+            });
+        };
+        let xs = scale_queries(
+            self.name(),
+            inputs,
+            state.inducing.ncols(),
+            state.input_scaler.as_ref(),
+        )?;
+        let moments = posterior.predict(xs.as_ref());
+        let (q, p) = (xs.nrows(), moments.mean.ncols());
+        let latent = Mat::from_fn(q, p, |i, _| moments.latent_variance[i]);
+        let noisy = Mat::from_fn(q, p, |i, _| {
+            moments.latent_variance[i] + moments.noise_variance
+        });
+        unscale_predictions(
+            moments.mean.as_ref(),
+            latent.as_ref(),
+            noisy.as_ref(),
+            state.output_scaler.as_ref(),
+        )
+    }
+}
+
+impl ResidualRegressor for SparseGp {
+    fn name(&self) -> &str {
+        "sparse_gp"
+    }
+
+    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
+        self.fit_impl(data).map_err(backend)
+    }
+
+    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let full = self.predict_full(inputs)?;
+        Ok(Predictions {
+            mean: full.mean,
+            variance: full.variance,
+        })
+    }
+}

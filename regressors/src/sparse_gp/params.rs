@@ -1,0 +1,167 @@
+//! What a sparse GP is asked to do, as written in YAML (`kind: sparse_gp`),
+//! validated once when the configuration is read. Defaults follow the
+//! authors' on-board model (GPy `SparseGPRegression`: RBF-ARD, 100 inducing
+//! points, hyperparameters shared by the outputs, L-BFGS-B on the bound).
+
+use serde::{Deserialize, Serialize};
+
+use crate::RegressorError;
+use crate::exact_gp::Bounds;
+use crate::hyperopt::{Optimizer, OptimizerSettings};
+use crate::kernels::{KernelExpr, KernelInit};
+
+/// Which sparse approximation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Approximation {
+    /// Titsias' collapsed variational bound (VFE, GPy's `VarDTC`): a lower
+    /// bound on the exact log marginal likelihood. Default.
+    #[default]
+    Vfe,
+    /// Fully independent training conditional (Snelson & Ghahramani): the
+    /// exact likelihood of a heteroscedastic approximate model.
+    Fitc,
+}
+
+/// How the inducing inputs are first placed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InducingInit {
+    /// k-means centres (k-means++ seeding, then Lloyd iterations). Default.
+    #[default]
+    Kmeans,
+    /// A random subset of the training inputs.
+    RandomSubset,
+}
+
+/// The inducing inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InducingParams {
+    /// Number of inducing points `m` (default 100; all training points
+    /// when there are fewer).
+    pub count: usize,
+    /// Initial placement (default `kmeans`).
+    pub init: InducingInit,
+    /// Lloyd iterations of the k-means placement (default 25).
+    pub kmeans_iters: usize,
+    /// Keep the inducing inputs where they were placed (default false:
+    /// they are learned with the hyperparameters).
+    pub fixed: bool,
+}
+
+impl Default for InducingParams {
+    fn default() -> Self {
+        Self {
+            count: 100,
+            init: InducingInit::Kmeans,
+            kmeans_iters: 25,
+            fixed: false,
+        }
+    }
+}
+
+/// Sparse GP settings. Every field has a default; see `experiments/README.md`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SparseGpParams {
+    /// Kernel expression (default `rbf`).
+    pub kernel: KernelExpr,
+    /// Approximation (default `vfe`).
+    pub approximation: Approximation,
+    /// Inducing inputs.
+    pub inducing: InducingParams,
+    /// Z-score inputs and outputs with training statistics (default true).
+    pub standardize: bool,
+    /// Initial kernel hyperparameters.
+    pub init: KernelInit,
+    /// Initial noise variance in standardised units (default 0.01).
+    pub noise_variance: f64,
+    /// Diagonal jitter added to `K_uu` in standardised units (default 1e-6,
+    /// GPy's).
+    pub jitter: f64,
+    /// Learn the hyperparameters (and the inducing inputs unless fixed)
+    /// (default true).
+    pub optimize: bool,
+    /// Optimiser (default `lbfgs`).
+    pub optimizer: Optimizer,
+    /// Iteration limit per start (default 200).
+    pub max_iters: u64,
+    /// Extra starts from seeded perturbations of the initial
+    /// hyperparameters (default 0).
+    pub restarts: usize,
+    /// Seed of the inducing-point placement and of the restarts (default 0).
+    pub seed: u64,
+    /// Gradient-norm stopping tolerance (default 1e-5), as for the exact GP.
+    pub gradient_tolerance: f64,
+    /// Relative objective-change stopping tolerance (default 1e-10).
+    pub relative_cost_tolerance: f64,
+    /// Hyperparameter bounds (as for the exact GP).
+    pub bounds: Bounds,
+}
+
+impl Default for SparseGpParams {
+    fn default() -> Self {
+        Self {
+            kernel: KernelExpr::Leaf("rbf".into()),
+            approximation: Approximation::Vfe,
+            inducing: InducingParams::default(),
+            standardize: true,
+            init: KernelInit::default(),
+            noise_variance: 0.01,
+            jitter: 1e-6,
+            optimize: true,
+            optimizer: Optimizer::Lbfgs,
+            max_iters: 200,
+            restarts: 0,
+            seed: 0,
+            gradient_tolerance: 1e-5,
+            relative_cost_tolerance: 1e-10,
+            bounds: Bounds::default(),
+        }
+    }
+}
+
+impl SparseGpParams {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the field and the expected form.
+    pub fn check(&self) -> Result<(), RegressorError> {
+        let bad = |field: &str, expected: &str| {
+            Err(RegressorError::InvalidSpec {
+                regressor: "sparse_gp".into(),
+                field: field.into(),
+                expected: expected.into(),
+            })
+        };
+        if self.inducing.count == 0 {
+            return bad("inducing.count", "at least 1 inducing point");
+        }
+        if !(self.jitter.is_finite() && self.jitter >= 0.0) {
+            return bad("jitter", "a non-negative number");
+        }
+        self.bounds.check("sparse_gp")?;
+        let [lo, hi] = self.bounds.noise_variance;
+        if !(self.noise_variance >= lo && self.noise_variance <= hi) {
+            return bad(
+                "noise_variance",
+                "a positive variance within bounds.noise_variance",
+            );
+        }
+        self.bounds.check_init(&self.init, "sparse_gp")?;
+        self.settings().check("sparse_gp", self.optimize)
+    }
+
+    /// The optimiser settings.
+    pub fn settings(&self) -> OptimizerSettings {
+        OptimizerSettings {
+            optimizer: self.optimizer,
+            max_iters: self.max_iters,
+            restarts: self.restarts,
+            seed: self.seed,
+            gradient_tolerance: self.gradient_tolerance,
+            relative_cost_tolerance: self.relative_cost_tolerance,
+        }
+    }
+}

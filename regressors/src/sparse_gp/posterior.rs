@@ -1,0 +1,118 @@
+//! The sparse GP posterior at fixed hyperparameters, reduced to what
+//! on-board prediction needs: the inducing inputs `Z`, the weights
+//! `β = Σ⁻¹ K_uf Λ⁻¹ Y` (`m × p`) and `P = K_uu⁻¹ − Σ⁻¹` (`m × m`), so that
+//! a query costs `O(m d)` for `k_*`, `O(m)` per output for the mean
+//! `k_*ᵀβ` and `O(m²)` for the latent variance `k_** − k_*ᵀ P k_*`.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef};
+
+use super::bound::factorize;
+use super::params::Approximation;
+use crate::RegressorError;
+use crate::dense::par;
+use crate::exact_gp::posterior::Moments;
+use crate::kernels::Kernel;
+
+/// A conditioned sparse GP.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparsePosterior {
+    /// The kernel.
+    pub kernel: Kernel,
+    /// The noise variance `σ²`.
+    pub noise_variance: f64,
+    /// Inducing inputs `Z` (`m × d`).
+    pub inducing: Mat<f64>,
+    /// `β` (`m × p`).
+    pub weights: Mat<f64>,
+    /// `P = K_uu⁻¹ − Σ⁻¹` (`m × m`).
+    pub variance_matrix: Mat<f64>,
+    /// The objective (VFE bound or FITC likelihood) at the training data.
+    pub objective: f64,
+    /// Diagonal jitter `K_uu` needed beyond the configured one.
+    pub extra_jitter: f64,
+}
+
+impl SparsePosterior {
+    /// Conditions the sparse GP on `(x, y)`.
+    ///
+    /// # Errors
+    /// [`RegressorError::NotPositiveDefinite`] when `K_uu` cannot be factorised.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        kernel: Kernel,
+        noise_variance: f64,
+        inducing: Mat<f64>,
+        x: MatRef<'_, f64>,
+        y: MatRef<'_, f64>,
+        approximation: Approximation,
+        jitter: f64,
+    ) -> Result<Self, RegressorError> {
+        let f = factorize(
+            &kernel,
+            noise_variance,
+            inducing.as_ref(),
+            x,
+            y,
+            approximation,
+            jitter,
+        )?;
+        let m = inducing.nrows();
+        let gamma = f.lb.solve_upper(f.c.as_ref());
+        let weights = f.l.solve_upper(gamma.as_ref());
+        // P = L⁻ᵀ (I − B⁻¹) L⁻¹.
+        let b_inv = f.lb.inverse();
+        let inner = Mat::from_fn(m, m, |a, b| {
+            (if a == b { 1.0 } else { 0.0 }) - b_inv[(a, b)]
+        });
+        let t = f.l.solve_upper(inner.as_ref());
+        let pt = f.l.solve_upper(t.transpose());
+        let variance_matrix = Mat::from_fn(m, m, |a, b| 0.5 * (pt[(a, b)] + pt[(b, a)]));
+        Ok(Self {
+            kernel,
+            noise_variance,
+            inducing,
+            weights,
+            variance_matrix,
+            objective: f.value,
+            extra_jitter: f.l.jitter,
+        })
+    }
+
+    /// Mean and variance at the rows of `xs`.
+    pub fn predict(&self, xs: MatRef<'_, f64>) -> Moments {
+        let k_star = self.kernel.cross(xs, self.inducing.as_ref()); // q × m
+        let mut mean = Mat::zeros(xs.nrows(), self.weights.ncols());
+        matmul(
+            mean.as_mut(),
+            Accum::Replace,
+            k_star.as_ref(),
+            self.weights.as_ref(),
+            1.0,
+            par(),
+        );
+        let mut kp = Mat::<f64>::zeros(xs.nrows(), self.inducing.nrows());
+        matmul(
+            kp.as_mut(),
+            Accum::Replace,
+            k_star.as_ref(),
+            self.variance_matrix.as_ref(),
+            1.0,
+            par(),
+        );
+        let prior = self.kernel.diag(xs);
+        let latent_variance = (0..xs.nrows())
+            .map(|i| {
+                let explained: f64 = (0..k_star.ncols())
+                    .map(|j| kp[(i, j)] * k_star[(i, j)])
+                    .sum();
+                (prior[i] - explained).max(0.0)
+            })
+            .collect();
+        Moments {
+            mean,
+            latent_variance,
+            noise_variance: self.noise_variance,
+        }
+    }
+}
