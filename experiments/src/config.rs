@@ -17,6 +17,8 @@ use gpodo_datasets::residuals::ResidualConfig;
 use gpodo_datasets::sim::preset::Preset;
 use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
 use gpodo_regressors::RegressorSpec;
+
+use crate::bench::BenchSettings;
 use serde::{Deserialize, Serialize};
 
 /// A whole experiment.
@@ -44,6 +46,9 @@ pub struct ExperimentConfig {
     /// when the file is missing.
     #[serde(default)]
     pub compare_with: Option<ReferenceTable>,
+    /// Settings of `gpodo bench` (ignored by `gpodo run`).
+    #[serde(default)]
+    pub bench: BenchSettings,
 }
 
 /// A reference residual table.
@@ -212,6 +217,7 @@ impl ExperimentConfig {
             r.validate().map_err(|e| format!("regressors[{i}]: {e}"))?;
         }
         self.residuals.validate().map_err(|e| e.to_string())?;
+        self.bench.validate(self.regressors.len())?;
         if let MotionModelSpec::WeightedJacobian { config, .. } = &self.motion_model {
             config.validate().map_err(|e| e.to_string())?;
         }

@@ -8,8 +8,12 @@
 //! * [`calibration`]: statistics of residual tables, to compare the
 //!   simulator with the real ExoTeR data;
 //! * [`odometry`]: dead reckoning with the motion model;
-//! * [`report`]: the Markdown and JSON outputs.
+//! * [`report`]: the Markdown and JSON outputs;
+//! * [`bench`](mod@bench) and [`bench_report`]: `gpodo bench`, every regressor timed
+//!   and scored on the same splits against the exact-GP baseline.
 
+pub mod bench;
+pub mod bench_report;
 pub mod calibration;
 pub mod config;
 pub mod odometry;

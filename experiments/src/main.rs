@@ -6,6 +6,8 @@ use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 use gpodo_datasets::log::write_log_csv;
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_experiments::bench::run_bench;
+use gpodo_experiments::bench_report::write_bench_report;
 use gpodo_experiments::config::ExperimentConfig;
 use gpodo_experiments::pipeline::run_experiment;
 use gpodo_experiments::report::write_report;
@@ -29,6 +31,17 @@ enum Command {
         /// The experiment YAML.
         file: PathBuf,
         /// Output folder (default: results/NAME, NAME from the file).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Benchmark every regressor of an experiment file on the same data
+    /// (fit time, prediction and online-update latency, scores, learning
+    /// curves) against the exact-GP row; writes results/NAME/bench.md and
+    /// bench.json.
+    Bench {
+        /// The experiment YAML.
+        file: PathBuf,
+        /// Output folder (default: results/NAME).
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -68,6 +81,18 @@ fn run(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
             "test scores"
         );
     }
+    println!("wrote {} and {}", md.display(), json.display());
+    Ok(())
+}
+
+fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
+    let config = ExperimentConfig::from_path(file)?;
+    let base = file.parent().unwrap_or_else(|| Path::new("."));
+    let results =
+        run_bench(&config, base).with_context(|| format!("benchmark {}", file.display()))?;
+    let dir = out.unwrap_or_else(|| PathBuf::from("results").join(&config.name));
+    let (md, json) =
+        write_bench_report(&results, &dir).with_context(|| format!("writing {}", dir.display()))?;
     println!("wrote {} and {}", md.display(), json.display());
     Ok(())
 }
@@ -113,6 +138,7 @@ fn main() -> anyhow::Result<()> {
         .init();
     match cli.command {
         Command::Run { file, out } => run(&file, out),
+        Command::Bench { file, out } => bench(&file, out),
         Command::Simulate {
             preset,
             seed,

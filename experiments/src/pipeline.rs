@@ -330,17 +330,17 @@ fn reference_statistics(
     }
 }
 
-/// Runs `config`; relative paths are resolved against `base` (the
-/// experiment file's folder).
-///
-/// # Errors
-/// [`PipelineError`] saying which stage failed.
-pub fn run_experiment(
-    config: &ExperimentConfig,
-    base: &Path,
-) -> Result<ExperimentResults, PipelineError> {
-    let start = Instant::now();
-    let data = prepare(config, base)?;
+/// The rows the regressors see: inputs standardised with the training
+/// statistics, targets in physical units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelRows {
+    /// Training rows.
+    pub train: ResidualDataset,
+    /// Test rows.
+    pub test: ResidualDataset,
+}
+
+fn model_rows(data: &PreparedData) -> Result<ModelRows, PipelineError> {
     if data.train.input_names != data.test.input_names
         || data.train.target_names != data.test.target_names
     {
@@ -357,6 +357,34 @@ pub fn run_experiment(
     train.inputs = scaler.transform(&data.train.inputs)?;
     let mut test = data.test.clone();
     test.inputs = scaler.transform(&data.test.inputs)?;
+    Ok(ModelRows { train, test })
+}
+
+/// The data of `config` as the regressors see them, and where they came
+/// from (for benchmarks that time the regressors alone).
+///
+/// # Errors
+/// [`PipelineError`] saying which stage failed.
+pub fn prepare_model_rows(
+    config: &ExperimentConfig,
+    base: &Path,
+) -> Result<(ModelRows, DatasetSummary), PipelineError> {
+    let data = prepare(config, base)?;
+    Ok((model_rows(&data)?, data.summary))
+}
+
+/// Runs `config`; relative paths are resolved against `base` (the
+/// experiment file's folder).
+///
+/// # Errors
+/// [`PipelineError`] saying which stage failed.
+pub fn run_experiment(
+    config: &ExperimentConfig,
+    base: &Path,
+) -> Result<ExperimentResults, PipelineError> {
+    let start = Instant::now();
+    let data = prepare(config, base)?;
+    let ModelRows { train, test } = model_rows(&data)?;
 
     let mut regressors = Vec::with_capacity(config.regressors.len());
     for spec in &config.regressors {

@@ -153,3 +153,59 @@ fn malformed_config_is_reported_with_file_and_line_and_nothing_is_written() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("nope.csv"), "{err}");
 }
+
+#[test]
+fn bench_writes_ratios_to_the_exact_gp_row_and_rejects_a_bad_baseline() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut csv = String::from("a,b,y1,y2\n");
+    for i in 0..150 {
+        let x = i as f64 * 0.05;
+        let noise = ((i * 37 % 11) as f64 - 5.0) * 0.002;
+        csv.push_str(&format!(
+            "{x},{},{},{}\n",
+            (0.7 * x).cos(),
+            (1.3 * x).sin() * 0.01 + noise,
+            0.002 * x - noise
+        ));
+    }
+    write(&d.join("table.csv"), &csv);
+    write(
+        &d.join("b.yaml"),
+        "name: b\ndataset: {kind: residual_table, path: table.csv, targets: [y1, y2], train_fraction: 0.8}\nregressors:\n  - kind: zero\n  - kind: exact_gp\n    max_iters: 20\n  - kind: sparse_gp\n    inducing: {count: 15}\n    max_iters: 20\nbench: {predict_queries: 7, learning_curve_every: 40}\n",
+    );
+    let out = gpodo(&["-q", "bench", "b.yaml"], d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let b = metrics(&d.join("results/b/bench.json"));
+    assert_eq!(b["baseline"], 1);
+    let rows = b["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[1]["predict_latency"]["count"], 7);
+    assert!(rows.iter().all(|r| r["online"].is_null()));
+    let report = std::fs::read_to_string(d.join("results/b/bench.md")).unwrap();
+    // The baseline's own row has ratio 1 and speed-up 1.
+    let exact_line = report
+        .lines()
+        .find(|l| l.starts_with("| exact GP"))
+        .unwrap();
+    assert!(
+        exact_line.contains("| 1.0× |") && exact_line.contains("| 1.000 |"),
+        "{exact_line}"
+    );
+
+    write(
+        &d.join("bad.yaml"),
+        "name: b\ndataset: {kind: residual_table, path: table.csv, targets: [y1, y2], train_fraction: 0.8}\nregressors:\n  - kind: zero\nbench: {baseline: 3}\n",
+    );
+    let out = gpodo(&["bench", "bad.yaml"], d);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.yaml") && err.contains("bench.baseline"),
+        "{err}"
+    );
+}

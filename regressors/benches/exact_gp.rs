@@ -14,50 +14,19 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use faer::Mat;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
 use gpodo_regressors::kernels::{KernelExpr, KernelInit};
-use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use gpodo_traits::ResidualRegressor;
+
+mod common;
+use common::{data, dataset};
 
 const SIZES: [usize; 3] = [500, 1000, 2000];
 const DIMS: [usize; 2] = [18, 28];
 /// Iteration cap of the fit benchmark.
 const FIT_ITERATIONS: u64 = 25;
-
-/// Standardised-looking inputs and 3 smooth noisy outputs.
-fn data(n: usize, d: usize) -> (Mat<f64>, Mat<f64>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(2026);
-    let x = Mat::from_fn(n, d, |_, _| rng.random_range(-1.7..1.7));
-    let y = Mat::from_fn(n, 3, |i, c| {
-        let s: f64 = (0..4).map(|q| x[(i, (q + c) % d)]).sum();
-        (0.7 * s).sin() + 0.3 * x[(i, c)] * x[(i, 5)] + rng.random_range(-0.2..0.2)
-    });
-    (x, y)
-}
-
-fn dataset(x: &Mat<f64>, y: &Mat<f64>) -> ResidualDataset {
-    let rows = |m: &Mat<f64>| {
-        SampleMatrix::from_row_major(
-            m.nrows(),
-            m.ncols(),
-            (0..m.nrows())
-                .flat_map(|i| (0..m.ncols()).map(move |j| m[(i, j)]))
-                .collect(),
-        )
-        .unwrap()
-    };
-    ResidualDataset::new(
-        rows(x),
-        rows(y),
-        (0..x.ncols()).map(|q| format!("x{q}")).collect(),
-        (0..3).map(|c| format!("y{c}")).collect(),
-    )
-    .unwrap()
-}
 
 fn evaluation(c: &mut Criterion) {
     let mut group = c.benchmark_group("exact_gp_evaluation");

@@ -12,12 +12,11 @@
 //! (`n³`, faer) and a few `O(n²d)` products, with no per-hyperparameter
 //! `n × n` temporaries (see the kernels' `accumulate_gradient`).
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, MatRef};
 
 use super::cholesky::Cholesky;
 use crate::RegressorError;
-use crate::dense::{par, trace};
+use crate::dense::{gemm, trace};
 use crate::kernels::Kernel;
 
 /// `log 2π`.
@@ -78,13 +77,12 @@ pub fn log_marginal_likelihood(
                 *v *= -(p as f64);
             }
         }
-        matmul(
+        gemm(
             w.as_mut(),
             Accum::Add,
             alpha.as_ref(),
             alpha.transpose(),
             1.0,
-            par(),
         );
         let mut g = vec![0.0; kernel.n_params() + 1];
         let m = kernel.n_params();

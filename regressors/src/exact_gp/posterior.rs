@@ -3,13 +3,12 @@
 //! output column sharing it and the variance
 //! `k(x_*, x_*) − ‖L⁻¹ k_*‖²` (latent; `+ σ_n²` for a noisy target).
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 
 use super::cholesky::Cholesky;
 use super::likelihood::lml_from_factor;
 use crate::RegressorError;
-use crate::dense::par;
+use crate::dense::gemm;
 use crate::kernels::Kernel;
 
 /// Predictive moments in the (standardised) units the posterior was built in.
@@ -78,13 +77,12 @@ impl Posterior {
     pub fn predict(&self, xs: MatRef<'_, f64>) -> Moments {
         let k_star = self.kernel.cross(self.x.as_ref(), xs); // n × m
         let mut mean = Mat::zeros(xs.nrows(), self.alpha.ncols());
-        matmul(
+        gemm(
             mean.as_mut(),
             Accum::Replace,
             k_star.transpose(),
             self.alpha.as_ref(),
             1.0,
-            par(),
         );
         let v = self.chol.solve_lower(k_star.as_ref());
         let prior = self.kernel.diag(xs);

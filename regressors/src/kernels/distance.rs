@@ -4,10 +4,9 @@
 //! (distances are translation invariant), which keeps the cancellation in
 //! `|z|² − 2 z·z'` small.
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 
-use crate::dense::par;
+use crate::dense::gemm;
 
 /// Column means of `x`.
 pub fn column_means(x: MatRef<'_, f64>) -> Vec<f64> {
@@ -46,13 +45,12 @@ pub fn scaled_sq_dist(
     };
     let (n1, n2) = (norms(&z1), norms(&z2));
     let mut r2 = Mat::<f64>::zeros(z1.nrows(), z2.nrows());
-    matmul(
+    gemm(
         r2.as_mut(),
         Accum::Replace,
         z1.as_ref(),
         z2.as_ref().transpose(),
         -2.0,
-        par(),
     );
     for (j, norm_j) in n2.iter().enumerate() {
         let col = r2.col_as_slice_mut(j);

@@ -3,11 +3,10 @@
 //! `∂K/∂log v_q = v_q x_q x_qᵀ`, so `Σ_ij W_ij ∂K_ij/∂log v_q = v_q x_qᵀ W x_q`,
 //! all `q` from one product `W X`.
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
-use crate::dense::par;
+use crate::dense::gemm;
 
 /// Hyperparameters of the linear kernel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -29,13 +28,12 @@ impl Linear {
             x1[(i, q)] * self.variances[q]
         });
         let mut k = Mat::zeros(x1.nrows(), x2.nrows());
-        matmul(
+        gemm(
             k.as_mut(),
             Accum::Replace,
             scaled.as_ref(),
             x2.transpose(),
             1.0,
-            par(),
         );
         k
     }
@@ -57,7 +55,7 @@ impl Linear {
     ) {
         let (n1, d) = (x1.nrows(), x1.ncols());
         let mut wx2 = Mat::<f64>::zeros(n1, d);
-        matmul(wx2.as_mut(), Accum::Replace, w, x2, 1.0, par());
+        gemm(wx2.as_mut(), Accum::Replace, w, x2, 1.0);
         if let Some(out) = out {
             for (q, o) in out.iter_mut().enumerate().take(d) {
                 let quad: f64 = (0..n1).map(|i| x1[(i, q)] * wx2[(i, q)]).sum();

@@ -10,12 +10,11 @@
 //! accumulated for all `q` at once from one product `M X` (`O(n²d)` in a
 //! GEMM, no per-lengthscale `n × n` temporaries).
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
 use super::distance::{column_means, scaled_sq_dist, shift_scale};
-use crate::dense::{frobenius_dot, hadamard, par};
+use crate::dense::{frobenius_dot, gemm, hadamard};
 
 /// Which stationary profile `κ(r)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -198,7 +197,7 @@ impl CrossSums {
         let x1c = shift_scale(x1, &centre, &ones);
         let x2c = shift_scale(x2, &centre, &ones);
         let mut mx2 = Mat::<f64>::zeros(x1.nrows(), x2.ncols());
-        matmul(mx2.as_mut(), Accum::Replace, m, x2c.as_ref(), 1.0, par());
+        gemm(mx2.as_mut(), Accum::Replace, m, x2c.as_ref(), 1.0);
         let row_sums = (0..m.nrows()).map(|i| m.row(i).iter().sum()).collect();
         let col_sums = (0..m.ncols()).map(|j| m.col(j).iter().sum()).collect();
         Self {

@@ -26,12 +26,11 @@
 //! and inducing-input gradients without per-hyperparameter `m × n`
 //! temporaries.
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 
 use super::params::Approximation;
 use crate::RegressorError;
-use crate::dense::par;
+use crate::dense::gemm;
 use crate::exact_gp::cholesky::Cholesky;
 use crate::kernels::{GramCache, Kernel};
 
@@ -64,10 +63,33 @@ pub(super) struct Factors {
     pub lambda: Vec<f64>,
     /// `A = L⁻¹ K_uf Λ^{-1/2}`.
     pub a: Mat<f64>,
+    /// `B = I + A Aᵀ`.
+    pub b: Mat<f64>,
     pub lb: Cholesky,
     /// `c = L_B⁻¹ A Λ^{-1/2} Y`.
     pub c: Mat<f64>,
     pub value: f64,
+}
+
+/// `Σ_r a_ri b_ri` for every column `i`.
+fn column_dots(a: &Mat<f64>, b: &Mat<f64>) -> Vec<f64> {
+    (0..a.ncols())
+        .map(|i| {
+            let (ca, cb) = (a.col_as_slice(i), b.col_as_slice(i));
+            ca.iter().zip(cb).map(|(x, y)| x * y).sum()
+        })
+        .collect()
+}
+
+/// `m` with column `i` multiplied by `w[i]`.
+fn scale_columns(m: &Mat<f64>, w: &[f64]) -> Mat<f64> {
+    let mut out = m.clone();
+    for (i, wi) in w.iter().enumerate() {
+        for v in out.col_as_slice_mut(i) {
+            *v *= wi;
+        }
+    }
+    out
 }
 
 /// Builds the factors and the objective.
@@ -91,37 +113,22 @@ pub(super) fn factorize(
     let cache_uf = kernel.cross_with_cache(z, x);
     let kdiag = kernel.diag(x);
     let lk = l.solve_lower(cache_uf.k.as_ref());
-    let q: Vec<f64> = (0..n)
-        .map(|i| lk.col(i).iter().map(|v| v * v).sum())
-        .collect();
+    let q = column_dots(&lk, &lk);
     let lambda: Vec<f64> = match approximation {
         Approximation::Vfe => vec![s; n],
         Approximation::Fitc => (0..n).map(|i| (kdiag[i] - q[i]).max(0.0) + s).collect(),
     };
-    let a = Mat::from_fn(m, n, |r, i| lk[(r, i)] / lambda[i].sqrt());
+    let inv_sqrt_lambda: Vec<f64> = lambda.iter().map(|v| 1.0 / v.sqrt()).collect();
+    let a = scale_columns(&lk, &inv_sqrt_lambda);
     let mut b = Mat::<f64>::identity(m, m);
-    matmul(
-        b.as_mut(),
-        Accum::Add,
-        a.as_ref(),
-        a.transpose(),
-        1.0,
-        par(),
-    );
-    let lb = Cholesky::factor(b)?;
-    let yt = Mat::from_fn(n, p, |i, c| y[(i, c)] / lambda[i].sqrt());
+    gemm(b.as_mut(), Accum::Add, a.as_ref(), a.transpose(), 1.0);
+    let lb = Cholesky::factor(b.clone())?;
+    let yt = Mat::from_fn(n, p, |i, c| y[(i, c)] * inv_sqrt_lambda[i]);
     let mut ay = Mat::<f64>::zeros(m, p);
-    matmul(
-        ay.as_mut(),
-        Accum::Replace,
-        a.as_ref(),
-        yt.as_ref(),
-        1.0,
-        par(),
-    );
+    gemm(ay.as_mut(), Accum::Replace, a.as_ref(), yt.as_ref(), 1.0);
     let c = lb.solve_lower(ay.as_ref());
-    let yy: f64 = (0..n)
-        .map(|i| (0..p).map(|k| y[(i, k)].powi(2)).sum::<f64>() / lambda[i])
+    let yy: f64 = (0..p)
+        .map(|k| (0..n).map(|i| yt[(i, k)].powi(2)).sum::<f64>())
         .sum();
     let cc: f64 = (0..p)
         .map(|k| c.col(k).iter().map(|v| v * v).sum::<f64>())
@@ -147,6 +154,7 @@ pub(super) fn factorize(
         q,
         lambda,
         a,
+        b,
         lb,
         c,
         value,
@@ -186,23 +194,29 @@ pub fn sparse_objective(
     // γ = B⁻¹ A Λ^{-1/2} Y (β = L⁻ᵀγ), R = K_fu β = (L⁻¹K_uf)ᵀ γ.
     let gamma = f.lb.solve_upper(f.c.as_ref());
     let mut r = Mat::<f64>::zeros(n, p);
-    matmul(
+    gemm(
         r.as_mut(),
         Accum::Replace,
         f.lk.transpose(),
         gamma.as_ref(),
         1.0,
-        par(),
     );
-    // E = L_B⁻¹ A: k_iᵀΣ⁻¹k_i = λ_i ‖e_i‖²; H = B⁻¹ A.
-    let e = f.lb.solve_lower(f.a.as_ref());
-    let h = f.lb.solve_upper(e.as_ref());
+    // H = B⁻¹ A; k_iᵀΣ⁻¹k_i = λ_i a_iᵀ B⁻¹ a_i = λ_i (a_i · h_i).
+    let b_inv = f.lb.inverse();
+    let mut h = Mat::<f64>::zeros(m, n);
+    gemm(
+        h.as_mut(),
+        Accum::Replace,
+        b_inv.as_ref(),
+        f.a.as_ref(),
+        1.0,
+    );
+    let ah = column_dots(&f.a, &h);
     let g_lambda: Vec<f64> = (0..n)
         .map(|i| {
             let lam = f.lambda[i];
-            let ee: f64 = e.col(i).iter().map(|v| v * v).sum();
             let resid: f64 = (0..p).map(|k| (y[(i, k)] - r[(i, k)]).powi(2)).sum();
-            0.5 * pf * ee / lam - 0.5 * pf / lam + 0.5 * resid / (lam * lam)
+            0.5 * pf * ah[i] / lam - 0.5 * pf / lam + 0.5 * resid / (lam * lam)
         })
         .collect();
     let (g_q, g_kdiag, g_s): (Vec<f64>, Vec<f64>, f64) = match approximation {
@@ -221,42 +235,58 @@ pub fn sparse_objective(
         }
     };
     // ∂F/∂K_uf = L⁻ᵀ [−p H Λ^{-1/2} + γ((Y − R)Λ⁻¹)ᵀ + 2 (L⁻¹K_uf) diag(g_q)].
-    let mut guf = Mat::from_fn(m, n, |row, i| {
-        -pf * h[(row, i)] / f.lambda[i].sqrt() + 2.0 * g_q[i] * f.lk[(row, i)]
-    });
+    let mut guf = Mat::<f64>::zeros(m, n);
+    for (i, (lam, gq)) in f.lambda.iter().zip(&g_q).enumerate() {
+        let (wh, wl) = (-pf / lam.sqrt(), 2.0 * gq);
+        let (hc, lc) = (h.col_as_slice(i), f.lk.col_as_slice(i));
+        for ((o, hv), lv) in guf.col_as_slice_mut(i).iter_mut().zip(hc).zip(lc) {
+            *o = wh * hv + wl * lv;
+        }
+    }
     let weighted_resid = Mat::from_fn(n, p, |i, k| (y[(i, k)] - r[(i, k)]) / f.lambda[i]);
-    matmul(
+    gemm(
         guf.as_mut(),
         Accum::Add,
         gamma.as_ref(),
         weighted_resid.transpose(),
         1.0,
-        par(),
     );
     let guf = f.l.solve_upper(guf.as_ref());
-    // ∂F/∂K_uu = L⁻ᵀ J L⁻¹, J = (p/2)(I − B⁻¹) − ½γγᵀ − (L⁻¹K_uf) diag(g_q) (L⁻¹K_uf)ᵀ.
-    let b_inv = f.lb.inverse();
+    // ∂F/∂K_uu = L⁻ᵀ J L⁻¹,
+    // J = (p/2)(I − B⁻¹) − ½γγᵀ − (L⁻¹K_uf) diag(g_q) (L⁻¹K_uf)ᵀ; for VFE
+    // g_q is the constant p/(2σ²) and (L⁻¹K_uf)(L⁻¹K_uf)ᵀ = σ²(B − I).
     let mut j = Mat::from_fn(m, m, |a, b| {
         let eye = if a == b { 1.0 } else { 0.0 };
         0.5 * pf * (eye - b_inv[(a, b)])
     });
-    matmul(
+    gemm(
         j.as_mut(),
         Accum::Add,
         gamma.as_ref(),
         gamma.transpose(),
         -0.5,
-        par(),
     );
-    let lk_g = Mat::from_fn(m, n, |row, i| f.lk[(row, i)] * g_q[i]);
-    matmul(
-        j.as_mut(),
-        Accum::Add,
-        lk_g.as_ref(),
-        f.lk.transpose(),
-        -1.0,
-        par(),
-    );
+    match approximation {
+        Approximation::Vfe => {
+            let g = g_q.first().copied().unwrap_or(0.0) * s;
+            for col in 0..m {
+                for row in 0..m {
+                    let eye = if row == col { 1.0 } else { 0.0 };
+                    j[(row, col)] -= g * (f.b[(row, col)] - eye);
+                }
+            }
+        }
+        Approximation::Fitc => {
+            let lk_g = scale_columns(&f.lk, &g_q);
+            gemm(
+                j.as_mut(),
+                Accum::Add,
+                lk_g.as_ref(),
+                f.lk.transpose(),
+                -1.0,
+            );
+        }
+    }
     let t = f.l.solve_upper(j.as_ref());
     let guu_t = f.l.solve_upper(t.transpose());
     let guu = Mat::from_fn(m, m, |a, b| 0.5 * (guu_t[(a, b)] + guu_t[(b, a)]));

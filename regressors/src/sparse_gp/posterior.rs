@@ -4,13 +4,12 @@
 //! a query costs `O(m d)` for `k_*`, `O(m)` per output for the mean
 //! `k_*ᵀβ` and `O(m²)` for the latent variance `k_** − k_*ᵀ P k_*`.
 
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef};
 
 use super::bound::factorize;
 use super::params::Approximation;
 use crate::RegressorError;
-use crate::dense::par;
+use crate::dense::gemm;
 use crate::exact_gp::posterior::Moments;
 use crate::kernels::Kernel;
 
@@ -83,22 +82,20 @@ impl SparsePosterior {
     pub fn predict(&self, xs: MatRef<'_, f64>) -> Moments {
         let k_star = self.kernel.cross(xs, self.inducing.as_ref()); // q × m
         let mut mean = Mat::zeros(xs.nrows(), self.weights.ncols());
-        matmul(
+        gemm(
             mean.as_mut(),
             Accum::Replace,
             k_star.as_ref(),
             self.weights.as_ref(),
             1.0,
-            par(),
         );
         let mut kp = Mat::<f64>::zeros(xs.nrows(), self.inducing.nrows());
-        matmul(
+        gemm(
             kp.as_mut(),
             Accum::Replace,
             k_star.as_ref(),
             self.variance_matrix.as_ref(),
             1.0,
-            par(),
         );
         let prior = self.kernel.diag(xs);
         let latent_variance = (0..xs.nrows())

@@ -1,0 +1,317 @@
+//! `gpodo bench`: every regressor of an experiment file on the same data
+//! and splits, timed one after another (never in parallel, so timings do
+//! not disturb each other): fit time, per-query prediction latency,
+//! per-sample online update latency (for online learners), RMSE, MAE,
+//! NLPD, 95 % coverage, and for online learners the learning curve (test
+//! error after every N samples of one prequential pass). Ratios to the
+//! exact-GP baseline are taken in the report.
+
+use std::path::Path;
+use std::time::Instant;
+
+use gpodo_regressors::RegressorSpec;
+use gpodo_regressors::metrics::{Evaluation, evaluate};
+use gpodo_traits::{FitReport, ResidualDataset, ResidualRegressor, SampleMatrix};
+use serde::{Deserialize, Serialize};
+
+use crate::config::ExperimentConfig;
+use crate::pipeline::{DatasetSummary, ModelRows, PipelineError, code_version, prepare_model_rows};
+
+/// The `bench:` section of an experiment file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BenchSettings {
+    /// Test rows predicted one at a time to time a single query (default
+    /// 300; all test rows when there are fewer).
+    pub predict_queries: usize,
+    /// Learning-curve step of online learners, in training samples
+    /// (default 100).
+    pub learning_curve_every: usize,
+    /// Index (in `regressors`) of the baseline row; omitted, the first
+    /// `exact_gp`.
+    pub baseline: Option<usize>,
+}
+
+impl Default for BenchSettings {
+    fn default() -> Self {
+        Self {
+            predict_queries: 300,
+            learning_curve_every: 100,
+            baseline: None,
+        }
+    }
+}
+
+impl BenchSettings {
+    /// Checks the fields against the experiment's regressors.
+    ///
+    /// # Errors
+    /// A message naming the field.
+    pub fn validate(&self, regressors: usize) -> Result<(), String> {
+        if self.predict_queries == 0 {
+            return Err("field `bench.predict_queries`: expected at least 1".into());
+        }
+        if self.learning_curve_every == 0 {
+            return Err("field `bench.learning_curve_every`: expected at least 1".into());
+        }
+        if let Some(b) = self.baseline
+            && b >= regressors
+        {
+            return Err(format!(
+                "field `bench.baseline`: expected an index into `regressors` (0..{regressors}), found {b}"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Latency statistics (µs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Latency {
+    /// Timed operations.
+    pub count: usize,
+    /// Median (µs).
+    pub median_us: f64,
+    /// 95th percentile (µs).
+    pub p95_us: f64,
+    /// Mean (µs).
+    pub mean_us: f64,
+}
+
+impl Latency {
+    /// Statistics of `samples_us`.
+    pub fn of(mut samples_us: Vec<f64>) -> Self {
+        samples_us.sort_by(f64::total_cmp);
+        let n = samples_us.len();
+        let at = |q: f64| {
+            if n == 0 {
+                f64::NAN
+            } else {
+                samples_us[((q * (n - 1) as f64).round() as usize).min(n - 1)]
+            }
+        };
+        Self {
+            count: n,
+            median_us: at(0.5),
+            p95_us: at(0.95),
+            mean_us: samples_us.iter().sum::<f64>() / n.max(1) as f64,
+        }
+    }
+}
+
+/// One point of a learning curve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CurvePoint {
+    /// Training samples seen.
+    pub samples: usize,
+    /// Pooled RMSE on the test rows.
+    pub rmse: f64,
+    /// Pooled MAE on the test rows.
+    pub mae: f64,
+    /// Mean NLPD on the test rows.
+    pub nlpd: f64,
+}
+
+/// One prequential online pass: each training sample is first predicted,
+/// then learned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OnlinePass {
+    /// Latency of one single-row prediction plus one update, per sample.
+    pub step_latency: Latency,
+    /// Latency of the update alone.
+    pub update_latency: Latency,
+    /// Test scores after every `learning_curve_every` samples, and at the end.
+    pub curve: Vec<CurvePoint>,
+    /// Test scores after the pass.
+    pub evaluation: Evaluation,
+}
+
+/// One regressor's benchmark.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BenchRow {
+    /// Label for tables.
+    pub label: String,
+    /// Its specification.
+    pub spec: RegressorSpec,
+    /// What the batch fit did (its duration is the fit time).
+    pub fit: FitReport,
+    /// Latency of a one-row prediction after the fit.
+    pub predict_latency: Latency,
+    /// Time to predict all test rows at once (s).
+    pub batch_predict_secs: f64,
+    /// Test scores after the batch fit.
+    pub evaluation: Evaluation,
+    /// The online pass, for learners that support it.
+    pub online: Option<OnlinePass>,
+}
+
+/// Everything `gpodo bench` measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BenchResults {
+    /// The configuration.
+    pub config: ExperimentConfig,
+    /// `git describe` of the code.
+    pub code_version: String,
+    /// The data.
+    pub dataset: DatasetSummary,
+    /// Index of the baseline row, if there is one.
+    pub baseline: Option<usize>,
+    /// One row per regressor, in config order.
+    pub rows: Vec<BenchRow>,
+    /// Wall-clock duration (s).
+    pub duration_secs: f64,
+}
+
+/// Row `i` (in range) as a one-row matrix.
+fn single_row(m: &SampleMatrix, i: usize) -> SampleMatrix {
+    m.select_rows(&[i])
+}
+
+fn micros(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e6
+}
+
+fn predict_latency(
+    model: &dyn ResidualRegressor,
+    test: &ResidualDataset,
+    queries: usize,
+) -> Result<Latency, PipelineError> {
+    let n = test.len().min(queries);
+    let mut samples = Vec::with_capacity(n);
+    for i in 0..n {
+        let row = single_row(&test.inputs, i);
+        let t = Instant::now();
+        let p = model.predict(&row)?;
+        samples.push(micros(t));
+        std::hint::black_box(p);
+    }
+    Ok(Latency::of(samples))
+}
+
+fn curve_point(
+    model: &dyn ResidualRegressor,
+    test: &ResidualDataset,
+    samples: usize,
+) -> Result<CurvePoint, PipelineError> {
+    let e = evaluate(&model.predict(&test.inputs)?, &test.targets)?;
+    Ok(CurvePoint {
+        samples,
+        rmse: e.pooled.rmse,
+        mae: e.pooled.mae,
+        nlpd: e.pooled.nlpd,
+    })
+}
+
+/// One prequential pass of a fresh learner over the training rows in order.
+fn online_pass(
+    spec: &RegressorSpec,
+    rows: &ModelRows,
+    every: usize,
+) -> Result<OnlinePass, PipelineError> {
+    let mut model = spec.build()?;
+    let (mut steps, mut updates, mut curve) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..rows.train.len() {
+        let x = rows.train.inputs.row(i);
+        let y = rows.train.targets.row(i);
+        let query = single_row(&rows.train.inputs, i);
+        let t = Instant::now();
+        // Before the first sample there is nothing to predict with.
+        let prediction = if i > 0 {
+            Some(model.predict(&query)?)
+        } else {
+            None
+        };
+        let u = Instant::now();
+        model.update(x, y)?;
+        updates.push(micros(u));
+        steps.push(micros(t));
+        std::hint::black_box(prediction);
+        if (i + 1).is_multiple_of(every) {
+            curve.push(curve_point(model.as_ref(), &rows.test, i + 1)?);
+        }
+    }
+    if !rows.train.len().is_multiple_of(every) {
+        curve.push(curve_point(model.as_ref(), &rows.test, rows.train.len())?);
+    }
+    let evaluation = evaluate(&model.predict(&rows.test.inputs)?, &rows.test.targets)?;
+    Ok(OnlinePass {
+        step_latency: Latency::of(steps),
+        update_latency: Latency::of(updates),
+        curve,
+        evaluation,
+    })
+}
+
+/// The baseline row: `settings.baseline`, else the first exact GP.
+pub fn baseline_index(config: &ExperimentConfig) -> Option<usize> {
+    config.bench.baseline.or_else(|| {
+        config
+            .regressors
+            .iter()
+            .position(|r| matches!(r, RegressorSpec::ExactGp(_)))
+    })
+}
+
+/// Benchmarks every regressor of `config`; relative paths are resolved
+/// against `base`.
+///
+/// # Errors
+/// [`PipelineError`] naming the stage or regressor that failed.
+pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults, PipelineError> {
+    let start = Instant::now();
+    let (rows, dataset) = prepare_model_rows(config, base)?;
+    let settings = &config.bench;
+    let mut out = Vec::with_capacity(config.regressors.len());
+    for spec in &config.regressors {
+        let label = spec.label();
+        let wrap = |source| PipelineError::Regressor {
+            label: label.clone(),
+            source,
+        };
+        tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
+        let mut model = spec.build()?;
+        let fit = model.fit(&rows.train).map_err(wrap)?;
+        let t = Instant::now();
+        let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
+        let batch_predict_secs = t.elapsed().as_secs_f64();
+        let evaluation = evaluate(&predictions, &rows.test.targets)?;
+        let predict_latency =
+            predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
+        let online = if model.supports_online_update() {
+            Some(online_pass(spec, &rows, settings.learning_curve_every)?)
+        } else {
+            None
+        };
+        out.push(BenchRow {
+            label,
+            spec: spec.clone(),
+            fit,
+            predict_latency,
+            batch_predict_secs,
+            evaluation,
+            online,
+        });
+    }
+    Ok(BenchResults {
+        config: config.clone(),
+        code_version: code_version(),
+        dataset,
+        baseline: baseline_index(config),
+        rows: out,
+        duration_secs: start.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latency_statistics_match_a_hand_computation() {
+        let l = Latency::of(vec![5.0, 1.0, 3.0, 2.0, 4.0]);
+        assert_eq!(l.count, 5);
+        assert_eq!(l.median_us, 3.0);
+        assert_eq!(l.p95_us, 5.0);
+        assert_eq!(l.mean_us, 3.0);
+    }
+}
