@@ -6,6 +6,7 @@ use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
 use crate::exact_gp::{ExactGp, ExactGpParams, OutputSharing};
+use crate::ilgr::{Ilgr, IlgrParams};
 use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
 use crate::{RegressorError, ZeroResidual};
 
@@ -24,6 +25,8 @@ pub enum RegressorSpec {
     ExactGp(ExactGpParams),
     /// The sparse GP (VFE or FITC) with a kernel expression.
     SparseGp(SparseGpParams),
+    /// Incremental local Gaussian regression (§VI), learning online.
+    Ilgr(IlgrParams),
 }
 
 impl RegressorSpec {
@@ -41,6 +44,20 @@ impl RegressorSpec {
                     Approximation::Fitc => "FITC",
                 };
                 format!("sparse GP ({method}, m={}): {}", p.inducing.count, p.kernel)
+            }
+            Self::Ilgr(p) => {
+                let mut details = Vec::new();
+                if p.forgetting < 1.0 {
+                    details.push(format!("κ = {}", p.forgetting));
+                }
+                if p.passes > 1 {
+                    details.push(format!("{} passes", p.passes));
+                }
+                if details.is_empty() {
+                    "ILGR".into()
+                } else {
+                    format!("ILGR ({})", details.join(", "))
+                }
             }
         }
     }
@@ -61,6 +78,7 @@ impl RegressorSpec {
             Self::Zero { .. } => Ok(()),
             Self::ExactGp(p) => p.check(),
             Self::SparseGp(p) => p.check(),
+            Self::Ilgr(p) => p.check(),
         }
     }
 
@@ -74,6 +92,7 @@ impl RegressorSpec {
             Self::Zero { variance } => Box::new(ZeroResidual::new(*variance)),
             Self::ExactGp(p) => Box::new(ExactGp::new(p.clone())?),
             Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
+            Self::Ilgr(p) => Box::new(Ilgr::new(p.clone())?),
         })
     }
 }
@@ -132,5 +151,31 @@ mod tests {
                 .to_string()
                 .contains("noise_variance")
         );
+    }
+
+    #[test]
+    fn ilgr_reads_its_fields_and_defaults() {
+        let spec = parse(r#"{"kind": "ilgr", "w_gen": 0.4, "max_models": 50}"#).unwrap();
+        let RegressorSpec::Ilgr(p) = &spec else {
+            panic!("not an ILGR: {spec:?}")
+        };
+        assert_eq!(p.w_gen, 0.4);
+        assert_eq!(p.max_models, 50);
+        assert_eq!(p.forgetting, IlgrParams::default().forgetting);
+        assert_eq!(spec.label(), "ILGR (κ = 0.999)");
+        let model = spec.build().unwrap();
+        assert_eq!(model.name(), "ilgr");
+        assert!(model.supports_online_update());
+        let spec = parse(r#"{"kind": "ilgr", "forgetting": 1.0}"#).unwrap();
+        assert_eq!(spec.label(), "ILGR");
+    }
+
+    #[test]
+    fn ilgr_rejects_unknown_fields_and_bad_values() {
+        let err = parse(r#"{"kind": "ilgr", "wgen": 0.4}"#).unwrap_err();
+        assert!(err.to_string().contains("wgen"), "{err}");
+        let spec = parse(r#"{"kind": "ilgr", "forgetting": 1.5}"#).unwrap();
+        let err = spec.build().err().unwrap();
+        assert!(err.to_string().contains("forgetting"), "{err}");
     }
 }
