@@ -7,11 +7,12 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use faer::Mat;
+mod support;
+
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::posterior::Posterior;
-use gpodo_regressors::kernels::{Kernel, Linear, Stationary, White};
 use serde::Deserialize;
+use support::gpy_fixture::{Part, gpy_kernel_gradient, kernel, matrix};
 
 #[derive(Deserialize)]
 struct Fixture {
@@ -19,17 +20,6 @@ struct Fixture {
     y_train: Vec<Vec<f64>>,
     x_test: Vec<Vec<f64>>,
     cases: Vec<Case>,
-}
-
-#[derive(Deserialize)]
-struct Part {
-    kind: String,
-    #[serde(default)]
-    variance: Option<f64>,
-    #[serde(default)]
-    lengthscales: Option<Vec<f64>>,
-    #[serde(default)]
-    variances: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -43,61 +33,6 @@ struct Case {
     mean: Vec<Vec<f64>>,
     variance_latent: Vec<f64>,
     variance_noisy: Vec<f64>,
-}
-
-fn matrix(rows: &[Vec<f64>]) -> Mat<f64> {
-    Mat::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
-}
-
-fn leaf(part: &Part) -> Kernel {
-    let stationary = || Stationary::new(part.variance.unwrap(), part.lengthscales.clone().unwrap());
-    match part.kind.as_str() {
-        "rbf" => Kernel::Rbf(stationary()),
-        "matern52" => Kernel::Matern52(stationary()),
-        "matern32" => Kernel::Matern32(stationary()),
-        "linear" => Kernel::Linear(Linear::new(part.variances.clone().unwrap())),
-        "white" => Kernel::White(White::new(part.variance.unwrap())),
-        other => panic!("unknown kind {other}"),
-    }
-}
-
-fn kernel(case: &Case) -> Kernel {
-    let leaves: Vec<Kernel> = case.parts.iter().map(leaf).collect();
-    match case.combine.as_str() {
-        "single" => leaves.into_iter().next().unwrap(),
-        "sum" => Kernel::Sum(leaves),
-        "product" => Kernel::Product(leaves),
-        other => panic!("unknown combination {other}"),
-    }
-}
-
-/// GPy's gradient in our parameter order (leaf by leaf, then the noise).
-fn gpy_gradient(case: &Case) -> Vec<f64> {
-    let prefix = match case.combine.as_str() {
-        "sum" => "sum.",
-        "product" => "mul.",
-        _ => "",
-    };
-    let mut out = Vec::new();
-    for part in &case.parts {
-        let name = match part.kind.as_str() {
-            "matern52" => "Mat52",
-            "matern32" => "Mat32",
-            other => other,
-        };
-        let get =
-            |suffix: &str| case.lml_gradient_natural[&format!("{prefix}{name}.{suffix}")].clone();
-        match part.kind.as_str() {
-            "linear" => out.extend(get("variances")),
-            "white" => out.extend(get("variance")),
-            _ => {
-                out.extend(get("variance"));
-                out.extend(get("lengthscale"));
-            }
-        }
-    }
-    out.extend(case.lml_gradient_natural["Gaussian_noise.variance"].clone());
-    out
 }
 
 fn close(a: f64, b: f64) -> bool {
@@ -119,7 +54,7 @@ fn lml_gradient_and_predictions_agree_with_gpy() {
     );
     assert_eq!(fixture.cases.len(), 8);
     for case in &fixture.cases {
-        let k = kernel(case);
+        let k = kernel(&case.combine, &case.parts);
         let eval =
             log_marginal_likelihood(&k, case.noise_variance, x.as_ref(), y.as_ref(), true).unwrap();
         assert_eq!(eval.jitter, 0.0, "{}", case.name);
@@ -134,7 +69,15 @@ fn lml_gradient_and_predictions_agree_with_gpy() {
         let mut theta: Vec<f64> = k.log_params().iter().map(|v| v.exp()).collect();
         theta.push(case.noise_variance);
         let ours = eval.gradient.unwrap();
-        for (i, ((g, t), reference)) in ours.iter().zip(&theta).zip(gpy_gradient(case)).enumerate()
+        for (i, ((g, t), reference)) in ours
+            .iter()
+            .zip(&theta)
+            .zip(gpy_kernel_gradient(
+                &case.combine,
+                &case.parts,
+                &case.lml_gradient_natural,
+            ))
+            .enumerate()
         {
             assert!(
                 (g / t - reference).abs() <= 1e-7 * reference.abs().max(1.0),

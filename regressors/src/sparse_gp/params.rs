@@ -78,7 +78,8 @@ pub struct SparseGpParams {
     /// Initial noise variance in standardised units (default 0.01).
     pub noise_variance: f64,
     /// Diagonal jitter added to `K_uu` in standardised units (default 1e-6,
-    /// GPy's).
+    /// GPy's FITC constant; GPy's VFE (`VarDTC`) adds 1e-8, which learned
+    /// inducing inputs that drift together can make too small).
     pub jitter: f64,
     /// Learn the hyperparameters (and the inducing inputs unless fixed)
     /// (default true).

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod gpy_fixture;
+
 use faer::Mat;
 use gpodo_regressors::kernels::{Kernel, KernelExpr, KernelInit};
 use gpodo_traits::{ResidualDataset, SampleMatrix};
