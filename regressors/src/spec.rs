@@ -30,35 +30,58 @@ pub enum RegressorSpec {
 }
 
 impl RegressorSpec {
-    /// A short label for reports.
+    /// A short label for reports: the kind, its kernel and approximation,
+    /// then every other setting that differs from its default
+    /// in name order (`ILGR [forgetting=1.0, passes=3]`), so that two rows of a table never
+    /// share a label unless they share their settings.
     pub fn label(&self) -> String {
-        match self {
-            Self::Zero { .. } => "parametric only".into(),
-            Self::ExactGp(p) => match p.outputs {
-                OutputSharing::Shared => format!("exact GP: {}", p.kernel),
-                OutputSharing::Independent => format!("exact GP: {} (per output)", p.kernel),
-            },
+        let (base, shown, params, defaults) = match self {
+            Self::Zero { variance } => {
+                let base = "parametric only".to_string();
+                return match variance {
+                    Some(v) => format!("{base} [variance={v}]"),
+                    None => base,
+                };
+            }
+            Self::ExactGp(p) => {
+                let base = match p.outputs {
+                    OutputSharing::Shared => format!("exact GP: {}", p.kernel),
+                    OutputSharing::Independent => format!("exact GP: {} (per output)", p.kernel),
+                };
+                (
+                    base,
+                    &["kernel", "outputs"][..],
+                    to_json(p),
+                    to_json(&ExactGpParams::default()),
+                )
+            }
             Self::SparseGp(p) => {
                 let method = match p.approximation {
                     Approximation::Vfe => "VFE",
                     Approximation::Fitc => "FITC",
                 };
-                format!("sparse GP ({method}, m={}): {}", p.inducing.count, p.kernel)
+                let base = format!("sparse GP ({method}, m={}): {}", p.inducing.count, p.kernel);
+                let shown = &["kernel", "approximation", "inducing.count"][..];
+                (base, shown, to_json(p), to_json(&SparseGpParams::default()))
             }
-            Self::Ilgr(p) => {
-                let mut details = Vec::new();
-                if p.forgetting < 1.0 {
-                    details.push(format!("κ = {}", p.forgetting));
-                }
-                if p.passes > 1 {
-                    details.push(format!("{} passes", p.passes));
-                }
-                if details.is_empty() {
-                    "ILGR".into()
-                } else {
-                    format!("ILGR ({})", details.join(", "))
-                }
-            }
+            Self::Ilgr(p) => (
+                "ILGR".to_string(),
+                &[][..],
+                to_json(p),
+                to_json(&IlgrParams::default()),
+            ),
+        };
+        let mut changed = Vec::new();
+        non_default_settings("", &params, &defaults, &mut changed);
+        changed.retain(|(path, _)| !shown.contains(&path.as_str()));
+        if changed.is_empty() {
+            base
+        } else {
+            let details: Vec<String> = changed
+                .into_iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            format!("{base} [{}]", details.join(", "))
         }
     }
 
@@ -97,6 +120,45 @@ impl RegressorSpec {
     }
 }
 
+fn to_json<T: Serialize>(value: &T) -> serde_json::Value {
+    serde_json::to_value(value).unwrap_or(serde_json::Value::Null)
+}
+
+/// The settings of `value` that differ from `default`, as dotted paths
+/// (`inducing.fixed`) with compact values, in name order.
+fn non_default_settings(
+    prefix: &str,
+    value: &serde_json::Value,
+    default: &serde_json::Value,
+    out: &mut Vec<(String, String)>,
+) {
+    use serde_json::Value;
+    match (value, default) {
+        (Value::Object(fields), Value::Object(defaults)) => {
+            for (key, v) in fields {
+                let path = if prefix.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{prefix}.{key}")
+                };
+                match defaults.get(key) {
+                    Some(d) => non_default_settings(&path, v, d, out),
+                    None => out.push((path, compact(v))),
+                }
+            }
+        }
+        _ if value != default => out.push((prefix.to_string(), compact(value))),
+        _ => {}
+    }
+}
+
+fn compact(value: &serde_json::Value) -> String {
+    match value {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -115,7 +177,7 @@ mod tests {
         assert_eq!(p.kernel.to_string(), "matern52 + linear");
         assert_eq!(p.restarts, 2);
         assert_eq!(p.max_iters, ExactGpParams::default().max_iters);
-        assert_eq!(spec.label(), "exact GP: matern52 + linear");
+        assert_eq!(spec.label(), "exact GP: matern52 + linear [restarts=2]");
         assert!(spec.build().is_ok());
     }
 
@@ -125,7 +187,10 @@ mod tests {
             r#"{"kind": "sparse_gp", "approximation": "fitc", "inducing": {"count": 50, "init": "random_subset"}}"#,
         )
         .unwrap();
-        assert_eq!(spec.label(), "sparse GP (FITC, m=50): rbf");
+        assert_eq!(
+            spec.label(),
+            "sparse GP (FITC, m=50): rbf [inducing.init=random_subset]"
+        );
         assert!(spec.build().is_ok());
         let err = parse(r#"{"kind": "sparse_gp", "inducing": {"cnt": 5}}"#).unwrap_err();
         assert!(err.to_string().contains("cnt"), "{err}");
@@ -162,12 +227,14 @@ mod tests {
         assert_eq!(p.w_gen, 0.4);
         assert_eq!(p.max_models, 50);
         assert_eq!(p.forgetting, IlgrParams::default().forgetting);
-        assert_eq!(spec.label(), "ILGR (κ = 0.999)");
+        assert_eq!(spec.label(), "ILGR [max_models=50, w_gen=0.4]");
         let model = spec.build().unwrap();
         assert_eq!(model.name(), "ilgr");
         assert!(model.supports_online_update());
-        let spec = parse(r#"{"kind": "ilgr", "forgetting": 1.0}"#).unwrap();
+        let spec = parse(r#"{"kind": "ilgr"}"#).unwrap();
         assert_eq!(spec.label(), "ILGR");
+        let spec = parse(r#"{"kind": "ilgr", "forgetting": 1.0, "passes": 3}"#).unwrap();
+        assert_eq!(spec.label(), "ILGR [forgetting=1.0, passes=3]");
     }
 
     #[test]
