@@ -99,41 +99,69 @@ pub fn true_body_velocity(log: &RoverLog, k: usize) -> Vector3<f64> {
     a.rotation.inverse() * (b.translation.vector - a.translation.vector) / dt
 }
 
-/// One step of a log: its time, duration, inputs and residual.
-struct StepRow {
-    time_secs: f64,
-    dt_secs: f64,
-    inputs: Vec<f64>,
-    residual: Vector3<f64>,
+/// One step of a log: its time, duration, inputs, the motion model's body
+/// twist and the residual against ground truth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogStep {
+    /// Time of the step's first sample (s).
+    pub time_secs: f64,
+    /// Duration of the step (s).
+    pub dt_secs: f64,
+    /// The inputs `x_k`, in [`feature_names`] order, physical units.
+    pub inputs: Vec<f64>,
+    /// The motion model's body twist over the step (`g` of eq. 11).
+    pub twist: gpodo_traits::BodyTwist,
+    /// The residual `y_k` as a body-frame velocity (m/s).
+    pub residual: Vector3<f64>,
 }
 
-/// Per-step rows of one log.
-fn step_rows(
+/// Every step of a log (`samples − 1` of them): inputs, model twist and
+/// residual.
+///
+/// # Errors
+/// [`DatasetError::Model`] when the motion model fails on a sample.
+pub fn log_steps(
     log: &RoverLog,
     model: &dyn MotionModel,
     wheel_radius_m: f64,
-) -> Result<Vec<StepRow>, DatasetError> {
+) -> Result<Vec<LogStep>, DatasetError> {
     let n = log.samples.len();
     let mut rows = Vec::with_capacity(n.saturating_sub(1));
     for k in 0..n.saturating_sub(1) {
         let dt = log.samples[k + 1].time_secs - log.samples[k].time_secs;
         let estimate = model.estimate(&log.samples[k], dt)?;
         let residual = true_body_velocity(log, k) - estimate.twist.linear_mps;
-        rows.push(StepRow {
+        rows.push(LogStep {
             time_secs: log.samples[k].time_secs,
             dt_secs: dt,
             inputs: step_features(log, k, wheel_radius_m),
+            twist: estimate.twist,
             residual,
         });
     }
     Ok(rows)
 }
 
+/// One window of consecutive steps (§IV-C: the authors' 1-s means).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowRow {
+    /// Start of the window (s): `t₀ + i · window`, `t₀` the log's first time.
+    pub start_secs: f64,
+    /// End of the window (s).
+    pub end_secs: f64,
+    /// The steps it averages (indices into the steps of the log).
+    pub steps: std::ops::Range<usize>,
+    /// Duration-weighted mean inputs.
+    pub inputs: Vec<f64>,
+    /// Duration-weighted mean residual (m/s).
+    pub residual: Vector3<f64>,
+}
+
 /// Averages consecutive steps over windows of `window_secs`, each step
 /// weighted by its duration (so the target is the window's mean velocity
 /// residual even when samples were dropped); a window whose steps cover less
 /// than half its length (a gap in the log, the end of a run) is dropped.
-fn windowed(rows: Vec<StepRow>, window_secs: f64) -> Vec<(Vec<f64>, Vector3<f64>)> {
+pub fn window_rows(rows: &[LogStep], window_secs: f64) -> Vec<WindowRow> {
     let Some(t0) = rows.first().map(|r| r.time_secs) else {
         return Vec::new();
     };
@@ -157,7 +185,13 @@ fn windowed(rows: Vec<StepRow>, window_secs: f64) -> Vec<(Vec<f64>, Vector3<f64>
                 }
                 y += r.residual * w;
             }
-            out.push((x, y));
+            out.push(WindowRow {
+                start_secs: t0 + window * window_secs,
+                end_secs: t0 + (window + 1.0) * window_secs,
+                steps: start..end,
+                inputs: x,
+                residual: y,
+            });
         }
         start = end;
     }
@@ -193,9 +227,12 @@ pub fn residual_dataset(
             });
         }
         log.validate()?;
-        let rows = step_rows(log, model, wheel_radius_m)?;
+        let rows = log_steps(log, model, wheel_radius_m)?;
         let rows: Vec<(Vec<f64>, Vector3<f64>)> = match config.window_secs {
-            Some(w) => windowed(rows, w),
+            Some(w) => window_rows(&rows, w)
+                .into_iter()
+                .map(|r| (r.inputs, r.residual))
+                .collect(),
             None => rows.into_iter().map(|r| (r.inputs, r.residual)).collect(),
         };
         for (x, y) in rows {
@@ -217,21 +254,32 @@ pub fn residual_dataset(
 mod tests {
     use super::*;
 
-    fn rows(times: &[f64]) -> Vec<StepRow> {
+    fn rows(times: &[f64]) -> Vec<LogStep> {
         times
             .iter()
-            .map(|&t| StepRow {
+            .map(|&t| LogStep {
                 time_secs: t,
                 dt_secs: 0.25,
                 inputs: vec![t],
+                twist: Default::default(),
                 residual: Vector3::new(t, 2.0 * t, 0.0),
             })
+            .collect()
+    }
+
+    fn windowed(rows: Vec<LogStep>, window_secs: f64) -> Vec<(Vec<f64>, Vector3<f64>)> {
+        window_rows(&rows, window_secs)
+            .into_iter()
+            .map(|w| (w.inputs, w.residual))
             .collect()
     }
 
     #[test]
     fn windows_average_consecutive_steps_and_drop_a_short_tail() {
         let times: Vec<f64> = (0..11).map(|k| 0.25 * k as f64).collect(); // 0 … 2.5 s
+        let full = window_rows(&rows(&times), 1.0);
+        assert_eq!(full[2].steps, 8..11);
+        assert_eq!((full[2].start_secs, full[2].end_secs), (2.0, 3.0));
         let out = windowed(rows(&times), 1.0);
         // Windows [0,1), [1,2) are complete; [2,3) holds 2.0, 2.25, 2.5:
         // 0.75 s covered ≥ half a window, kept.

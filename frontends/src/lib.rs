@@ -1,14 +1,26 @@
-//! Visual front-end policies (paper §V-B): which camera frames to process.
+//! The visual front end of gpodo (paper §V-B and §VI): which camera frames
+//! to process, what visual odometry makes of them, and how wheel and
+//! visual odometry are fused.
 //!
-//! Implemented here: [`fixed_rate::FixedRate`], the paper's fixed-rate
-//! baselines (ORB-SLAM at 2.5 fps and 0.5 fps), and [`spec::SelectorSpec`],
-//! the closed set of selector kinds an experiment may name. The GP-gated
-//! policies, the simulated visual odometry and the pose-graph back-end join
-//! this crate as `gating/`, `vo/` and `backend/` modules.
+//! * [`FrameSelector`](gpodo_traits::FrameSelector) policies: the paper's
+//!   fixed-rate baselines ([`fixed_rate`]) and the residual-gated ones
+//!   ([`gating`]);
+//! * [`vo`]: visual odometry behind one interface, simulated or replayed;
+//! * [`backend`]: the factrs pose graph;
+//! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
+//! * [`tum`]: trajectories in the TUM format;
+//! * [`spec::SelectorSpec`]: the closed set of selector kinds an experiment
+//!   may name.
 
+pub mod backend;
 mod error;
 pub mod fixed_rate;
+pub mod odometry;
+pub mod prediction;
 pub mod spec;
+pub mod traverse;
+pub mod tum;
+pub mod vo;
 
 pub use error::FrontendError;
 pub use fixed_rate::FixedRate;

@@ -1,0 +1,99 @@
+//! Visual odometry behind one interface, [`VisualOdometry`]: given two
+//! processed camera frames, the relative pose with its covariance, or a
+//! tracking failure; and place recognition for relocalisation and loop
+//! closing.
+//!
+//! * [`simulated::SimulatedVo`]: a feature tracker simulated from ground
+//!   truth in which skipping frames costs something (see its module);
+//! * [`replay::ReplayVo`]: replays a VO log (a trajectory computed offline
+//!   on all frames by any SLAM system) so the policies run on real
+//!   recordings.
+
+pub mod camera;
+pub mod replay;
+pub mod simulated;
+
+use nalgebra::{Isometry3, Matrix6};
+use serde::{Deserialize, Serialize};
+
+pub use camera::CameraParams;
+pub use replay::{ReplayVo, ReplayVoParams};
+pub use simulated::{SimulatedVo, SimulatedVoParams};
+
+/// A camera frame: its index in the traverse's camera stream and its time.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FrameRef {
+    /// Index in the camera stream.
+    pub index: usize,
+    /// Time stamp (s).
+    pub time_secs: f64,
+}
+
+/// Why a frame is matched against another.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum TrackPurpose {
+    /// Tracking the current frame against the reference keyframe, with a
+    /// motion prior when one is available.
+    Tracking,
+    /// Relocalising a lost tracker against a keyframe it recognised.
+    Relocalisation,
+    /// Closing a loop from a new keyframe to an old one.
+    LoopClosure,
+}
+
+/// A request to estimate `reference_from_current`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackRequest {
+    /// The frame the current one is matched against (a keyframe).
+    pub reference: FrameRef,
+    /// The frame being processed.
+    pub current: FrameRef,
+    /// The predicted `reference_from_current` (from wheel odometry or a
+    /// constant-velocity model); `None` when there is none.
+    pub prior: Option<Isometry3<f64>>,
+    /// Why.
+    pub purpose: TrackPurpose,
+}
+
+/// A successful relative pose measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VoMeasurement {
+    /// Estimated `reference_from_current`.
+    pub relative: Isometry3<f64>,
+    /// Its covariance as a right perturbation `relative · Exp(δ)`,
+    /// `δ = [rotation; translation]` (factrs' order).
+    pub covariance: Matrix6<f64>,
+    /// The fraction of the reference view seen in the current one, in
+    /// `[0, 1]` (what keyframe decisions read).
+    pub overlap: f64,
+}
+
+/// What tracking gave.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TrackOutcome {
+    /// The relative pose.
+    Tracked(VoMeasurement),
+    /// Tracking failed.
+    Lost,
+}
+
+/// A visual odometry front end.
+pub trait VisualOdometry: Send {
+    /// A short name for reports.
+    fn name(&self) -> &str;
+
+    /// Estimates `reference_from_current`, or fails.
+    fn track(&mut self, request: &TrackRequest) -> TrackOutcome;
+
+    /// Place recognition: the keyframes among `keyframes` that the current
+    /// frame may be matched against, best first (empty when none is
+    /// recognised).
+    fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef>;
+}
+
+/// Block-diagonal covariance with isotropic rotation and translation
+/// standard deviations, rotation first.
+pub fn isotropic_covariance(rotation_sigma_rad: f64, translation_sigma_m: f64) -> Matrix6<f64> {
+    let (r, t) = (rotation_sigma_rad.powi(2), translation_sigma_m.powi(2));
+    Matrix6::from_diagonal(&nalgebra::Vector6::new(r, r, r, t, t, t))
+}
