@@ -161,7 +161,9 @@ impl OptObserver for LastValues {
 fn noise(covariance: &Matrix6<f64>, what: &str) -> Result<GaussianNoise<6>, FrontendError> {
     let sym = 0.5 * (covariance + covariance.transpose());
     GaussianNoise::<6>::from_matrix_cov(sym.as_view()).ok_or_else(|| {
-        FrontendError::Backend(format!("{what}: covariance is not positive definite: {sym}"))
+        FrontendError::Backend(format!(
+            "{what}: covariance is not positive definite: {sym}"
+        ))
     })
 }
 
@@ -253,7 +255,9 @@ impl PoseGraph {
                 result
                     .get::<_, SE3>(X(i as u32))
                     .map(from_se3)
-                    .ok_or_else(|| FrontendError::Backend(format!("node {i} missing after optimisation")))
+                    .ok_or_else(|| {
+                        FrontendError::Backend(format!("node {i} missing after optimisation"))
+                    })
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(OptimizedGraph {

@@ -6,6 +6,10 @@
 //!   fixed-rate baselines ([`fixed_rate`]) and the residual-gated ones
 //!   ([`gating`]);
 //! * [`vo`]: visual odometry behind one interface, simulated or replayed;
+//! * [`run::run_frontend`]: one run of a policy over a traverse — odometry,
+//!   tracking, keyframes, loop closing, relocalisation, online learning,
+//!   the optimised trajectory and Table II's metrics ([`metrics`]);
+//! * [`online`]: regressors learning from VO targets (§VI);
 //! * [`backend`]: the factrs pose graph;
 //! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
 //! * [`tum`]: trajectories in the TUM format;
@@ -15,8 +19,14 @@
 pub mod backend;
 mod error;
 pub mod fixed_rate;
+pub mod gating;
+pub mod metrics;
 pub mod odometry;
+pub mod online;
+pub mod oracle;
+pub mod params;
 pub mod prediction;
+pub mod run;
 pub mod spec;
 pub mod traverse;
 pub mod tum;
@@ -24,4 +34,6 @@ pub mod vo;
 
 pub use error::FrontendError;
 pub use fixed_rate::FixedRate;
+pub use params::FrontendParams;
+pub use run::{FrontendRun, run_frontend};
 pub use spec::SelectorSpec;

@@ -185,9 +185,9 @@ impl OdometryIntegrator {
     /// Expected squared displacement error since the interval started
     /// (m²), including the block in progress.
     pub fn drift_m2(&self) -> f64 {
-        let partial = self
-            .epoch
-            .map_or(0.0, |(_, p)| p.expected_sq_error() * self.epoch_secs * self.epoch_secs);
+        let partial = self.epoch.map_or(0.0, |(_, p)| {
+            p.expected_sq_error() * self.epoch_secs * self.epoch_secs
+        });
         self.drift + partial
     }
 
@@ -205,8 +205,12 @@ impl OdometryIntegrator {
         covariance
             .fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&(0.5 * (translation + translation.transpose())));
-        let mean_inputs = (self.inputs_secs > 0.0)
-            .then(|| self.inputs_sum.iter().map(|v| v / self.inputs_secs).collect());
+        let mean_inputs = (self.inputs_secs > 0.0).then(|| {
+            self.inputs_sum
+                .iter()
+                .map(|v| v / self.inputs_secs)
+                .collect()
+        });
         let out = OdometryInterval {
             relative: self.relative,
             raw_relative: self.raw_relative,
@@ -297,10 +301,20 @@ mod tests {
         odo.advance(&twist(0.04, 0.0), 1.0, 0, &p, None);
         let steps = 100;
         for _ in 0..steps {
-            odo.advance(&twist(0.0, std::f64::consts::FRAC_PI_2), 1.0 / steps as f64, 1, &prediction(0.0, 0.0), None);
+            odo.advance(
+                &twist(0.0, std::f64::consts::FRAC_PI_2),
+                1.0 / steps as f64,
+                1,
+                &prediction(0.0, 0.0),
+                None,
+            );
         }
         let out = odo.take();
-        assert!((out.covariance[(4, 4)] - 1e-6).abs() < 1e-12, "{}", out.covariance);
+        assert!(
+            (out.covariance[(4, 4)] - 1e-6).abs() < 1e-12,
+            "{}",
+            out.covariance
+        );
         assert!(out.covariance[(3, 3)].abs() < 1e-12);
         assert!((out.covariance[(0, 0)] - 2e-6).abs() < 1e-15);
         assert!((out.rotation_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-9);

@@ -1,31 +1,256 @@
 //! The frame selector kinds an experiment may name in YAML, as a closed enum
 //! (`kind: fixed_rate`, ...), validated when the configuration is read and
-//! built into a runtime `Box<dyn FrameSelector>`.
+//! built into a runtime `Box<dyn FrameSelector>`. Wrappers nest:
+//!
+//! ```yaml
+//! selector:
+//!   kind: max_gap
+//!   max_gap_secs: 4
+//!   inner: { kind: residual_schedule, r_max_mps: 0.01 }
+//! ```
 
 use gpodo_traits::FrameSelector;
 use serde::{Deserialize, Serialize};
 
+use crate::gating::{
+    Hysteresis, HysteresisParams, MaxGap, MaxGapParams, ResidualSchedule, ResidualScheduleParams,
+    ResidualSignal, UncertaintyBudget, UncertaintyBudgetParams,
+};
+use crate::oracle::OracleParams;
 use crate::{FixedRate, FrontendError};
+
+fn default_max_gap_secs() -> Option<f64> {
+    MaxGapParams::default().max_gap_secs
+}
 
 /// A frame selector as written in an experiment file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SelectorSpec {
-    /// Process frames at a fixed rate.
+    /// Process frames at a fixed rate (the paper's 2.5 and 0.5 fps).
     FixedRate {
-        /// Frames per second (the paper: 2.5 and 0.5).
+        /// Frames per second.
         fps: f64,
     },
+    /// The authors' quadratic schedule on the predicted residual.
+    ResidualSchedule(ResidualScheduleParams),
+    /// Process when the expected odometry drift exceeds a budget.
+    UncertaintyBudget(UncertaintyBudgetParams),
+    /// A guard around another policy.
+    MaxGap {
+        /// The guarded policy.
+        inner: Box<SelectorSpec>,
+        /// Longest time between processed frames (s; default 4; null: off).
+        #[serde(default = "default_max_gap_secs")]
+        max_gap_secs: Option<f64>,
+        /// Longest odometry distance between them (m; default off).
+        #[serde(default)]
+        max_distance_m: Option<f64>,
+        /// Largest odometry rotation between them (rad; default off).
+        #[serde(default)]
+        max_rotation_rad: Option<f64>,
+    },
+    /// Two-threshold alert mode around another policy.
+    Hysteresis {
+        /// The policy outside alert mode.
+        inner: Box<SelectorSpec>,
+        /// Residual that starts the alert mode (m/s; default 0.008).
+        #[serde(default = "HysteresisParams::default_enter")]
+        enter_mps: f64,
+        /// Residual that ends it (m/s; default 0.004).
+        #[serde(default = "HysteresisParams::default_exit")]
+        exit_mps: f64,
+        /// Period in alert mode (s; default 0.4).
+        #[serde(default = "HysteresisParams::default_alert_period")]
+        alert_period_secs: f64,
+        /// Keyframe threshold scale in alert mode (default 0.5).
+        #[serde(default = "HysteresisParams::default_alert_scale")]
+        alert_keyframe_scale: f64,
+        /// The residual scalar compared (default `mean`).
+        #[serde(default)]
+        signal: ResidualSignal,
+    },
+    /// The offline oracle (sees ground truth; planned by the runner).
+    Oracle(OracleParams),
 }
 
 impl SelectorSpec {
+    /// A short label for reports.
+    pub fn label(&self) -> String {
+        match self {
+            Self::FixedRate { fps } => format!("fixed {fps} fps"),
+            Self::ResidualSchedule(p) => format!(
+                "residual schedule (r_max {} m/s, {}–{} s)",
+                p.r_max_mps, p.t_cam_secs, p.t_max_secs
+            ),
+            Self::UncertaintyBudget(p) => {
+                format!("uncertainty budget ({:.0} mm)", 1e3 * p.budget_m2.sqrt())
+            }
+            Self::MaxGap {
+                inner,
+                max_gap_secs,
+                ..
+            } => match max_gap_secs {
+                Some(g) => format!("{} + max gap {g} s", inner.label()),
+                None => format!("{} + max gap", inner.label()),
+            },
+            Self::Hysteresis {
+                inner,
+                enter_mps,
+                exit_mps,
+                ..
+            } => format!("{} + hysteresis {exit_mps}/{enter_mps} m/s", inner.label()),
+            Self::Oracle(p) => match (&p.frames, &p.same_as) {
+                (Some(n), _) => format!("oracle ({n} frames)"),
+                (None, Some(s)) => format!("oracle (frames of {s})"),
+                (None, None) => "oracle".into(),
+            },
+        }
+    }
+
+    /// Whether the selector needs the regressor's predictions (every kind
+    /// but the fixed rate and the oracle reads them).
+    pub fn reads_residuals(&self) -> bool {
+        match self {
+            Self::FixedRate { .. } | Self::Oracle(_) => false,
+            Self::MaxGap { inner, .. } => inner.reads_residuals(),
+            _ => true,
+        }
+    }
+
+    /// The oracle's settings when this is the oracle.
+    pub fn oracle(&self) -> Option<&OracleParams> {
+        match self {
+            Self::Oracle(p) => Some(p),
+            _ => None,
+        }
+    }
+
+    /// Checks every field (nested ones too).
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidSpec`] naming the selector and field.
+    pub fn validate(&self) -> Result<(), FrontendError> {
+        match self {
+            Self::Oracle(p) => p.validate(),
+            _ => self.build().map(|_| ()),
+        }
+    }
+
     /// Builds the runtime selector.
     ///
     /// # Errors
-    /// [`FrontendError::InvalidSpec`] naming the bad field.
+    /// [`FrontendError::InvalidSpec`] naming the bad field; the oracle is
+    /// planned by the runner and cannot be built here.
     pub fn build(&self) -> Result<Box<dyn FrameSelector>, FrontendError> {
         Ok(match self {
             Self::FixedRate { fps } => Box::new(FixedRate::new(*fps)?),
+            Self::ResidualSchedule(p) => Box::new(ResidualSchedule::new(*p)?),
+            Self::UncertaintyBudget(p) => Box::new(UncertaintyBudget::new(*p)?),
+            Self::MaxGap {
+                inner,
+                max_gap_secs,
+                max_distance_m,
+                max_rotation_rad,
+            } => Box::new(MaxGap::new(
+                inner.build()?,
+                MaxGapParams {
+                    max_gap_secs: *max_gap_secs,
+                    max_distance_m: *max_distance_m,
+                    max_rotation_rad: *max_rotation_rad,
+                },
+            )?),
+            Self::Hysteresis {
+                inner,
+                enter_mps,
+                exit_mps,
+                alert_period_secs,
+                alert_keyframe_scale,
+                signal,
+            } => Box::new(Hysteresis::new(
+                inner.build()?,
+                HysteresisParams {
+                    enter_mps: *enter_mps,
+                    exit_mps: *exit_mps,
+                    alert_period_secs: *alert_period_secs,
+                    alert_keyframe_scale: *alert_keyframe_scale,
+                    signal: *signal,
+                },
+            )?),
+            Self::Oracle(_) => {
+                return Err(FrontendError::InvalidSpec {
+                    selector: "oracle".into(),
+                    field: "kind".into(),
+                    expected: "a causal selector here; the oracle is planned offline by the runner"
+                        .into(),
+                });
+            }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(json: &str) -> Result<SelectorSpec, serde_json::Error> {
+        serde_json::from_str(json)
+    }
+
+    #[test]
+    fn every_kind_parses_with_defaults_and_builds() {
+        let specs = [
+            r#"{"kind": "fixed_rate", "fps": 2.5}"#,
+            r#"{"kind": "residual_schedule"}"#,
+            r#"{"kind": "uncertainty_budget", "budget_m2": 1e-4}"#,
+            r#"{"kind": "max_gap", "inner": {"kind": "residual_schedule"}}"#,
+            r#"{"kind": "hysteresis", "inner": {"kind": "fixed_rate", "fps": 0.5}, "enter_mps": 0.01}"#,
+        ];
+        for json in specs {
+            let spec = parse(json).unwrap();
+            spec.validate().unwrap();
+            let s = spec.build().unwrap();
+            assert!(!s.name().is_empty());
+        }
+        let spec = parse(r#"{"kind": "max_gap", "inner": {"kind": "residual_schedule"}}"#).unwrap();
+        assert_eq!(
+            spec.label(),
+            "residual schedule (r_max 0.01 m/s, 0.4–2 s) + max gap 4 s"
+        );
+        assert!(spec.reads_residuals());
+        assert!(
+            !parse(r#"{"kind": "fixed_rate", "fps": 2.5}"#)
+                .unwrap()
+                .reads_residuals()
+        );
+    }
+
+    #[test]
+    fn unknown_fields_and_kinds_are_rejected() {
+        let err = parse(r#"{"kind": "residual_schedule", "rmax": 0.01}"#).unwrap_err();
+        assert!(err.to_string().contains("rmax"), "{err}");
+        let err = parse(r#"{"kind": "fixed"}"#).unwrap_err();
+        assert!(err.to_string().contains("fixed"), "{err}");
+        let err =
+            parse(r#"{"kind": "max_gap", "inner": {"kind": "fixed_rate", "fsp": 1}}"#).unwrap_err();
+        assert!(err.to_string().contains("fsp"), "{err}");
+    }
+
+    #[test]
+    fn bad_values_name_the_nested_field() {
+        let spec = parse(
+            r#"{"kind": "max_gap", "inner": {"kind": "residual_schedule", "r_max_mps": -1}}"#,
+        )
+        .unwrap();
+        let err = spec.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("residual_schedule") && err.contains("r_max_mps"),
+            "{err}"
+        );
+        let spec = parse(r#"{"kind": "oracle"}"#).unwrap();
+        assert!(spec.validate().unwrap_err().to_string().contains("same_as"));
+        let spec = parse(r#"{"kind": "oracle", "same_as": "GP"}"#).unwrap();
+        spec.validate().unwrap();
+        assert!(spec.build().is_err());
     }
 }

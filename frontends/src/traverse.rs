@@ -71,18 +71,31 @@ impl Traverse {
             .windows(2)
             .position(|w| !(w[1] > w[0] && w[1].is_finite() && w[0].is_finite()))
         {
-            return Err(bad(format!("sample times not strictly increasing at sample {}", k + 1)));
+            return Err(bad(format!(
+                "sample times not strictly increasing at sample {}",
+                k + 1
+            )));
         }
         if ground_truth.len() != n {
-            return Err(bad(format!("{} ground-truth poses for {n} samples", ground_truth.len())));
+            return Err(bad(format!(
+                "{} ground-truth poses for {n} samples",
+                ground_truth.len()
+            )));
         }
         if twists.len() != n - 1 {
-            return Err(bad(format!("{} odometry twists for {} steps", twists.len(), n - 1)));
+            return Err(bad(format!(
+                "{} odometry twists for {} steps",
+                twists.len(),
+                n - 1
+            )));
         }
         let mut previous_end = 0;
         for (i, w) in windows.iter().enumerate() {
             if w.steps.start < previous_end || w.steps.end > n - 1 || w.steps.is_empty() {
-                return Err(bad(format!("window {i} covers steps {:?} out of order or range", w.steps)));
+                return Err(bad(format!(
+                    "window {i} covers steps {:?} out of order or range",
+                    w.steps
+                )));
             }
             if !(w.end_secs > w.start_secs) {
                 return Err(bad(format!("window {i} ends before it starts")));
@@ -90,17 +103,23 @@ impl Traverse {
             previous_end = w.steps.end;
         }
         if let Some(k) = camera_times_secs.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(bad(format!("camera times not strictly increasing at frame {}", k + 1)));
+            return Err(bad(format!(
+                "camera times not strictly increasing at frame {}",
+                k + 1
+            )));
         }
         let (t0, t1) = (times_secs[0], times_secs[n - 1]);
         if camera_times_secs.iter().any(|t| !(*t >= t0 && *t <= t1)) {
-            return Err(bad(format!("camera frames outside the sampled span [{t0}, {t1}] s")));
+            return Err(bad(format!(
+                "camera frames outside the sampled span [{t0}, {t1}] s"
+            )));
         }
         let mut cumulative_m = Vec::with_capacity(n);
         let mut acc = 0.0;
         cumulative_m.push(0.0);
         for k in 1..n {
-            acc += (ground_truth[k].translation.vector - ground_truth[k - 1].translation.vector).norm();
+            acc += (ground_truth[k].translation.vector - ground_truth[k - 1].translation.vector)
+                .norm();
             cumulative_m.push(acc);
         }
         Ok(Self {
@@ -167,7 +186,9 @@ impl Traverse {
 
     /// The sample at or before `t` (clamped to the first sample).
     pub fn sample_at_or_before(&self, t: f64) -> usize {
-        self.times_secs.partition_point(|&s| s <= t).saturating_sub(1)
+        self.times_secs
+            .partition_point(|&s| s <= t)
+            .saturating_sub(1)
     }
 
     /// Ground truth at time `t`, interpolated between samples (linear in
@@ -194,8 +215,15 @@ mod tests {
             .iter()
             .map(|t| Isometry3::translation(0.05 * t, 0.0, 0.0))
             .collect();
-        Traverse::new("line", times, gt, vec![BodyTwist::default(); n - 1], vec![], vec![0.0, 0.5])
-            .unwrap()
+        Traverse::new(
+            "line",
+            times,
+            gt,
+            vec![BodyTwist::default(); n - 1],
+            vec![],
+            vec![0.0, 0.5],
+        )
+        .unwrap()
     }
 
     #[test]
@@ -213,11 +241,28 @@ mod tests {
     fn inconsistent_inputs_are_rejected_with_what_is_wrong() {
         let times = vec![0.0, 0.1, 0.1];
         let gt = vec![Isometry3::identity(); 3];
-        let err = Traverse::new("x", times, gt.clone(), vec![BodyTwist::default(); 2], vec![], vec![])
-            .unwrap_err();
-        assert!(err.to_string().contains("strictly increasing at sample 2"), "{err}");
-        let err = Traverse::new("x", vec![0.0, 0.1, 0.2], gt, vec![BodyTwist::default(); 2], vec![], vec![0.5])
-            .unwrap_err();
+        let err = Traverse::new(
+            "x",
+            times,
+            gt.clone(),
+            vec![BodyTwist::default(); 2],
+            vec![],
+            vec![],
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("strictly increasing at sample 2"),
+            "{err}"
+        );
+        let err = Traverse::new(
+            "x",
+            vec![0.0, 0.1, 0.2],
+            gt,
+            vec![BodyTwist::default(); 2],
+            vec![],
+            vec![0.5],
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("camera frames outside"), "{err}");
     }
 }

@@ -68,7 +68,12 @@ pub fn parse_tum(text: &str, path: &str) -> Result<Vec<StampedPose>, FrontendErr
                 .parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| bad(format!("field {}: expected a finite number, found `{field}`", k + 1)))?;
+                .ok_or_else(|| {
+                    bad(format!(
+                        "field {}: expected a finite number, found `{field}`",
+                        k + 1
+                    ))
+                })?;
         }
         let q = Quaternion::new(v[7], v[4], v[5], v[6]);
         if (q.norm() - 1.0).abs() > 1e-3 {
@@ -127,7 +132,10 @@ mod tests {
         let err = parse_tum("0 0 0 0 0 0 0 2\n", "t").unwrap_err();
         assert!(err.to_string().contains("norm"), "{err}");
         let err = parse_tum("0 0 0 0 0 0 0 1\n0 0 0 0 0 0 0 1\n", "t").unwrap_err();
-        assert!(err.to_string().contains("t:2") && err.to_string().contains("increase"), "{err}");
+        assert!(
+            err.to_string().contains("t:2") && err.to_string().contains("increase"),
+            "{err}"
+        );
         let err = parse_tum("0 0 nan 0 0 0 0 1\n", "t").unwrap_err();
         assert!(err.to_string().contains("field 3"), "{err}");
     }

@@ -85,6 +85,10 @@ pub trait VisualOdometry: Send {
     /// Estimates `reference_from_current`, or fails.
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome;
 
+    /// The probability that [`VisualOdometry::track`] succeeds for
+    /// `request` (what an offline planner may use; 0 or 1 for a replay).
+    fn success_probability(&self, request: &TrackRequest) -> f64;
+
     /// Place recognition: the keyframes among `keyframes` that the current
     /// frame may be matched against, best first (empty when none is
     /// recognised).

@@ -177,7 +177,10 @@ impl ReplayVo {
     }
 
     fn logged(&self, a: FrameRef, b: FrameRef) -> Option<Isometry3<f64>> {
-        let (x, y) = (self.frames.get(a.index)?.as_ref()?, self.frames.get(b.index)?.as_ref()?);
+        let (x, y) = (
+            self.frames.get(a.index)?.as_ref()?,
+            self.frames.get(b.index)?.as_ref()?,
+        );
         Some(x.inverse() * y)
     }
 }
@@ -204,6 +207,14 @@ impl VisualOdometry for ReplayVo {
             covariance: isotropic_covariance(sigma_r, sigma_t),
             overlap,
         })
+    }
+
+    fn success_probability(&self, request: &TrackRequest) -> f64 {
+        if self.logged(request.reference, request.current).is_some() {
+            1.0
+        } else {
+            0.0
+        }
     }
 
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef> {

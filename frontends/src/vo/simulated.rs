@@ -204,7 +204,10 @@ impl SimulatedVo {
     }
 
     fn truth(&self, reference: FrameRef, current: FrameRef) -> Option<Isometry3<f64>> {
-        let (a, b) = (self.frames.get(reference.index)?, self.frames.get(current.index)?);
+        let (a, b) = (
+            self.frames.get(reference.index)?,
+            self.frames.get(current.index)?,
+        );
         Some(a.inverse() * b)
     }
 
@@ -214,8 +217,9 @@ impl SimulatedVo {
     }
 
     /// The probability that `request` succeeds (what [`VisualOdometry::track`]
-    /// draws against), and the overlap of the two views.
-    pub fn success_probability(&self, request: &TrackRequest) -> Option<(f64, f64)> {
+    /// draws against), and the overlap of the two views; `None` for frames
+    /// outside the traverse.
+    pub fn success_and_overlap(&self, request: &TrackRequest) -> Option<(f64, f64)> {
         let truth = self.truth(request.reference, request.current)?;
         let p = &self.params;
         let overlap = p.camera.body_overlap(&truth);
@@ -252,7 +256,7 @@ impl VisualOdometry for SimulatedVo {
     }
 
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome {
-        let Some((success, overlap)) = self.success_probability(request) else {
+        let Some((success, overlap)) = self.success_and_overlap(request) else {
             return TrackOutcome::Lost;
         };
         let Some(truth) = self.truth(request.reference, request.current) else {
@@ -264,17 +268,22 @@ impl VisualOdometry for SimulatedVo {
             return TrackOutcome::Lost;
         }
         let (sigma_r, sigma_t) = self.error_sigmas(&truth, overlap);
-        let mut draw = |sigma: f64| {
-            Vector3::from_fn(|_, _| sigma * rng.sample::<f64, _>(StandardNormal))
-        };
+        let mut draw =
+            |sigma: f64| Vector3::from_fn(|_, _| sigma * rng.sample::<f64, _>(StandardNormal));
         let (omega, v) = (draw(sigma_r), draw(sigma_t));
-        let noise =
-            Isometry3::from_parts(Translation3::from(v), UnitQuaternion::from_scaled_axis(omega));
+        let noise = Isometry3::from_parts(
+            Translation3::from(v),
+            UnitQuaternion::from_scaled_axis(omega),
+        );
         TrackOutcome::Tracked(VoMeasurement {
             relative: truth * noise,
             covariance: isotropic_covariance(sigma_r, sigma_t),
             overlap,
         })
+    }
+
+    fn success_probability(&self, request: &TrackRequest) -> f64 {
+        self.success_and_overlap(request).map_or(0.0, |(p, _)| p)
     }
 
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef> {

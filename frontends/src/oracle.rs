@@ -1,0 +1,282 @@
+//! The offline oracle: an exact dynamic programme that sees ground truth
+//! and chooses which camera frames to process, for a frame budget, to
+//! minimise the trajectory error — the yardstick for how good a causal
+//! policy can get.
+//!
+//! # Model
+//! Candidates are the camera frames on a grid of `candidate_period_secs`
+//! (the first frame always included). If the frames `a < b` are processed
+//! and nothing in between, the trajectory between them is the corrected
+//! wheel odometry started from the true pose at `a`, and the gap costs
+//! `C(a, b) = Σ_k ‖p̂_k − p_k‖²` over the sensor samples `t_a ≤ t_k < t_b`
+//! (the squared position errors the odometry accumulates). A gap the
+//! visual odometry would probably not bridge — tracking `b` from `a` with
+//! the odometry prior succeeds with probability below
+//! `min_track_probability` — or longer than `max_gap_secs` is not allowed.
+//! The plan minimises `Σ C` over consecutive chosen frames plus the tail
+//! after the last one, with at most `B` frames.
+//!
+//! # Algorithm
+//! `E_m(j) = min_{j−G ≤ i < j} E_{m−1}(i) + C(i, j)`, `E_1(0) = 0`, for
+//! `m = 2 … B`, `G` the candidates within `max_gap_secs`; the answer is
+//! `min_{m ≤ B, j} E_m(j) + C(j, end)`, traced back through stored
+//! predecessors. Exact for the model above, in `O(N G B)` time and
+//! `O(N B)` memory for `N` candidates; the gap costs are integrated once,
+//! `O(N G)` pose compositions.
+//!
+//! The plan is then run through the same front end as every causal policy
+//! (visual odometry, keyframes, back end) with [`crate::gating::Planned`].
+//! The model assumes a processed frame is localised exactly, so the oracle
+//! is the best plan for a surrogate of the trajectory error, not a proof
+//! that no policy can do better in the full pipeline.
+
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+
+use crate::FrontendError;
+use crate::params::MotionPrior;
+use crate::prediction::ResidualPrediction;
+use crate::traverse::Traverse;
+use crate::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
+
+/// The oracle's settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OracleParams {
+    /// Frame budget. Omitted, `same_as` names the scheme whose frame count
+    /// is the budget.
+    pub frames: Option<usize>,
+    /// The label of the scheme whose processed-frame count is the budget
+    /// (read by the experiment runner).
+    pub same_as: Option<String>,
+    /// Spacing of the candidate frames (s; default 0.4, the fastest the
+    /// gated policies process).
+    pub candidate_period_secs: f64,
+    /// Longest allowed gap between processed frames (s; default 20).
+    pub max_gap_secs: f64,
+    /// Least probability that visual odometry bridges a gap (default 0.5).
+    pub min_track_probability: f64,
+}
+
+impl Default for OracleParams {
+    fn default() -> Self {
+        Self {
+            frames: None,
+            same_as: None,
+            candidate_period_secs: 0.4,
+            max_gap_secs: 20.0,
+            min_track_probability: 0.5,
+        }
+    }
+}
+
+impl OracleParams {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidSpec`] naming the field.
+    pub fn validate(&self) -> Result<(), FrontendError> {
+        let bad = |field: &str, expected: &str| {
+            Err(FrontendError::InvalidSpec {
+                selector: "oracle".into(),
+                field: field.into(),
+                expected: expected.into(),
+            })
+        };
+        match (&self.frames, &self.same_as) {
+            (Some(0), _) => return bad("frames", "a budget of at least 1 frame"),
+            (Some(_), Some(_)) | (None, None) => {
+                return bad("frames", "either `frames: N` or `same_as: <scheme label>`");
+            }
+            _ => {}
+        }
+        if !(self.candidate_period_secs.is_finite() && self.candidate_period_secs > 0.0) {
+            return bad("candidate_period_secs", "a positive period in s");
+        }
+        if !(self.max_gap_secs.is_finite() && self.max_gap_secs >= self.candidate_period_secs) {
+            return bad("max_gap_secs", "a duration at least candidate_period_secs");
+        }
+        if !(0.0..=1.0).contains(&self.min_track_probability) {
+            return bad("min_track_probability", "a probability in [0, 1]");
+        }
+        Ok(())
+    }
+}
+
+/// The oracle's plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OraclePlan {
+    /// Camera frame indices to process, increasing.
+    pub frames: Vec<usize>,
+    /// Their times (s).
+    pub times_secs: Vec<f64>,
+    /// The minimised cost `Σ C` (m²·samples).
+    pub cost: f64,
+    /// Number of candidates considered.
+    pub candidates: usize,
+}
+
+/// The prediction in force at time `t` (the last window that ended by
+/// then), as the causal front end has it.
+fn prediction_at(
+    traverse: &Traverse,
+    predictions: &[ResidualPrediction],
+    t: f64,
+) -> Option<ResidualPrediction> {
+    let done = traverse.windows().partition_point(|w| w.end_secs <= t);
+    done.checked_sub(1)
+        .and_then(|w| predictions.get(w).copied())
+}
+
+/// Plans the frames of a budget.
+///
+/// # Errors
+/// As [`OracleParams::validate`] (except the budget, given here);
+/// [`FrontendError::InvalidSpec`] when no plan within the budget respects
+/// the gap limits.
+pub fn plan_frames(
+    traverse: &Traverse,
+    predictions: &[ResidualPrediction],
+    vo: &dyn VisualOdometry,
+    motion_prior: MotionPrior,
+    params: &OracleParams,
+    budget: usize,
+) -> Result<OraclePlan, FrontendError> {
+    let check = OracleParams {
+        frames: Some(budget.max(1)),
+        same_as: None,
+        ..params.clone()
+    };
+    check.validate()?;
+    let camera = traverse.camera_times_secs();
+    if camera.is_empty() {
+        return Ok(OraclePlan {
+            frames: Vec::new(),
+            times_secs: Vec::new(),
+            cost: 0.0,
+            candidates: 0,
+        });
+    }
+    // Candidate frames on the grid.
+    let mut candidates = vec![0usize];
+    for (i, &t) in camera.iter().enumerate().skip(1) {
+        let last = camera[candidates[candidates.len() - 1]];
+        if t - last >= params.candidate_period_secs - 1e-9 {
+            candidates.push(i);
+        }
+    }
+    let n = candidates.len();
+    let times = traverse.times_secs();
+    let end_time = times[times.len() - 1];
+    let max_gap = params.max_gap_secs;
+    // Gap costs C(i, i + g), g = 1 … G, and the tail cost C(i, end).
+    let g_max = ((max_gap / params.candidate_period_secs).floor() as usize).max(1);
+    let mut gap_cost = vec![f64::INFINITY; n * g_max];
+    let mut tail_cost = vec![f64::INFINITY; n];
+    for (ci, &fi) in candidates.iter().enumerate() {
+        let t_start = camera[fi];
+        let mut k = traverse.sample_at_or_before(t_start);
+        if times[k] < t_start && k + 1 < times.len() {
+            k += 1;
+        }
+        let start_pose = traverse.ground_truth()[k];
+        let mut odometry = Isometry3::identity();
+        let mut cost = 0.0;
+        let mut next = ci + 1;
+        loop {
+            let t = times[k];
+            // Close every candidate gap that ends at or before this sample.
+            while next < n && next - ci <= g_max && camera[candidates[next]] <= t {
+                let (a, b) = (
+                    FrameRef {
+                        index: fi,
+                        time_secs: t_start,
+                    },
+                    FrameRef {
+                        index: candidates[next],
+                        time_secs: camera[candidates[next]],
+                    },
+                );
+                let prior = match motion_prior {
+                    MotionPrior::None => None,
+                    _ => Some(odometry),
+                };
+                let p = vo.success_probability(&TrackRequest {
+                    reference: a,
+                    current: b,
+                    prior,
+                    purpose: TrackPurpose::Tracking,
+                });
+                if p >= params.min_track_probability {
+                    gap_cost[ci * g_max + (next - ci - 1)] = cost;
+                }
+                next += 1;
+            }
+            if t - t_start > max_gap || k + 1 >= times.len() {
+                if k + 1 >= times.len() && end_time - t_start <= max_gap {
+                    tail_cost[ci] = cost;
+                }
+                break;
+            }
+            let estimate = start_pose * odometry;
+            cost += (estimate.translation.vector - traverse.ground_truth()[k].translation.vector)
+                .norm_squared();
+            let dt = times[k + 1] - t;
+            let mut twist = traverse.twists()[k];
+            if let Some(p) = prediction_at(traverse, predictions, t) {
+                twist.linear_mps += p.mean;
+            }
+            odometry *= twist.pose_delta(dt);
+            k += 1;
+        }
+    }
+    // E_m(j) over layers m = 1 … B; predecessors per layer.
+    let budget = budget.min(n);
+    let mut best = vec![f64::INFINITY; n];
+    best[0] = 0.0;
+    let mut predecessors: Vec<Vec<u32>> = Vec::with_capacity(budget);
+    let mut answer = (tail_cost[0], 1usize, 0usize);
+    for m in 2..=budget {
+        let mut layer = vec![f64::INFINITY; n];
+        let mut from = vec![u32::MAX; n];
+        for j in 1..n {
+            let lo = j.saturating_sub(g_max);
+            for i in lo..j {
+                let c = best[i] + gap_cost[i * g_max + (j - i - 1)];
+                if c < layer[j] {
+                    layer[j] = c;
+                    from[j] = i as u32;
+                }
+            }
+            let total = layer[j] + tail_cost[j];
+            if total < answer.0 {
+                answer = (total, m, j);
+            }
+        }
+        predecessors.push(from);
+        best = layer;
+    }
+    let (cost, m, mut j) = answer;
+    if !cost.is_finite() {
+        return Err(FrontendError::InvalidSpec {
+            selector: "oracle".into(),
+            field: "frames".into(),
+            expected: format!(
+                "a budget that can cover the traverse with gaps of at most {max_gap} s that VO can bridge ({budget} frames cannot)"
+            ),
+        });
+    }
+    let mut chosen = vec![j];
+    for layer in (2..=m).rev() {
+        j = predecessors[layer - 2][j] as usize;
+        chosen.push(j);
+    }
+    chosen.reverse();
+    let frames: Vec<usize> = chosen.iter().map(|&c| candidates[c]).collect();
+    Ok(OraclePlan {
+        times_secs: frames.iter().map(|&f| camera[f]).collect(),
+        frames,
+        cost,
+        candidates: n,
+    })
+}

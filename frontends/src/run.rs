@@ -1,0 +1,586 @@
+//! One front-end run over a traverse (§V-B): wheel odometry integrated at
+//! the sensor rate and corrected by the predicted residual; at every camera
+//! frame the selector decides; processed frames are tracked against their
+//! reference keyframe by the visual odometry, become keyframes when they
+//! share too little with it, close loops, and relocalise after a loss only
+//! where the map already is; an online residual source learns from the VO
+//! (§VI). At the end the pose graph of processed frames is optimised and
+//! the trajectory at every sensor sample is the optimised pose of the last
+//! processed frame composed with the odometry since.
+
+use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::FrontendError;
+use crate::backend::{EdgeKind, PoseGraph, PoseGraphEdge};
+use crate::metrics::{TrajectoryMetrics, trajectory_metrics};
+use crate::odometry::{OdometryIntegrator, OdometryInterval};
+use crate::params::{FrontendParams, MotionPrior};
+use crate::prediction::{ResidualPrediction, ResidualSource};
+use crate::traverse::Traverse;
+use crate::vo::{
+    FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry, VoMeasurement,
+};
+
+/// One processed frame, as the learning curve records it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProcessedFrame {
+    /// Camera frame index.
+    pub frame: usize,
+    /// Time (s).
+    pub time_secs: f64,
+    /// Ground-truth distance travelled by then (m).
+    pub distance_m: f64,
+    /// Whether it became a keyframe.
+    pub keyframe: bool,
+    /// Whether it was tracked (or relocalised) rather than lost.
+    pub tracked: bool,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrontendRun {
+    /// Frames processed.
+    pub frames: usize,
+    /// Keyframes inserted.
+    pub keyframes: usize,
+    /// Times tracking was lost.
+    pub tracking_losses: usize,
+    /// Successful relocalisations.
+    pub relocalisations: usize,
+    /// Loop closures.
+    pub loop_closures: usize,
+    /// Time spent lost (s).
+    pub lost_secs: f64,
+    /// The compute proxy (ms).
+    pub compute_ms: f64,
+    /// Residual targets learned online.
+    pub online_targets: usize,
+    /// Position errors of the final trajectory.
+    pub metrics: TrajectoryMetrics,
+    /// Weighted squared error of the pose graph before and after
+    /// optimisation.
+    pub graph_error: (f64, f64),
+    /// Every processed frame, in order.
+    pub processed: Vec<ProcessedFrame>,
+    /// The prediction in force from each time on (time, prediction).
+    pub predictions: Vec<(f64, ResidualPrediction)>,
+    /// Estimated `world_from_body` at every sensor sample.
+    #[serde(skip)]
+    pub trajectory: Vec<Isometry3<f64>>,
+}
+
+/// A node of the pose graph.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    frame: Option<FrameRef>,
+    /// The node's pose according to the visual map (keyframe chain), when
+    /// it was tracked.
+    map_pose: Option<Isometry3<f64>>,
+}
+
+/// The interval an online target is accumulated over.
+#[derive(Debug, Clone)]
+struct TargetAnchor {
+    node: usize,
+    time_secs: f64,
+    raw_relative: Isometry3<f64>,
+    inputs_sum: Vec<f64>,
+    inputs_secs: f64,
+}
+
+/// Scales a relative motion by `s` (rotation angle and translation).
+fn scale_motion(m: &Isometry3<f64>, s: f64) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::from(m.translation.vector * s),
+        UnitQuaternion::from_scaled_axis(m.rotation.scaled_axis() * s),
+    )
+}
+
+struct Session<'a> {
+    traverse: &'a Traverse,
+    params: &'a FrontendParams,
+    source: &'a mut dyn ResidualSource,
+    vo: &'a mut dyn VisualOdometry,
+    integrator: OdometryIntegrator,
+    time: f64,
+    step: usize,
+    next_window: usize,
+    epoch: usize,
+    prediction: ResidualPrediction,
+    predictions: Vec<(f64, ResidualPrediction)>,
+    /// Per sample: the node it hangs from and the odometry since.
+    anchors: Vec<(usize, Isometry3<f64>)>,
+    /// Step → window index, for the regressor inputs of a step.
+    step_window: Vec<Option<usize>>,
+    graph: PoseGraph,
+    nodes: Vec<Node>,
+    last_node: usize,
+    last_processed_secs: Option<f64>,
+    tracking: bool,
+    lost_since: f64,
+    reference_kf: Option<usize>,
+    keyframes: Vec<usize>,
+    /// The last two tracked nodes with their times (constant velocity).
+    tracked_history: [Option<(usize, f64)>; 2],
+    target_anchor: Option<TargetAnchor>,
+    run: FrontendRun,
+}
+
+impl<'a> Session<'a> {
+    fn new(
+        traverse: &'a Traverse,
+        params: &'a FrontendParams,
+        source: &'a mut dyn ResidualSource,
+        vo: &'a mut dyn VisualOdometry,
+    ) -> Self {
+        let n = traverse.len();
+        let mut step_window = vec![None; n - 1];
+        for (w, window) in traverse.windows().iter().enumerate() {
+            for s in window.steps.clone() {
+                step_window[s] = Some(w);
+            }
+        }
+        let prediction = ResidualPrediction::uninformed(params.initial_residual_variance);
+        let t0 = traverse.times_secs()[0];
+        let mut graph = PoseGraph::default();
+        graph.add_node(traverse.ground_truth()[0]);
+        Self {
+            traverse,
+            params,
+            source,
+            vo,
+            integrator: OdometryIntegrator::new(params.odometry),
+            time: t0,
+            step: 0,
+            next_window: 0,
+            epoch: 0,
+            prediction,
+            predictions: vec![(t0, prediction)],
+            anchors: vec![(0, Isometry3::identity())],
+            step_window,
+            graph,
+            nodes: vec![Node {
+                frame: None,
+                map_pose: None,
+            }],
+            last_node: 0,
+            last_processed_secs: None,
+            tracking: true,
+            lost_since: t0,
+            reference_kf: None,
+            keyframes: Vec::new(),
+            tracked_history: [None, None],
+            target_anchor: None,
+            run: FrontendRun {
+                frames: 0,
+                keyframes: 0,
+                tracking_losses: 0,
+                relocalisations: 0,
+                loop_closures: 0,
+                lost_secs: 0.0,
+                compute_ms: 0.0,
+                online_targets: 0,
+                metrics: TrajectoryMetrics::default(),
+                graph_error: (0.0, 0.0),
+                processed: Vec::new(),
+                predictions: Vec::new(),
+                trajectory: Vec::new(),
+            },
+        }
+    }
+
+    /// Integrates odometry up to `t`, delivering predictions as windows
+    /// complete and recording every sample passed.
+    fn advance_to(&mut self, t: f64) -> Result<(), FrontendError> {
+        let times = self.traverse.times_secs();
+        let windows = self.traverse.windows();
+        while self.time < t && self.step + 1 < times.len() {
+            let mut end = t.min(times[self.step + 1]);
+            if let Some(w) = windows.get(self.next_window)
+                && w.end_secs > self.time
+            {
+                end = end.min(w.end_secs);
+            }
+            let inputs = self.step_window[self.step].map(|w| windows[w].inputs.as_slice());
+            self.integrator.advance(
+                &self.traverse.twists()[self.step],
+                end - self.time,
+                self.epoch,
+                &self.prediction,
+                inputs,
+            );
+            self.time = end;
+            if self.time >= times[self.step + 1] {
+                self.step += 1;
+                self.anchors
+                    .push((self.last_node, *self.integrator.relative()));
+            }
+            while let Some(w) = windows.get(self.next_window)
+                && w.end_secs <= self.time
+            {
+                self.prediction = self.source.on_window(self.next_window, w)?;
+                self.epoch += 1;
+                self.next_window += 1;
+                self.predictions.push((self.time, self.prediction));
+            }
+        }
+        Ok(())
+    }
+
+    fn context(&self, time_secs: f64) -> FrameContext {
+        FrameContext {
+            time_secs,
+            last_processed_secs: self.last_processed_secs,
+            distance_since_processed_m: self.integrator.distance_m(),
+            rotation_since_processed_rad: self.integrator.rotation_rad(),
+            residual_mean: self.prediction.mean.iter().copied().collect(),
+            residual_variance: self.prediction.variance.iter().copied().collect(),
+            drift_since_processed: self.integrator.drift_m2(),
+        }
+    }
+
+    fn frame_of(&self, node: usize) -> Option<FrameRef> {
+        self.nodes[node].frame
+    }
+
+    /// The motion prior for tracking `current` against the reference
+    /// keyframe: `kf_from_current` predicted.
+    fn prior(
+        &self,
+        interval: &OdometryInterval,
+        kf_from_last: &Isometry3<f64>,
+        gap: f64,
+    ) -> Option<Isometry3<f64>> {
+        match self.params.motion_prior {
+            MotionPrior::Odometry => Some(kf_from_last * interval.relative),
+            MotionPrior::None => None,
+            MotionPrior::ConstantVelocity => {
+                let [Some((a, ta)), Some((b, tb))] = self.tracked_history else {
+                    return Some(*kf_from_last);
+                };
+                let (pa, pb) = (self.nodes[a].map_pose?, self.nodes[b].map_pose?);
+                let velocity = pa.inverse() * pb;
+                Some(kf_from_last * scale_motion(&velocity, gap / (tb - ta).max(1e-6)))
+            }
+        }
+    }
+
+    fn add_vo_edge(&mut self, from: usize, to: usize, m: &VoMeasurement, kind: EdgeKind) {
+        self.graph.add_edge(PoseGraphEdge {
+            from,
+            to,
+            measurement: m.relative,
+            covariance: m.covariance,
+            kind,
+        });
+    }
+
+    fn make_keyframe(&mut self, node: usize) {
+        self.keyframes.push(node);
+        self.reference_kf = Some(node);
+        self.run.keyframes += 1;
+    }
+
+    /// Looks for a loop from the new keyframe `node` to an old one.
+    fn close_loop(&mut self, node: usize, time_secs: f64) {
+        if !self.params.loop_closure.enabled {
+            return;
+        }
+        let Some(current) = self.frame_of(node) else {
+            return;
+        };
+        let horizon = time_secs - self.params.loop_closure.min_separation_secs;
+        let old: Vec<FrameRef> = self
+            .keyframes
+            .iter()
+            .filter_map(|&k| self.frame_of(k))
+            .filter(|f| f.time_secs < horizon)
+            .collect();
+        for candidate in self.vo.recognise(current, &old) {
+            let request = TrackRequest {
+                reference: candidate,
+                current,
+                prior: None,
+                purpose: TrackPurpose::LoopClosure,
+            };
+            if let TrackOutcome::Tracked(m) = self.vo.track(&request)
+                && let Some(kf) = self.node_of_frame(candidate.index)
+            {
+                self.add_vo_edge(kf, node, &m, EdgeKind::LoopClosure);
+                self.run.loop_closures += 1;
+                return;
+            }
+        }
+    }
+
+    fn node_of_frame(&self, frame: usize) -> Option<usize> {
+        self.keyframes
+            .iter()
+            .copied()
+            .find(|&k| self.nodes[k].frame.is_some_and(|f| f.index == frame))
+    }
+
+    /// Tries to relocalise `node` against a recognised keyframe.
+    fn relocalise(&mut self, node: usize, current: FrameRef) -> Option<(usize, VoMeasurement)> {
+        let known: Vec<FrameRef> = self
+            .keyframes
+            .iter()
+            .filter_map(|&k| self.frame_of(k))
+            .collect();
+        for candidate in self.vo.recognise(current, &known) {
+            let request = TrackRequest {
+                reference: candidate,
+                current,
+                prior: None,
+                purpose: TrackPurpose::Relocalisation,
+            };
+            if let TrackOutcome::Tracked(m) = self.vo.track(&request)
+                && let Some(kf) = self.node_of_frame(candidate.index)
+            {
+                self.add_vo_edge(kf, node, &m, EdgeKind::Relocalisation);
+                return Some((kf, m));
+            }
+        }
+        None
+    }
+
+    /// Learns from the VO over the interval since the target anchor.
+    fn online_target(
+        &mut self,
+        node: usize,
+        time_secs: f64,
+        interval: &OdometryInterval,
+    ) -> Result<(), FrontendError> {
+        if !self.source.learns_online() {
+            return Ok(());
+        }
+        let Some(anchor) = self.target_anchor.as_mut() else {
+            return Ok(());
+        };
+        anchor.raw_relative *= interval.raw_relative;
+        if let Some(x) = &interval.mean_inputs {
+            if anchor.inputs_sum.len() != x.len() {
+                anchor.inputs_sum = vec![0.0; x.len()];
+                anchor.inputs_secs = 0.0;
+            }
+            for (acc, v) in anchor.inputs_sum.iter_mut().zip(x) {
+                *acc += v * interval.duration_secs;
+            }
+            anchor.inputs_secs += interval.duration_secs;
+        }
+        let duration = time_secs - anchor.time_secs;
+        let limits = self.params.online;
+        if duration < limits.min_interval_secs {
+            return Ok(());
+        }
+        let anchor = self.target_anchor.take();
+        self.start_target(node, time_secs);
+        let Some(anchor) = anchor else {
+            return Ok(());
+        };
+        let (Some(a), Some(b)) = (self.nodes[anchor.node].map_pose, self.nodes[node].map_pose)
+        else {
+            return Ok(());
+        };
+        if duration > limits.max_interval_secs || anchor.inputs_secs <= 0.0 {
+            return Ok(());
+        }
+        let visual = a.inverse() * b;
+        let target: Vector3<f64> =
+            (visual.translation.vector - anchor.raw_relative.translation.vector) / duration;
+        let inputs: Vec<f64> = anchor
+            .inputs_sum
+            .iter()
+            .map(|v| v / anchor.inputs_secs)
+            .collect();
+        self.source.on_target(&inputs, &target, time_secs)?;
+        self.run.online_targets += 1;
+        Ok(())
+    }
+
+    fn start_target(&mut self, node: usize, time_secs: f64) {
+        self.target_anchor = Some(TargetAnchor {
+            node,
+            time_secs,
+            raw_relative: Isometry3::identity(),
+            inputs_sum: Vec::new(),
+            inputs_secs: 0.0,
+        });
+    }
+
+    /// Processes camera frame `frame` with the selector's decision.
+    fn process(&mut self, frame: FrameRef, keyframe_scale: f64) -> Result<(), FrontendError> {
+        let interval = self.integrator.take();
+        let previous_pose = self.graph.initial[self.last_node];
+        let node = self.graph.add_node(previous_pose * interval.relative);
+        self.nodes.push(Node {
+            frame: Some(frame),
+            map_pose: None,
+        });
+        self.graph.add_edge(PoseGraphEdge {
+            from: self.last_node,
+            to: node,
+            measurement: interval.relative,
+            covariance: interval.covariance,
+            kind: EdgeKind::Odometry,
+        });
+        let gap = frame.time_secs - self.last_processed_secs.unwrap_or(frame.time_secs);
+        let previous = self.last_node;
+        self.last_node = node;
+        self.last_processed_secs = Some(frame.time_secs);
+        self.run.frames += 1;
+        let mut became_keyframe = false;
+        let mut tracked = false;
+        // A target interval starts here (map initialised or relocalised).
+        let mut fresh_anchor = false;
+        if self.tracking {
+            match self.reference_kf {
+                None => {
+                    // The first processed frame initialises the map.
+                    self.nodes[node].map_pose = Some(self.graph.initial[node]);
+                    self.make_keyframe(node);
+                    became_keyframe = true;
+                    tracked = true;
+                    fresh_anchor = true;
+                }
+                Some(kf) => {
+                    let kf_from_last =
+                        match (self.nodes[kf].map_pose, self.nodes[previous].map_pose) {
+                            (Some(k), Some(l)) => k.inverse() * l,
+                            _ => Isometry3::identity(),
+                        };
+                    let reference = self.frame_of(kf).unwrap_or(frame);
+                    let request = TrackRequest {
+                        reference,
+                        current: frame,
+                        prior: self.prior(&interval, &kf_from_last, gap),
+                        purpose: TrackPurpose::Tracking,
+                    };
+                    match self.vo.track(&request) {
+                        TrackOutcome::Tracked(m) => {
+                            self.add_vo_edge(kf, node, &m, EdgeKind::VisualOdometry);
+                            self.nodes[node].map_pose =
+                                self.nodes[kf].map_pose.map(|p| p * m.relative);
+                            tracked = true;
+                            became_keyframe =
+                                self.keyframe_due(&m, reference, frame, keyframe_scale);
+                        }
+                        TrackOutcome::Lost => {
+                            self.tracking = false;
+                            self.lost_since = frame.time_secs;
+                            self.run.tracking_losses += 1;
+                            self.target_anchor = None;
+                        }
+                    }
+                }
+            }
+        } else if let Some((kf, m)) = self.relocalise(node, frame) {
+            self.tracking = true;
+            self.run.relocalisations += 1;
+            self.run.lost_secs += frame.time_secs - self.lost_since;
+            self.nodes[node].map_pose = self.nodes[kf].map_pose.map(|p| p * m.relative);
+            self.reference_kf = Some(kf);
+            tracked = true;
+            let reference = self.frame_of(kf).unwrap_or(frame);
+            became_keyframe = self.keyframe_due(&m, reference, frame, keyframe_scale);
+            fresh_anchor = true;
+        }
+        if tracked {
+            self.tracked_history = [self.tracked_history[1], Some((node, frame.time_secs))];
+            if fresh_anchor {
+                self.start_target(node, frame.time_secs);
+            } else {
+                self.online_target(node, frame.time_secs, &interval)?;
+            }
+        } else {
+            self.tracked_history = [None, None];
+        }
+        if became_keyframe && self.reference_kf != Some(node) {
+            self.make_keyframe(node);
+            self.close_loop(node, frame.time_secs);
+        }
+        self.run.processed.push(ProcessedFrame {
+            frame: frame.index,
+            time_secs: frame.time_secs,
+            distance_m: self
+                .traverse
+                .distance_at(self.traverse.sample_at_or_before(frame.time_secs)),
+            keyframe: became_keyframe,
+            tracked,
+        });
+        Ok(())
+    }
+
+    fn keyframe_due(
+        &self,
+        m: &VoMeasurement,
+        reference: FrameRef,
+        current: FrameRef,
+        scale: f64,
+    ) -> bool {
+        let k = &self.params.keyframes;
+        let threshold = 1.0 - (1.0 - k.min_overlap) * scale.max(0.0);
+        m.overlap < threshold
+            || k.max_interval_secs
+                .is_some_and(|max| current.time_secs - reference.time_secs >= max)
+    }
+
+    fn finish(mut self) -> Result<FrontendRun, FrontendError> {
+        let end = self.traverse.times_secs()[self.traverse.len() - 1];
+        self.advance_to(end)?;
+        if !self.tracking {
+            self.run.lost_secs += end - self.lost_since;
+        }
+        let optimized = self.graph.optimize(&self.params.backend)?;
+        if optimized.hit_iteration_limit {
+            tracing::warn!(
+                nodes = self.graph.initial.len(),
+                "pose graph: iteration limit reached"
+            );
+        }
+        self.run.graph_error = (optimized.initial_error, optimized.final_error);
+        self.run.trajectory = self
+            .anchors
+            .iter()
+            .map(|(node, relative)| optimized.poses[*node] * relative)
+            .collect();
+        self.run.metrics = trajectory_metrics(&self.run.trajectory, self.traverse.ground_truth());
+        let cost = &self.params.cost;
+        self.run.compute_ms =
+            self.run.frames as f64 * cost.frame_ms + self.run.keyframes as f64 * cost.keyframe_ms;
+        self.run.predictions = self.predictions;
+        Ok(self.run)
+    }
+}
+
+/// Runs the front end over `traverse`: `selector` decides which camera
+/// frames are processed, `source` supplies (and may learn) the residual
+/// predictions, `vo` tracks.
+///
+/// # Errors
+/// [`FrontendError::InvalidConfig`] for bad settings, what the source or
+/// the back end report.
+pub fn run_frontend(
+    traverse: &Traverse,
+    params: &FrontendParams,
+    selector: &mut dyn FrameSelector,
+    source: &mut dyn ResidualSource,
+    vo: &mut dyn VisualOdometry,
+) -> Result<FrontendRun, FrontendError> {
+    params.validate()?;
+    selector.reset();
+    let mut session = Session::new(traverse, params, source, vo);
+    for (index, &time_secs) in traverse.camera_times_secs().iter().enumerate() {
+        session.advance_to(time_secs)?;
+        let ctx = session.context(time_secs);
+        if let FrameDecision::Process {
+            keyframe_threshold_scale,
+        } = selector.decide(&ctx)
+        {
+            session.process(FrameRef { index, time_secs }, keyframe_threshold_scale)?;
+        }
+    }
+    session.finish()
+}
