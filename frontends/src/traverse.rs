@@ -97,7 +97,7 @@ impl Traverse {
                     w.steps
                 )));
             }
-            if !(w.end_secs > w.start_secs) {
+            if w.end_secs.partial_cmp(&w.start_secs) != Some(std::cmp::Ordering::Greater) {
                 return Err(bad(format!("window {i} ends before it starts")));
             }
             previous_end = w.steps.end;

@@ -69,6 +69,9 @@ pub struct VoMeasurement {
 }
 
 /// What tracking gave.
+// Returned by value once per request, never stored in bulk: the size of
+// the measurement does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TrackOutcome {
     /// The relative pose.
