@@ -19,6 +19,8 @@ use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
 use gpodo_regressors::RegressorSpec;
 
 use crate::bench::BenchSettings;
+use crate::schemes::SchemeSpec;
+use gpodo_frontends::FrontendParams;
 use serde::{Deserialize, Serialize};
 
 /// A whole experiment.
@@ -49,6 +51,14 @@ pub struct ExperimentConfig {
     /// Settings of `gpodo bench` (ignored by `gpodo run`).
     #[serde(default)]
     pub bench: BenchSettings,
+    /// The visual front end of Table II (visual odometry, keyframes, back
+    /// end); every field has a default.
+    #[serde(default)]
+    pub frontend: FrontendParams,
+    /// The SLAM schemes of Table II, run on every test run (needs rover
+    /// logs: `simulated` or `logs` data).
+    #[serde(default)]
+    pub schemes: Vec<SchemeSpec>,
 }
 
 /// A reference residual table.
@@ -221,6 +231,7 @@ impl ExperimentConfig {
         if let MotionModelSpec::WeightedJacobian { config, .. } = &self.motion_model {
             config.validate().map_err(|e| e.to_string())?;
         }
+        self.validate_schemes()?;
         match &self.dataset {
             DatasetSpec::ResidualTable { train_fraction, .. }
                 if !(*train_fraction > 0.0 && *train_fraction < 1.0) =>
@@ -232,6 +243,79 @@ impl ExperimentConfig {
             }
             _ => Ok(()),
         }
+    }
+}
+
+impl ExperimentConfig {
+    /// The labels of the regressors, as reports print them.
+    pub fn regressor_labels(&self) -> Vec<String> {
+        self.regressors.iter().map(RegressorSpec::label).collect()
+    }
+
+    fn validate_schemes(&self) -> Result<(), String> {
+        if self.schemes.is_empty() {
+            return Ok(());
+        }
+        if matches!(self.dataset, DatasetSpec::ResidualTable { .. }) {
+            return Err(
+                "field `schemes`: expected rover logs (`dataset.kind: simulated` or `logs`); a residual table has no trajectory or camera frames".into(),
+            );
+        }
+        self.frontend
+            .validate()
+            .map_err(|e| format!("field `frontend`: {e}"))?;
+        let labels = self.regressor_labels();
+        let mut seen = std::collections::HashSet::new();
+        for (i, scheme) in self.schemes.iter().enumerate() {
+            let at = |e: String| format!("schemes[{i}] (`{}`): {e}", scheme.label);
+            if scheme.label.trim().is_empty() {
+                return Err(format!(
+                    "schemes[{i}]: field `label`: expected a non-empty row label"
+                ));
+            }
+            if !seen.insert(scheme.label.as_str()) {
+                return Err(at(
+                    "field `label`: expected a label no other scheme has".into()
+                ));
+            }
+            scheme.selector.validate().map_err(|e| at(e.to_string()))?;
+            match (&scheme.online, &scheme.regressor) {
+                (Some(_), Some(_)) => {
+                    return Err(at(
+                        "expected either `regressor` (trained offline) or `online`, not both"
+                            .into(),
+                    ));
+                }
+                (Some(online), None) => {
+                    online
+                        .regressor
+                        .validate()
+                        .map_err(|e| at(format!("online.regressor: {e}")))?;
+                    if online.refit_every == Some(0) || online.min_targets == 0 {
+                        return Err(at(
+                            "online: expected refit_every and min_targets of at least 1".into(),
+                        ));
+                    }
+                }
+                (None, _) => {
+                    scheme.regressor_index(&labels).map_err(at)?;
+                }
+            }
+            if let Some(oracle) = scheme.selector.oracle()
+                && let Some(other) = &oracle.same_as
+            {
+                let found = self
+                    .schemes
+                    .iter()
+                    .any(|s| &s.label == other && s.selector.oracle().is_none());
+                if !found {
+                    return Err(at(format!(
+                        "selector.same_as: expected the label of a scheme that is not an oracle, found `{other}`"
+                    )));
+                }
+            }
+        }
+        Ok(())
     }
 }
 

@@ -8,6 +8,8 @@
 //! * [`calibration`]: statistics of residual tables, to compare the
 //!   simulator with the real ExoTeR data;
 //! * [`odometry`]: dead reckoning with the motion model;
+//! * [`schemes`] and [`table_two`]: the SLAM schemes of Table II run
+//!   through the visual front end, with [`plots`] (Fig. 3 and Fig. 5);
 //! * [`report`]: the Markdown and JSON outputs;
 //! * [`bench`](mod@bench) and [`bench_report`]: `gpodo bench`, every regressor timed
 //!   and scored on the same splits against the exact-GP baseline.
@@ -18,4 +20,7 @@ pub mod calibration;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
+pub mod plots;
 pub mod report;
+pub mod schemes;
+pub mod table_two;

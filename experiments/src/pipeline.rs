@@ -17,6 +17,11 @@ use serde::{Deserialize, Serialize};
 use crate::calibration::{ResidualStatistics, residual_statistics};
 use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};
 use crate::odometry::{DeadReckoning, dead_reckoning};
+use crate::table_two::{
+    SchemeInputs, SchemeResult, build_traverse, run_schemes, window_predictions,
+};
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::traverse::Traverse;
 
 /// A run's length and duration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -86,6 +91,9 @@ pub struct ExperimentResults {
     pub reference_statistics: Option<(String, ResidualStatistics)>,
     /// One entry per regressor, in config order.
     pub regressors: Vec<RegressorResult>,
+    /// Table II: every scheme on every test run.
+    #[serde(default)]
+    pub schemes: Vec<SchemeResult>,
     /// Wall-clock duration of the whole experiment (s).
     pub duration_secs: f64,
     /// The training rows (physical units), written as a CSV beside the
@@ -95,6 +103,13 @@ pub struct ExperimentResults {
     /// The test rows (physical units).
     #[serde(skip)]
     pub test_rows: Option<ResidualDataset>,
+    /// The test runs as the front end saw them (for trajectories and plots).
+    #[serde(skip)]
+    pub traverses: Vec<Traverse>,
+    /// Each regressor's window predictions on each traverse, where computed
+    /// (`[regressor][traverse]`).
+    #[serde(skip)]
+    pub window_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>>,
 }
 
 /// Why an experiment failed.
@@ -120,9 +135,21 @@ pub enum PipelineError {
     /// A model failed on a sample.
     #[error(transparent)]
     Model(#[from] gpodo_traits::Error),
-    /// Training and test rows do not have the same columns.
-    #[error("training and test rows differ: {0}")]
+    /// Training and test rows do not have the same columns, or a scheme
+    /// refers to something that is not there.
+    #[error("inconsistent experiment: {0}")]
     Inconsistent(String),
+    /// The visual front end failed.
+    #[error(transparent)]
+    Frontend(#[from] gpodo_frontends::FrontendError),
+    /// A scheme of Table II failed.
+    #[error("scheme `{label}`: {source}")]
+    Scheme {
+        /// The scheme.
+        label: String,
+        /// What failed.
+        source: Box<PipelineError>,
+    },
 }
 
 fn resolve(base: &Path, p: &Path) -> PathBuf {
@@ -182,6 +209,10 @@ struct PreparedData {
     summary: DatasetSummary,
     motion_model: Option<String>,
     dead_reckoning: Vec<(String, DeadReckoning)>,
+    /// The test runs (in the rover's joint order), the motion model and the
+    /// wheel radius, for the front end.
+    test_logs: Vec<RoverLog>,
+    model: Option<(Box<dyn MotionModel>, f64)>,
 }
 
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
@@ -217,6 +248,7 @@ fn from_logs(
         .iter()
         .map(|log| Ok((log.name.clone(), dead_reckoning(log, model.as_ref())?)))
         .collect::<Result<_, PipelineError>>()?;
+    let test_logs = test_logs.clone();
     Ok(PreparedData {
         summary: DatasetSummary {
             source,
@@ -232,6 +264,8 @@ fn from_logs(
         test,
         motion_model: Some(model.name().to_string()),
         dead_reckoning,
+        test_logs,
+        model: Some((model, radius)),
     })
 }
 
@@ -303,6 +337,8 @@ fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, Pipel
                 test,
                 motion_model: None,
                 dead_reckoning: Vec::new(),
+                test_logs: Vec::new(),
+                model: None,
             })
         }
     }
@@ -340,7 +376,7 @@ pub struct ModelRows {
     pub test: ResidualDataset,
 }
 
-fn model_rows(data: &PreparedData) -> Result<ModelRows, PipelineError> {
+fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer), PipelineError> {
     if data.train.input_names != data.test.input_names
         || data.train.target_names != data.test.target_names
     {
@@ -357,7 +393,7 @@ fn model_rows(data: &PreparedData) -> Result<ModelRows, PipelineError> {
     train.inputs = scaler.transform(&data.train.inputs)?;
     let mut test = data.test.clone();
     test.inputs = scaler.transform(&data.test.inputs)?;
-    Ok(ModelRows { train, test })
+    Ok((ModelRows { train, test }, scaler))
 }
 
 /// The data of `config` as the regressors see them, and where they came
@@ -370,7 +406,7 @@ pub fn prepare_model_rows(
     base: &Path,
 ) -> Result<(ModelRows, DatasetSummary), PipelineError> {
     let data = prepare(config, base)?;
-    Ok((model_rows(&data)?, data.summary))
+    Ok((model_rows(&data)?.0, data.summary))
 }
 
 /// Runs `config`; relative paths are resolved against `base` (the
@@ -384,9 +420,10 @@ pub fn run_experiment(
 ) -> Result<ExperimentResults, PipelineError> {
     let start = Instant::now();
     let data = prepare(config, base)?;
-    let ModelRows { train, test } = model_rows(&data)?;
+    let (ModelRows { train, test }, scaler) = model_rows(&data)?;
 
     let mut regressors = Vec::with_capacity(config.regressors.len());
+    let mut trained = Vec::with_capacity(config.regressors.len());
     for spec in &config.regressors {
         let label = spec.label();
         tracing::info!(regressor = %label, n = train.len(), "fitting");
@@ -404,7 +441,10 @@ pub fn run_experiment(
             fit,
             evaluation,
         });
+        trained.push(model);
     }
+    let (traverses, window_predictions, schemes) =
+        table_two(config, base, &data, &scaler, &trained)?;
     Ok(ExperimentResults {
         config: config.clone(),
         code_version: code_version(),
@@ -415,8 +455,71 @@ pub fn run_experiment(
         motion_model: data.motion_model,
         dead_reckoning: data.dead_reckoning,
         regressors,
+        schemes,
         duration_secs: start.elapsed().as_secs_f64(),
         train_rows: Some(data.train),
         test_rows: Some(data.test),
+        traverses,
+        window_predictions,
     })
+}
+
+/// Traverses, window predictions and Table II.
+type TableTwo = (
+    Vec<Traverse>,
+    Vec<Option<Vec<Vec<ResidualPrediction>>>>,
+    Vec<SchemeResult>,
+);
+
+/// Builds the test traverses and runs the schemes, when there are any.
+fn table_two(
+    config: &ExperimentConfig,
+    base: &Path,
+    data: &PreparedData,
+    scaler: &Standardizer,
+    trained: &[Box<dyn gpodo_traits::ResidualRegressor>],
+) -> Result<TableTwo, PipelineError> {
+    let (Some((model, radius)), false) = (&data.model, config.schemes.is_empty()) else {
+        return Ok((Vec::new(), vec![None; trained.len()], Vec::new()));
+    };
+    let window = config.residuals.window_secs.unwrap_or(1.0);
+    let traverses = data
+        .test_logs
+        .iter()
+        .map(|log| build_traverse(log, model.as_ref(), *radius, window, scaler))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Predictions of every trained regressor a scheme (or a plot) reads.
+    let labels = config.regressor_labels();
+    let mut used = vec![false; trained.len()];
+    for scheme in config.schemes.iter().filter(|s| s.online.is_none()) {
+        if let Ok(r) = scheme.regressor_index(&labels) {
+            used[r] = true;
+        }
+    }
+    let window_predictions = trained
+        .iter()
+        .zip(&used)
+        .map(|(model, &used)| {
+            used.then(|| {
+                traverses
+                    .iter()
+                    .map(|t| window_predictions(model.as_ref(), t))
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .transpose()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    tracing::info!(
+        schemes = config.schemes.len(),
+        runs = traverses.len(),
+        "running Table II"
+    );
+    let schemes = run_schemes(&SchemeInputs {
+        config,
+        base,
+        traverses: &traverses,
+        predictions: &window_predictions,
+        regressor_labels: &labels,
+    })?;
+    Ok((traverses, window_predictions, schemes))
 }

@@ -6,9 +6,13 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::tum::{StampedPose, format_tum};
+
 use crate::calibration::ResidualStatistics;
 use crate::config::DatasetSpec;
 use crate::pipeline::{ExperimentResults, RegressorResult};
+use crate::plots;
 
 /// Writes `contents` to `path` atomically (temporary file + rename).
 ///
@@ -42,7 +46,103 @@ pub fn write_report(results: &ExperimentResults, dir: &Path) -> anyhow::Result<(
             write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
         }
     }
+    write_table_two_files(results, dir)?;
     Ok((md, json))
+}
+
+/// A file-name-safe form of a label.
+pub fn slug(label: &str) -> String {
+    let mut out = String::new();
+    for c in label.chars() {
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.trim_matches('-').to_string()
+}
+
+/// Trajectories (TUM) and figures of Table II.
+fn write_table_two_files(results: &ExperimentResults, dir: &Path) -> anyhow::Result<()> {
+    if results.schemes.is_empty() {
+        return Ok(());
+    }
+    let (traj_dir, plot_dir) = (dir.join("trajectories"), dir.join("plots"));
+    std::fs::create_dir_all(&traj_dir)?;
+    std::fs::create_dir_all(&plot_dir)?;
+    for (t, traverse) in results.traverses.iter().enumerate() {
+        let stamped = |poses: &[nalgebra::Isometry3<f64>]| -> Vec<StampedPose> {
+            traverse
+                .times_secs()
+                .iter()
+                .zip(poses)
+                .map(|(&time_secs, &pose)| StampedPose { time_secs, pose })
+                .collect()
+        };
+        let name = slug(traverse.name());
+        write_atomically(
+            &traj_dir.join(format!("{name}.ground_truth.tum")),
+            format_tum(
+                &format!("ground truth of `{}` (world_from_body)", traverse.name()),
+                &stamped(traverse.ground_truth()),
+            )
+            .as_bytes(),
+        )?;
+        for scheme in results
+            .schemes
+            .iter()
+            .filter(|r| r.traverse == traverse.name())
+        {
+            let file = format!("{name}.{}", slug(&scheme.label));
+            let comment = format!(
+                "`{}` on `{}`: {} frames, {} keyframes (world_from_body)",
+                scheme.label,
+                traverse.name(),
+                scheme.run.frames,
+                scheme.run.keyframes
+            );
+            write_atomically(
+                &traj_dir.join(format!("{file}.tum")),
+                format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
+            )?;
+            let title = format!(
+                "{}: {} frames, {} keyframes, RMSE {:.3} m",
+                scheme.label, scheme.run.frames, scheme.run.keyframes, scheme.run.metrics.rmse_m
+            );
+            write_atomically(
+                &plot_dir.join(format!("fig5_{file}.svg")),
+                plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
+            )?;
+        }
+        if let Some((label, predictions)) = residual_map_source(results, t) {
+            write_atomically(
+                &plot_dir.join(format!("fig3_{name}.svg")),
+                plots::residual_map_svg(traverse, predictions, &label)?.as_bytes(),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// The predictions Fig. 3 shows: those of the first scheme's regressor
+/// that gates on residuals, or else of the first regressor with any.
+fn residual_map_source(
+    results: &ExperimentResults,
+    t: usize,
+) -> Option<(String, &[ResidualPrediction])> {
+    let labels = results.config.regressor_labels();
+    let gating = results
+        .config
+        .schemes
+        .iter()
+        .filter(|s| s.online.is_none() && s.selector.reads_residuals())
+        .filter_map(|s| s.regressor_index(&labels).ok());
+    let any = 0..results.window_predictions.len();
+    gating.chain(any).find_map(|r| {
+        let p = results.window_predictions.get(r)?.as_ref()?.get(t)?;
+        Some((labels[r].clone(), p.as_slice()))
+    })
 }
 
 /// A residual dataset as CSV: input columns, then target columns, full
@@ -90,6 +190,7 @@ pub fn markdown(r: &ExperimentResults) -> String {
     );
     runs_section(&mut s, r);
     table_one(&mut s, r);
+    table_two(&mut s, r);
     hyperparameter_section(&mut s, r);
     dead_reckoning_section(&mut s, r);
     statistics_section(&mut s, r);
@@ -158,6 +259,102 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
             reg.fit.evaluations.map_or("–".into(), |e| e.to_string()),
             reg.fit.jitter.map_or("–".into(), |j| format!("{j:.1e}")),
         );
+    }
+    s.push('\n');
+}
+
+fn table_two(s: &mut String, r: &ExperimentResults) {
+    if r.schemes.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "## Table II — localisation and mapping per scheme\n\nEach scheme runs the visual front end (simulated VO, keyframes, loop closing, factrs pose graph fusing VO with the residual-corrected wheel odometry) over the test run; errors are positions at every sensor sample against ground truth. Frames and RMSE are also given relative to the first scheme. Compute = frames × frame cost + keyframes × keyframe cost. Trajectories (TUM) are in `trajectories/`, figures in `plots/`.\n"
+    );
+    for traverse in &r.traverses {
+        let rows: Vec<_> = r
+            .schemes
+            .iter()
+            .filter(|x| x.traverse == traverse.name())
+            .collect();
+        let Some(first) = rows.first() else {
+            continue;
+        };
+        let _ = writeln!(
+            s,
+            "Run `{}` ({:.2} m):\n\n| Scheme | #Frames | #Keyframes | RMSE [m] | Max E. [m] | Final E. [m] | Travel Distance E. [%] | frames / first | RMSE / first | compute [s] | VO losses | lost [s] | loop closures | residuals |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+            traverse.name(),
+            traverse.path_length_m()
+        );
+        for x in &rows {
+            let m = &x.run.metrics;
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.0} | {} | {} |",
+                x.label,
+                x.run.frames,
+                x.run.keyframes,
+                m.rmse_m,
+                m.max_error_m,
+                m.final_error_m,
+                m.travel_distance_error_percent,
+                x.run.frames as f64 / first.run.frames.max(1) as f64,
+                m.rmse_m / first.run.metrics.rmse_m.max(f64::MIN_POSITIVE),
+                x.run.compute_ms / 1e3,
+                x.run.tracking_losses,
+                x.run.lost_secs,
+                x.run.loop_closures,
+                x.residuals,
+            );
+        }
+        s.push('\n');
+        learning_curves(s, &rows);
+    }
+}
+
+/// Frames per metre over time for schemes that learn online.
+fn learning_curves(s: &mut String, rows: &[&crate::table_two::SchemeResult]) {
+    let online: Vec<_> = rows.iter().filter(|x| x.run.online_targets > 0).collect();
+    if online.is_empty() {
+        return;
+    }
+    const BIN_SECS: f64 = 120.0;
+    let end = online
+        .iter()
+        .filter_map(|x| x.run.processed.last().map(|p| p.time_secs))
+        .fold(0.0, f64::max);
+    let t0 = online
+        .iter()
+        .filter_map(|x| x.run.processed.first().map(|p| p.time_secs))
+        .fold(f64::INFINITY, f64::min);
+    let names: Vec<String> = online.iter().map(|x| x.label.clone()).collect();
+    let _ = writeln!(
+        s,
+        "Online learning from VO: frames processed per metre driven, in {BIN_SECS:.0}-s bins (the model starts knowing nothing).\n\n| time [s] | {} |\n|---:|{}",
+        names.join(" | "),
+        "---:|".repeat(names.len())
+    );
+    let mut start = t0;
+    while start < end {
+        let cells: Vec<String> = online
+            .iter()
+            .map(|x| {
+                let inside: Vec<_> = x
+                    .run
+                    .processed
+                    .iter()
+                    .filter(|p| p.time_secs >= start && p.time_secs < start + BIN_SECS)
+                    .collect();
+                match (inside.first(), inside.last()) {
+                    (Some(a), Some(b)) if b.distance_m > a.distance_m + 0.05 => {
+                        format!("{:.1}", inside.len() as f64 / (b.distance_m - a.distance_m))
+                    }
+                    _ => "–".into(),
+                }
+            })
+            .collect();
+        let _ = writeln!(s, "| {:.0} | {} |", start - t0, cells.join(" | "));
+        start += BIN_SECS;
     }
     s.push('\n');
 }

@@ -20,6 +20,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::prediction::ResidualPrediction;
 
+/// Variance added to every diagonal entry of an interval's covariance
+/// (rad², m²): 1 µm, 1 µrad.
+pub const COVARIANCE_FLOOR: f64 = 1e-12;
+
 /// Noise of the odometry beyond the predicted residual.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -79,6 +83,7 @@ pub struct OdometryIntegrator {
     distance: f64,
     rotation: f64,
     drift: f64,
+    drift_variance: f64,
     /// The prediction in force and the displacement matrix / time spent
     /// under it since it took over (or since the interval started).
     epoch: Option<(usize, ResidualPrediction)>,
@@ -101,6 +106,7 @@ impl OdometryIntegrator {
             distance: 0.0,
             rotation: 0.0,
             drift: 0.0,
+            drift_variance: 0.0,
             epoch: None,
             epoch_matrix: Matrix3::zeros(),
             epoch_secs: 0.0,
@@ -114,6 +120,7 @@ impl OdometryIntegrator {
             let d = self.epoch_matrix;
             self.translation_cov += d * Matrix3::from_diagonal(&p.variance) * d.transpose();
             self.drift += p.expected_sq_error() * self.epoch_secs * self.epoch_secs;
+            self.drift_variance += p.variance.sum() * self.epoch_secs * self.epoch_secs;
         }
         self.epoch_matrix = Matrix3::zeros();
         self.epoch_secs = 0.0;
@@ -191,6 +198,14 @@ impl OdometryIntegrator {
         self.drift + partial
     }
 
+    /// The same with the predicted variance alone (m²).
+    pub fn drift_variance_m2(&self) -> f64 {
+        let partial = self.epoch.map_or(0.0, |(_, p)| {
+            p.variance.sum() * self.epoch_secs * self.epoch_secs
+        });
+        self.drift_variance + partial
+    }
+
     /// Ends the interval: returns it and starts the next one at the same
     /// prediction epoch.
     pub fn take(&mut self) -> OdometryInterval {
@@ -205,6 +220,9 @@ impl OdometryIntegrator {
         covariance
             .fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&(0.5 * (translation + translation.transpose())));
+        // A floor keeps the edge of a zero-length interval (a frame at the
+        // previous node's time) well defined.
+        covariance += Matrix6::identity() * COVARIANCE_FLOOR;
         let mean_inputs = (self.inputs_secs > 0.0).then(|| {
             self.inputs_sum
                 .iter()
@@ -274,15 +292,23 @@ mod tests {
             odo.advance(&twist(0.04, 0.0), 0.1, 0, &p, None);
         }
         let one = odo.take();
-        assert!((one.covariance[(3, 3)] - 16e-6).abs() < 1e-15);
+        assert!((one.covariance[(3, 3)] - 16e-6).abs() < 2e-12);
         assert!((one.drift_m2 - 3.0 * 4e-6 * 4.0).abs() < 1e-15);
+        // A residual mean counts in the drift, not in the variance drift.
+        let mut odo = OdometryIntegrator::new(noise);
+        let biased = prediction(0.003, 4e-6);
+        for _ in 0..10 {
+            odo.advance(&twist(0.04, 0.0), 0.1, 0, &biased, None);
+        }
+        assert!((odo.drift_m2() - (9e-6 + 12e-6)).abs() < 1e-15);
+        assert!((odo.drift_variance_m2() - 12e-6).abs() < 1e-15);
         // Two seconds under two predictions: 2 · (1 s · 2 mm/s)² = 8e-6.
         let mut odo = OdometryIntegrator::new(noise);
         for k in 0..20 {
             odo.advance(&twist(0.04, 0.0), 0.1, k / 10, &p, None);
         }
         let two = odo.take();
-        assert!((two.covariance[(3, 3)] - 8e-6).abs() < 1e-15);
+        assert!((two.covariance[(3, 3)] - 8e-6).abs() < 2e-12);
     }
 
     #[test]
@@ -315,8 +341,8 @@ mod tests {
             "{}",
             out.covariance
         );
-        assert!(out.covariance[(3, 3)].abs() < 1e-12);
-        assert!((out.covariance[(0, 0)] - 2e-6).abs() < 1e-15);
+        assert!(out.covariance[(3, 3)].abs() < 1e-11);
+        assert!((out.covariance[(0, 0)] - 2e-6).abs() < 2e-12);
         assert!((out.rotation_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
     }
 

@@ -128,6 +128,60 @@ fn prediction_at(
         .and_then(|w| predictions.get(w).copied())
 }
 
+/// The dynamic programme itself: candidates `0 … n−1`, candidate 0 always
+/// chosen, `gap_cost[i·g_max + (j−i−1)]` the cost of going from `i` to
+/// `j ≤ i + g_max` with nothing in between (∞ when not allowed),
+/// `tail_cost[i]` the cost from `i` to the end. Returns the least total cost
+/// with at most `budget` candidates and the chosen candidates in order, or
+/// `None` when every plan costs ∞.
+pub fn dp_plan(
+    n: usize,
+    g_max: usize,
+    gap_cost: &[f64],
+    tail_cost: &[f64],
+    budget: usize,
+) -> Option<(f64, Vec<usize>)> {
+    if n == 0 || budget == 0 {
+        return None;
+    }
+    let budget = budget.min(n);
+    // E_m(j) over layers m = 1 … B; predecessors per layer.
+    let mut best = vec![f64::INFINITY; n];
+    best[0] = 0.0;
+    let mut predecessors: Vec<Vec<u32>> = Vec::with_capacity(budget);
+    let mut answer = (tail_cost[0], 1usize, 0usize);
+    for m in 2..=budget {
+        let mut layer = vec![f64::INFINITY; n];
+        let mut from = vec![u32::MAX; n];
+        for j in 1..n {
+            for i in j.saturating_sub(g_max)..j {
+                let c = best[i] + gap_cost[i * g_max + (j - i - 1)];
+                if c < layer[j] {
+                    layer[j] = c;
+                    from[j] = i as u32;
+                }
+            }
+            let total = layer[j] + tail_cost[j];
+            if total < answer.0 {
+                answer = (total, m, j);
+            }
+        }
+        predecessors.push(from);
+        best = layer;
+    }
+    let (cost, m, mut j) = answer;
+    if !cost.is_finite() {
+        return None;
+    }
+    let mut chosen = vec![j];
+    for layer in (2..=m).rev() {
+        j = predecessors[layer - 2][j] as usize;
+        chosen.push(j);
+    }
+    chosen.reverse();
+    Some((cost, chosen))
+}
+
 /// Plans the frames of a budget.
 ///
 /// # Errors
@@ -230,34 +284,7 @@ pub fn plan_frames(
             k += 1;
         }
     }
-    // E_m(j) over layers m = 1 … B; predecessors per layer.
-    let budget = budget.min(n);
-    let mut best = vec![f64::INFINITY; n];
-    best[0] = 0.0;
-    let mut predecessors: Vec<Vec<u32>> = Vec::with_capacity(budget);
-    let mut answer = (tail_cost[0], 1usize, 0usize);
-    for m in 2..=budget {
-        let mut layer = vec![f64::INFINITY; n];
-        let mut from = vec![u32::MAX; n];
-        for j in 1..n {
-            let lo = j.saturating_sub(g_max);
-            for i in lo..j {
-                let c = best[i] + gap_cost[i * g_max + (j - i - 1)];
-                if c < layer[j] {
-                    layer[j] = c;
-                    from[j] = i as u32;
-                }
-            }
-            let total = layer[j] + tail_cost[j];
-            if total < answer.0 {
-                answer = (total, m, j);
-            }
-        }
-        predecessors.push(from);
-        best = layer;
-    }
-    let (cost, m, mut j) = answer;
-    if !cost.is_finite() {
+    let Some((cost, chosen)) = dp_plan(n, g_max, &gap_cost, &tail_cost, budget) else {
         return Err(FrontendError::InvalidSpec {
             selector: "oracle".into(),
             field: "frames".into(),
@@ -265,13 +292,7 @@ pub fn plan_frames(
                 "a budget that can cover the traverse with gaps of at most {max_gap} s that VO can bridge ({budget} frames cannot)"
             ),
         });
-    }
-    let mut chosen = vec![j];
-    for layer in (2..=m).rev() {
-        j = predecessors[layer - 2][j] as usize;
-        chosen.push(j);
-    }
-    chosen.reverse();
+    };
     let frames: Vec<usize> = chosen.iter().map(|&c| candidates[c]).collect();
     Ok(OraclePlan {
         times_secs: frames.iter().map(|&f| camera[f]).collect(),
@@ -279,4 +300,82 @@ pub fn plan_frames(
         cost,
         candidates: n,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Every subset containing candidate 0, by brute force.
+    fn brute_force(n: usize, g_max: usize, gap: &[f64], tail: &[f64], budget: usize) -> f64 {
+        let mut best = f64::INFINITY;
+        for mask in 0u32..(1 << (n - 1)) {
+            let chosen: Vec<usize> = std::iter::once(0)
+                .chain((1..n).filter(|j| mask & (1 << (j - 1)) != 0))
+                .collect();
+            if chosen.len() > budget {
+                continue;
+            }
+            let mut cost = 0.0;
+            for w in chosen.windows(2) {
+                let (i, j) = (w[0], w[1]);
+                cost += if j - i <= g_max {
+                    gap[i * g_max + (j - i - 1)]
+                } else {
+                    f64::INFINITY
+                };
+            }
+            cost += tail[chosen[chosen.len() - 1]];
+            best = best.min(cost);
+        }
+        best
+    }
+
+    #[test]
+    fn the_programme_is_exact_against_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for trial in 0..40 {
+            let n = rng.random_range(2..11);
+            let g_max = rng.random_range(1..5);
+            let budget = rng.random_range(1..n + 1);
+            let gap: Vec<f64> = (0..n * g_max)
+                .map(|_| {
+                    if rng.random::<f64>() < 0.15 {
+                        f64::INFINITY
+                    } else {
+                        rng.random_range(0.0..10.0)
+                    }
+                })
+                .collect();
+            let tail: Vec<f64> = (0..n)
+                .map(|i| {
+                    if n - i > g_max + 1 {
+                        f64::INFINITY
+                    } else {
+                        rng.random_range(0.0..10.0)
+                    }
+                })
+                .collect();
+            let expected = brute_force(n, g_max, &gap, &tail, budget);
+            match dp_plan(n, g_max, &gap, &tail, budget) {
+                Some((cost, chosen)) => {
+                    assert!(
+                        (cost - expected).abs() < 1e-12,
+                        "trial {trial}: {cost} vs {expected}"
+                    );
+                    assert_eq!(chosen[0], 0);
+                    assert!(chosen.len() <= budget);
+                    let recomputed: f64 = chosen
+                        .windows(2)
+                        .map(|w| gap[w[0] * g_max + (w[1] - w[0] - 1)])
+                        .sum::<f64>()
+                        + tail[chosen[chosen.len() - 1]];
+                    assert!((recomputed - cost).abs() < 1e-12);
+                }
+                None => assert!(expected.is_infinite(), "trial {trial}: {expected}"),
+            }
+        }
+    }
 }

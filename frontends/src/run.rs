@@ -238,6 +238,7 @@ impl<'a> Session<'a> {
             residual_mean: self.prediction.mean.iter().copied().collect(),
             residual_variance: self.prediction.variance.iter().copied().collect(),
             drift_since_processed: self.integrator.drift_m2(),
+            drift_variance_since_processed: self.integrator.drift_variance_m2(),
         }
     }
 
@@ -468,6 +469,29 @@ impl<'a> Session<'a> {
                                 self.keyframe_due(&m, reference, frame, keyframe_scale);
                         }
                         TrackOutcome::Lost => {
+                            tracing::debug!(
+                                time_secs = frame.time_secs,
+                                gap_secs = gap,
+                                since_keyframe_secs = frame.time_secs - reference.time_secs,
+                                success_probability = self.vo.success_probability(&request),
+                                prior_error_m = request.prior.map(|p| {
+                                    let truth = self
+                                        .traverse
+                                        .ground_truth_at(reference.time_secs)
+                                        .inverse()
+                                        * self.traverse.ground_truth_at(frame.time_secs);
+                                    (p.inverse() * truth).translation.vector.norm()
+                                }),
+                                prior_error_rad = request.prior.map(|p| {
+                                    let truth = self
+                                        .traverse
+                                        .ground_truth_at(reference.time_secs)
+                                        .inverse()
+                                        * self.traverse.ground_truth_at(frame.time_secs);
+                                    (p.inverse() * truth).rotation.angle()
+                                }),
+                                "tracking lost"
+                            );
                             self.tracking = false;
                             self.lost_since = frame.time_secs;
                             self.run.tracking_losses += 1;

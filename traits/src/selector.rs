@@ -20,10 +20,15 @@ pub struct FrameContext {
     pub residual_mean: Vec<f64>,
     /// The regressor's latest predicted residual variance per output.
     pub residual_variance: Vec<f64>,
-    /// Integral since the last processed frame of (mean² + variance) of the
-    /// predicted residual, summed over outputs (m²/s² · s): the odometry
-    /// drift the regressor expects to have accumulated.
+    /// The odometry drift the regressor expects since the last processed
+    /// frame: the expected squared displacement error of the odometry,
+    /// `Σ_w (‖μ_w‖² + Σ σ²_w) τ_w²` over the regressor windows `w` the rover
+    /// spent `τ_w` seconds in (a window's residual error is the same all
+    /// through it) (m²).
     pub drift_since_processed: f64,
+    /// The same with the variance alone, `Σ_w (Σ σ²_w) τ_w²` (m²): the drift
+    /// left when the odometry is corrected by the predicted mean.
+    pub drift_variance_since_processed: f64,
 }
 
 /// A selector's decision for one frame.

@@ -89,6 +89,7 @@ pub(crate) mod test_support {
                 residual_mean: vec![r, 0.0, 0.0],
                 residual_variance: vec![0.0; 3],
                 drift_since_processed: drift,
+                drift_variance_since_processed: 0.0,
             };
             if selector.decide(&ctx).is_process() {
                 processed.push(t);

@@ -4,6 +4,11 @@
 //! [`crate::odometry`]) — exceeds a budget. Where the wheels are trusted
 //! the rover looks rarely; where they slip, or where an online model is
 //! still uncertain, it looks often.
+//!
+//! With `count_mean: false` only the variance counts: the drift left once
+//! the odometry is corrected by the predicted mean, as the front end does.
+//! A model that has learned a large but steady residual then stops asking
+//! for frames, and only what it does not know costs frames.
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 use serde::{Deserialize, Serialize};
@@ -20,6 +25,9 @@ pub struct UncertaintyBudgetParams {
     pub budget_m2: f64,
     /// Shortest period between processed frames (s; default 0.4).
     pub min_period_secs: f64,
+    /// Count the predicted mean² in the drift (default true); false counts
+    /// the variance alone.
+    pub count_mean: bool,
 }
 
 impl Default for UncertaintyBudgetParams {
@@ -27,6 +35,7 @@ impl Default for UncertaintyBudgetParams {
         Self {
             budget_m2: 2.5e-5,
             min_period_secs: 0.4,
+            count_mean: true,
         }
     }
 }
@@ -83,7 +92,12 @@ impl FrameSelector for UncertaintyBudget {
         if since_processed(ctx) + TIME_TOLERANCE_SECS < self.params.min_period_secs {
             return FrameDecision::Skip;
         }
-        if ctx.drift_since_processed >= self.params.budget_m2 {
+        let drift = if self.params.count_mean {
+            ctx.drift_since_processed
+        } else {
+            ctx.drift_variance_since_processed
+        };
+        if drift >= self.params.budget_m2 {
             FrameDecision::PROCESS
         } else {
             FrameDecision::Skip
@@ -105,6 +119,7 @@ mod tests {
         let mut s = UncertaintyBudget::new(UncertaintyBudgetParams {
             budget_m2: 1e-4,
             min_period_secs: 0.0,
+            count_mean: true,
         })
         .unwrap();
         let times = run(&mut s, 10.0, |_| 0.01);
@@ -120,6 +135,25 @@ mod tests {
         assert_eq!(run(&mut s, 30.0, |_| 0.0), vec![0.0]);
         let times = run(&mut s, 10.0, |_| 1.0);
         assert_eq!(times.len(), 25, "min period 0.4 s: {times:?}");
+    }
+
+    #[test]
+    fn without_the_mean_only_the_variance_drift_counts() {
+        let mut s = UncertaintyBudget::new(UncertaintyBudgetParams {
+            budget_m2: 1e-4,
+            min_period_secs: 0.0,
+            count_mean: false,
+        })
+        .unwrap();
+        let ctx = |drift, variance_drift| FrameContext {
+            time_secs: 5.0,
+            last_processed_secs: Some(0.0),
+            drift_since_processed: drift,
+            drift_variance_since_processed: variance_drift,
+            ..Default::default()
+        };
+        assert_eq!(s.decide(&ctx(1.0, 5e-5)), FrameDecision::Skip);
+        assert!(s.decide(&ctx(1.0, 2e-4)).is_process());
     }
 
     #[test]

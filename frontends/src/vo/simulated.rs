@@ -50,12 +50,12 @@ pub struct SimulatedVoParams {
     pub camera: CameraParams,
     /// Overlap at which guided tracking succeeds half the time (default 0.3).
     pub min_overlap: f64,
-    /// Softness of the overlap thresholds (default 0.05).
+    /// Softness of the overlap thresholds (default 0.02).
     pub overlap_softness: f64,
     /// Search radius of guided matching (pixels; default 15, ORB-SLAM's
     /// stereo window).
     pub search_radius_px: f64,
-    /// Softness of the search radius (pixels; default 3).
+    /// Softness of the search radius (pixels; default 1.5).
     pub search_softness_px: f64,
     /// Overlap at which matching without a motion prior (against the
     /// reference keyframe, for relocalisation and loop closing) succeeds
@@ -88,9 +88,9 @@ impl Default for SimulatedVoParams {
         Self {
             camera: CameraParams::default(),
             min_overlap: 0.3,
-            overlap_softness: 0.05,
+            overlap_softness: 0.02,
             search_radius_px: 15.0,
-            search_softness_px: 3.0,
+            search_softness_px: 1.5,
             prior_free_min_overlap: 0.7,
             recognition_min_overlap: 0.5,
             recognition_probability: 0.9,

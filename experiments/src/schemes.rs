@@ -1,0 +1,111 @@
+//! The SLAM schemes of Table II as written in an experiment file: a frame
+//! selector, the regressor whose predictions correct the odometry and feed
+//! the selector (trained offline on the training runs), or a fresh
+//! regressor that learns online from visual odometry (§VI).
+//!
+//! ```yaml
+//! schemes:
+//!   - label: ORB-SLAM 2.5 fps
+//!     selector: { kind: fixed_rate, fps: 2.5 }
+//!   - label: ORB-SLAM with GP
+//!     regressor: "exact GP: rbf"
+//!     selector: { kind: residual_schedule }
+//!   - label: ILGR online
+//!     online: { regressor: { kind: ilgr } }
+//!     selector: { kind: uncertainty_budget }
+//!   - label: oracle
+//!     regressor: "exact GP: rbf"
+//!     selector: { kind: oracle, same_as: ORB-SLAM with GP }
+//! ```
+
+use gpodo_frontends::SelectorSpec;
+use gpodo_frontends::online::OnlineMode;
+use gpodo_regressors::RegressorSpec;
+use serde::{Deserialize, Serialize};
+
+/// Which trained regressor a scheme uses: its index in `regressors` or its
+/// report label (`exact GP: rbf`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RegressorRef {
+    /// Position in the experiment's `regressors` list.
+    Index(usize),
+    /// The regressor's label as the reports print it.
+    Label(String),
+}
+
+/// A regressor that learns online from visual odometry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OnlineSpec {
+    /// The regressor (fresh: it sees only VO targets).
+    pub regressor: RegressorSpec,
+    /// Refit from scratch every this many targets (batch regressors such as
+    /// the sparse GP); omitted, one online `update` per target (ILGR).
+    #[serde(default)]
+    pub refit_every: Option<usize>,
+    /// Fewest targets before the first refit (default 20).
+    #[serde(default = "default_min_targets")]
+    pub min_targets: usize,
+}
+
+fn default_min_targets() -> usize {
+    20
+}
+
+impl OnlineSpec {
+    /// The learning mode.
+    pub fn mode(&self) -> OnlineMode {
+        match self.refit_every {
+            Some(every) => OnlineMode::Refit {
+                every,
+                min_targets: self.min_targets,
+            },
+            None => OnlineMode::Update,
+        }
+    }
+}
+
+/// One scheme.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SchemeSpec {
+    /// The row label.
+    pub label: String,
+    /// Which frames are processed.
+    pub selector: SelectorSpec,
+    /// The offline-trained regressor; omitted, the first of `regressors`
+    /// (in the paper's experiment, the parametric model alone).
+    #[serde(default)]
+    pub regressor: Option<RegressorRef>,
+    /// Learn online from VO instead of using a trained regressor.
+    #[serde(default)]
+    pub online: Option<OnlineSpec>,
+}
+
+impl SchemeSpec {
+    /// The index of the scheme's trained regressor among `labels`.
+    ///
+    /// # Errors
+    /// A message naming the reference and the valid ones.
+    pub fn regressor_index(&self, labels: &[String]) -> Result<usize, String> {
+        match &self.regressor {
+            None => Ok(0),
+            Some(RegressorRef::Index(i)) if *i < labels.len() => Ok(*i),
+            Some(RegressorRef::Index(i)) => Err(format!(
+                "regressor index {i}: expected an index into `regressors` (0..{})",
+                labels.len()
+            )),
+            Some(RegressorRef::Label(l)) => labels.iter().position(|x| x == l).ok_or_else(|| {
+                format!(
+                    "unknown regressor `{l}`; expected one of: {}",
+                    labels
+                        .iter()
+                        .map(|x| format!("`{x}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }),
+        }
+    }
+}

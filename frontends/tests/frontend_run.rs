@@ -1,0 +1,279 @@
+//! Front-end runs on hand-made traverses: exact odometry and near-noiseless
+//! visual odometry recover the trajectory; visual odometry corrects biased
+//! wheels, more so with more frames; skipping frames without a prior loses
+//! track and relocalises only at a mapped place; an online learner picks up
+//! a constant residual and then asks for fewer frames; the oracle respects
+//! its budget.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use gpodo_frontends::gating::{UncertaintyBudget, UncertaintyBudgetParams};
+use gpodo_frontends::online::{OnlineLearner, OnlineMode};
+use gpodo_frontends::oracle::{OracleParams, plan_frames};
+use gpodo_frontends::params::{FrontendParams, MotionPrior, VoSpec};
+use gpodo_frontends::prediction::{Precomputed, ResidualPrediction};
+use gpodo_frontends::traverse::{Traverse, TraverseWindow};
+use gpodo_frontends::vo::{SimulatedVo, SimulatedVoParams};
+use gpodo_frontends::{FixedRate, run_frontend};
+use gpodo_regressors::{Ilgr, IlgrParams};
+use gpodo_traits::BodyTwist;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+const DT: f64 = 0.08;
+
+/// A traverse sampled at 12.5 Hz with a 10 Hz camera; `pose(t)` gives
+/// `(x, y, yaw)`. Odometry twists reproduce the ground truth exactly, minus
+/// `velocity_error` (body frame, m/s); windows of 1 s hold `inputs`.
+fn traverse(
+    secs: f64,
+    pose: impl Fn(f64) -> (f64, f64, f64),
+    velocity_error: Vector3<f64>,
+    inputs: &[f64],
+) -> Traverse {
+    let n = (secs / DT).round() as usize + 1;
+    let times: Vec<f64> = (0..n).map(|k| k as f64 * DT).collect();
+    let gt: Vec<Isometry3<f64>> = times
+        .iter()
+        .map(|&t| {
+            let (x, y, yaw) = pose(t);
+            Isometry3::from_parts(
+                Translation3::new(x, y, 0.0),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+            )
+        })
+        .collect();
+    let twists: Vec<BodyTwist> = gt
+        .windows(2)
+        .map(|w| {
+            let delta = w[0].inverse() * w[1];
+            BodyTwist {
+                linear_mps: delta.translation.vector / DT - velocity_error,
+                angular_radps: delta.rotation.scaled_axis() / DT,
+            }
+        })
+        .collect();
+    let steps_per_window = (1.0 / DT).round() as usize;
+    let windows: Vec<TraverseWindow> = (0..(n - 1) / steps_per_window)
+        .map(|w| {
+            let steps = w * steps_per_window..(w + 1) * steps_per_window;
+            TraverseWindow {
+                start_secs: times[steps.start],
+                end_secs: times[steps.end],
+                steps,
+                inputs: inputs.to_vec(),
+                true_residual: velocity_error,
+            }
+        })
+        .collect();
+    // The camera runs at 12.5 Hz on the sensor clock, so frames fall on
+    // samples and the odometry between frames is exact.
+    let camera: Vec<f64> = times[..n - 1].to_vec();
+    Traverse::new("hand-made", times, gt, twists, windows, camera).unwrap()
+}
+
+/// An S-curve at 5 cm/s.
+fn s_curve(t: f64) -> (f64, f64, f64) {
+    let yaw = 0.6 * (0.05 * t).sin();
+    // Integrate approximately: fine, the odometry is derived from it.
+    (0.05 * t, 0.3 * (0.05 * t).sin() * (0.05 * t), yaw)
+}
+
+fn zero_predictions(t: &Traverse, variance: f64) -> Precomputed {
+    Precomputed::new(
+        "zero",
+        vec![ResidualPrediction::uninformed(variance); t.windows().len()],
+    )
+}
+
+fn params(vo: SimulatedVoParams) -> FrontendParams {
+    FrontendParams {
+        vo: VoSpec::Simulated(vo),
+        ..FrontendParams::default()
+    }
+}
+
+fn precise_vo() -> SimulatedVoParams {
+    SimulatedVoParams {
+        translation_sigma_m: 1e-9,
+        translation_sigma_per_m: 0.0,
+        rotation_sigma_rad: 1e-9,
+        rotation_sigma_per_rad: 0.0,
+        ..SimulatedVoParams::default()
+    }
+}
+
+#[test]
+fn exact_odometry_and_precise_vo_recover_the_trajectory() {
+    let t = traverse(120.0, s_curve, Vector3::zeros(), &[0.0]);
+    let p = params(precise_vo());
+    let mut vo = SimulatedVo::new(precise_vo(), &t).unwrap();
+    let mut selector = FixedRate::new(2.5).unwrap();
+    let mut source = zero_predictions(&t, 1e-8);
+    let run = run_frontend(&t, &p, &mut selector, &mut source, &mut vo).unwrap();
+    assert_eq!(run.frames, 300);
+    assert_eq!(run.processed[1].time_secs, 0.4);
+    assert_eq!(run.tracking_losses, 0);
+    assert!(run.keyframes >= 2);
+    assert!(run.metrics.rmse_m < 1e-6, "{:?}", run.metrics);
+    assert_eq!(run.trajectory.len(), t.len());
+}
+
+#[test]
+fn vo_corrects_biased_wheels_and_more_frames_correct_more() {
+    // The wheels see 8 mm/s less than the rover drives; the model knows
+    // nothing of it (zero mean, a small variance).
+    let bias = Vector3::new(0.008, 0.0, 0.0);
+    let t = traverse(300.0, s_curve, bias, &[0.0]);
+    let vo_params = SimulatedVoParams {
+        seed: 4,
+        ..SimulatedVoParams::default()
+    };
+    let p = params(vo_params);
+    let run = |fps: f64| {
+        let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
+        let mut selector = FixedRate::new(fps).unwrap();
+        // A variance that covers the bias: the fusion trusts the VO.
+        let mut source = zero_predictions(&t, 1e-4);
+        run_frontend(&t, &p, &mut selector, &mut source, &mut vo).unwrap()
+    };
+    let (dense, sparse) = (run(2.5), run(0.2));
+    let dead_reckoning = 0.008 * 300.0;
+    println!(
+        "final error: dead reckoning {dead_reckoning:.3} m, 2.5 fps {:.3} m, 0.2 fps {:.3} m",
+        dense.metrics.final_error_m, sparse.metrics.final_error_m
+    );
+    // The source's covariance treats 1-s windows as independent, so a bias
+    // that persists for the whole run is only partly removed.
+    assert!(dense.metrics.final_error_m < 0.3 * dead_reckoning);
+    assert!(sparse.metrics.final_error_m < dead_reckoning);
+    assert!(dense.metrics.rmse_m < sparse.metrics.rmse_m);
+}
+
+#[test]
+fn a_fast_turn_between_sparse_frames_loses_track_and_relocalises_at_a_mapped_place() {
+    // 1 m east in 20 s, a quarter turn left on the spot in 10 s, back to
+    // east in 10 s, then 1 m further east.
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let path = move |t: f64| match t {
+        t if t < 20.0 => (0.05 * t, 0.0, 0.0),
+        t if t < 30.0 => (1.0, 0.0, quarter * (t - 20.0) / 10.0),
+        t if t < 40.0 => (1.0, 0.0, quarter * (40.0 - t) / 10.0),
+        t => (1.0 + 0.05 * (t - 40.0), 0.0, 0.0),
+    };
+    let t = traverse(60.0, path, Vector3::zeros(), &[0.0]);
+    let vo_params = SimulatedVoParams::default();
+    let p = params(vo_params);
+    let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
+    // One frame every 5 s: the frames at 25 s and 30 s look 45° and 90°
+    // away from every keyframe; the one at 40 s looks where the rover
+    // looked at 20 s.
+    let mut selector = FixedRate::new(0.2).unwrap();
+    let mut source = zero_predictions(&t, 1e-6);
+    let run = run_frontend(&t, &p, &mut selector, &mut source, &mut vo).unwrap();
+    println!(
+        "losses {}, relocalisations {}, lost {:.1} s, frames {:?}",
+        run.tracking_losses,
+        run.relocalisations,
+        run.lost_secs,
+        run.processed
+            .iter()
+            .map(|f| (f.time_secs, f.tracked, f.keyframe))
+            .collect::<Vec<_>>()
+    );
+    assert_eq!(run.tracking_losses, 1);
+    assert_eq!(run.relocalisations, 1);
+    // Lost half-way through the turn (25 s), relocalised at 40 s.
+    assert!(
+        run.lost_secs > 9.0 && run.lost_secs < 16.0,
+        "{}",
+        run.lost_secs
+    );
+    assert!(
+        run.processed
+            .iter()
+            .any(|f| f.time_secs > 39.0 && f.time_secs < 41.0 && f.tracked)
+    );
+    // Processing every frame the turn is tracked all the way.
+    let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
+    let mut selector = FixedRate::new(2.5).unwrap();
+    let run = run_frontend(&t, &p, &mut selector, &mut source, &mut vo).unwrap();
+    assert_eq!(run.tracking_losses, 0);
+}
+
+#[test]
+fn an_online_learner_picks_up_a_constant_residual_and_then_looks_less() {
+    let bias = Vector3::new(0.006, 0.0, 0.0);
+    let t = traverse(900.0, s_curve, bias, &[0.3, -0.2]);
+    let vo_params = SimulatedVoParams {
+        seed: 9,
+        ..SimulatedVoParams::default()
+    };
+    let p = params(vo_params);
+    let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
+    let mut selector = UncertaintyBudget::new(UncertaintyBudgetParams {
+        budget_m2: 1e-4,
+        min_period_secs: 0.4,
+        count_mean: false,
+    })
+    .unwrap();
+    let model = Ilgr::new(IlgrParams {
+        init_lengthscale: 2.0,
+        ..IlgrParams::default()
+    })
+    .unwrap();
+    let mut source = OnlineLearner::new("ilgr", Box::new(model), OnlineMode::Update, 1e-4).unwrap();
+    let run = run_frontend(&t, &p, &mut selector, &mut source, &mut vo).unwrap();
+    let count = |a: f64, b: f64| {
+        run.processed
+            .iter()
+            .filter(|f| f.time_secs >= a && f.time_secs < b)
+            .count()
+    };
+    let (early, late) = (count(0.0, 150.0), count(750.0, 900.0));
+    let last = run.predictions.last().unwrap().1;
+    println!(
+        "targets {}, frames early {early}, late {late}, final prediction {:?} ± {:?}",
+        run.online_targets,
+        last.mean,
+        last.variance.map(f64::sqrt)
+    );
+    for (t, p) in run.predictions.iter().step_by(100) {
+        println!(
+            "t {t:6.1}: mean {:.4?} std {:.4?}",
+            p.mean.as_slice(),
+            p.variance.map(f64::sqrt).as_slice()
+        );
+    }
+    assert!(run.online_targets > 50);
+    assert!((last.mean.x - 0.006).abs() < 0.002, "{:?}", last.mean);
+    // The VO noise in the targets sets a floor to the model's variance;
+    // once the mean is learned the frames fall by a fifth or more.
+    assert!(late * 5 < early * 4, "early {early}, late {late}");
+}
+
+#[test]
+fn the_oracle_respects_its_budget_and_gap_limit() {
+    let t = traverse(200.0, s_curve, Vector3::new(0.004, 0.0, 0.0), &[0.0]);
+    let vo = SimulatedVo::new(SimulatedVoParams::default(), &t).unwrap();
+    let predictions = vec![ResidualPrediction::uninformed(1e-6); t.windows().len()];
+    let params = OracleParams {
+        frames: Some(40),
+        max_gap_secs: 10.0,
+        ..OracleParams::default()
+    };
+    let plan = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 40).unwrap();
+    assert!(
+        plan.frames.len() <= 40 && plan.frames.len() >= 20,
+        "{}",
+        plan.frames.len()
+    );
+    assert_eq!(plan.frames[0], 0);
+    for w in plan.times_secs.windows(2) {
+        assert!(w[1] - w[0] <= 10.0 + 1e-9);
+    }
+    // A larger budget cannot cost more.
+    let more = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 80).unwrap();
+    assert!(more.cost <= plan.cost);
+    // Too small a budget to respect the gap limit is an error.
+    assert!(plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 5).is_err());
+}
