@@ -11,7 +11,8 @@ use gpodo_datasets::standardize::Standardizer;
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
 use gpodo_regressors::metrics::{Evaluation, evaluate};
-use gpodo_traits::{FitReport, MotionModel, ResidualDataset};
+use gpodo_traits::{FitReport, MotionModel, ResidualDataset, ResidualRegressor};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::calibration::{ResidualStatistics, residual_statistics};
@@ -409,6 +410,34 @@ pub fn prepare_model_rows(
     Ok((model_rows(&data)?.0, data.summary))
 }
 
+/// Fits one regressor on the training rows and scores it on the test rows.
+fn fit_and_score(
+    spec: &gpodo_regressors::RegressorSpec,
+    train: &ResidualDataset,
+    test: &ResidualDataset,
+) -> Result<(RegressorResult, Box<dyn ResidualRegressor>), PipelineError> {
+    let label = spec.label();
+    tracing::info!(regressor = %label, n = train.len(), "fitting");
+    let mut model = spec.build()?;
+    let wrap = |source| PipelineError::Regressor {
+        label: label.clone(),
+        source,
+    };
+    let fit = model.fit(train).map_err(wrap)?;
+    let predictions = model.predict(&test.inputs).map_err(wrap)?;
+    let evaluation = evaluate(&predictions, &test.targets)?;
+    tracing::info!(regressor = %label, secs = fit.duration_secs, "fitted");
+    Ok((
+        RegressorResult {
+            label,
+            spec: spec.clone(),
+            fit,
+            evaluation,
+        },
+        model,
+    ))
+}
+
 /// Runs `config`; relative paths are resolved against `base` (the
 /// experiment file's folder).
 ///
@@ -422,27 +451,14 @@ pub fn run_experiment(
     let data = prepare(config, base)?;
     let (ModelRows { train, test }, scaler) = model_rows(&data)?;
 
-    let mut regressors = Vec::with_capacity(config.regressors.len());
-    let mut trained = Vec::with_capacity(config.regressors.len());
-    for spec in &config.regressors {
-        let label = spec.label();
-        tracing::info!(regressor = %label, n = train.len(), "fitting");
-        let mut model = spec.build()?;
-        let wrap = |source| PipelineError::Regressor {
-            label: label.clone(),
-            source,
-        };
-        let fit = model.fit(&train).map_err(wrap)?;
-        let predictions = model.predict(&test.inputs).map_err(wrap)?;
-        let evaluation = evaluate(&predictions, &test.targets)?;
-        regressors.push(RegressorResult {
-            label,
-            spec: spec.clone(),
-            fit,
-            evaluation,
-        });
-        trained.push(model);
-    }
+    // Regressors are fitted in parallel (the slowest, exact GPs, dominate);
+    // each fit is deterministic, so the results do not depend on the order.
+    let fitted: Vec<(RegressorResult, Box<dyn ResidualRegressor>)> = config
+        .regressors
+        .par_iter()
+        .map(|spec| fit_and_score(spec, &train, &test))
+        .collect::<Result<_, _>>()?;
+    let (regressors, trained): (Vec<_>, Vec<_>) = fitted.into_iter().unzip();
     let (traverses, window_predictions, schemes) =
         table_two(config, base, &data, &scaler, &trained)?;
     Ok(ExperimentResults {
@@ -477,7 +493,7 @@ fn table_two(
     base: &Path,
     data: &PreparedData,
     scaler: &Standardizer,
-    trained: &[Box<dyn gpodo_traits::ResidualRegressor>],
+    trained: &[Box<dyn ResidualRegressor>],
 ) -> Result<TableTwo, PipelineError> {
     let (Some((model, radius)), false) = (&data.model, config.schemes.is_empty()) else {
         return Ok((Vec::new(), vec![None; trained.len()], Vec::new()));

@@ -15,6 +15,23 @@ use plotters::prelude::*;
 /// Plot size (pixels).
 const SIZE: (u32, u32) = (720, 720);
 
+/// At most this many points of a line are drawn (keeps the files small).
+const MAX_LINE_POINTS: usize = 2500;
+
+/// Every `k`-th point, `k` such that at most [`MAX_LINE_POINTS`] remain,
+/// and the last one.
+fn thin(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    let stride = points.len().div_ceil(MAX_LINE_POINTS).max(1);
+    let last = points.last().copied();
+    let mut out: Vec<(f64, f64)> = points.into_iter().step_by(stride).collect();
+    if let Some(p) = last
+        && out.last() != Some(&p)
+    {
+        out.push(p);
+    }
+    out
+}
+
 fn io(e: impl std::fmt::Display) -> std::io::Error {
     std::io::Error::other(e.to_string())
 }
@@ -103,13 +120,13 @@ pub fn trajectory_svg(
             .draw()
             .map_err(io)?;
         chart
-            .draw_series(LineSeries::new(truth, BLACK.stroke_width(2)))
+            .draw_series(LineSeries::new(thin(truth), BLACK.stroke_width(2)))
             .map_err(io)?
             .label("ground truth")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
         let blue = RGBColor(31, 119, 180);
         chart
-            .draw_series(LineSeries::new(estimate, blue.stroke_width(1)))
+            .draw_series(LineSeries::new(thin(estimate), blue.stroke_width(1)))
             .map_err(io)?
             .label("estimate")
             .legend(move |(x, y)| {

@@ -20,6 +20,7 @@
 
 use gpodo_frontends::SelectorSpec;
 use gpodo_frontends::online::OnlineMode;
+use gpodo_frontends::params::MotionPrior;
 use gpodo_regressors::RegressorSpec;
 use serde::{Deserialize, Serialize};
 
@@ -81,6 +82,11 @@ pub struct SchemeSpec {
     /// Learn online from VO instead of using a trained regressor.
     #[serde(default)]
     pub online: Option<OnlineSpec>,
+    /// The tracking prior of this scheme; omitted, `frontend.motion_prior`.
+    /// ORB-SLAM alone predicts with a constant-velocity model; the paper's
+    /// GP scheme gives the tracker the wheel odometry (§V-B).
+    #[serde(default)]
+    pub motion_prior: Option<MotionPrior>,
 }
 
 impl SchemeSpec {

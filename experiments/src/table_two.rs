@@ -221,13 +221,11 @@ impl SchemeInputs<'_> {
         let traverse = &self.traverses[t];
         let (mut source, residuals) = self.source(scheme, t)?;
         let mut vo = build_vo(self.config, self.base, traverse)?;
-        let run = run_frontend(
-            traverse,
-            &self.config.frontend,
-            selector,
-            source.as_mut(),
-            vo.as_mut(),
-        )?;
+        let mut frontend = self.config.frontend.clone();
+        if let Some(prior) = scheme.motion_prior {
+            frontend.motion_prior = prior;
+        }
+        let run = run_frontend(traverse, &frontend, selector, source.as_mut(), vo.as_mut())?;
         tracing::info!(
             scheme = %scheme.label,
             traverse = traverse.name(),
@@ -289,7 +287,9 @@ impl SchemeInputs<'_> {
             traverse,
             &predictions,
             vo.as_ref(),
-            self.config.frontend.motion_prior,
+            scheme
+                .motion_prior
+                .unwrap_or(self.config.frontend.motion_prior),
             params,
             budget,
         )?;

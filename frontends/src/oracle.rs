@@ -54,7 +54,8 @@ pub struct OracleParams {
     pub candidate_period_secs: f64,
     /// Longest allowed gap between processed frames (s; default 20).
     pub max_gap_secs: f64,
-    /// Least probability that visual odometry bridges a gap (default 0.5).
+    /// Least probability that visual odometry bridges a gap (default 0.99:
+    /// the oracle knows the truth and takes no risk).
     pub min_track_probability: f64,
 }
 
@@ -65,7 +66,7 @@ impl Default for OracleParams {
             same_as: None,
             candidate_period_secs: 0.4,
             max_gap_secs: 20.0,
-            min_track_probability: 0.5,
+            min_track_probability: 0.99,
         }
     }
 }

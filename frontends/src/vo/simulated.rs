@@ -7,13 +7,16 @@
 //! * **Tracking.** A frame is tracked against its reference keyframe by
 //!   projecting the keyframe's features with a motion prior and searching a
 //!   window of `search_radius_px` around each projection. Guided tracking
-//!   succeeds with probability `L((o − min_overlap)/s_o) · L((r − e)/s_e)`,
+//!   succeeds with probability `R((o − min_overlap)/s_o) · R((r − e)/s_e)`,
 //!   `o` the overlap, `e` the prior's error in pixels
-//!   ([`CameraParams::image_error_px`]), `r` the search radius, `L` the
-//!   logistic function: a prior from wheel odometry that stays close to the
+//!   ([`CameraParams::image_error_px`]), `r` the search radius, and
+//!   `R(x) = clamp(½ + x/2, 0, 1)` a linear ramp: sure success when the
+//!   overlap is at least `s_o` above its threshold and the prior error `s_e`
+//!   inside the window, sure failure as far on the other side, even odds at
+//!   the thresholds. A prior from wheel odometry that stays close to the
 //!   truth lets the tracker bridge a longer gap. Without a prior, or when
 //!   guided tracking fails, matching against the reference keyframe without
-//!   a prior (bag of words) needs a larger overlap: `L((o −
+//!   a prior (bag of words) needs a larger overlap: `R((o −
 //!   prior_free_min_overlap)/s_o)`.
 //! * **Error.** The estimated relative pose is the truth perturbed by
 //!   `N(0, σ²)` with `σ_t = (σ_t0 + k_t ‖t‖) / o^p` and
@@ -50,12 +53,12 @@ pub struct SimulatedVoParams {
     pub camera: CameraParams,
     /// Overlap at which guided tracking succeeds half the time (default 0.3).
     pub min_overlap: f64,
-    /// Softness of the overlap thresholds (default 0.02).
+    /// Half-width of the overlap thresholds' transition (default 0.05).
     pub overlap_softness: f64,
     /// Search radius of guided matching (pixels; default 15, ORB-SLAM's
     /// stereo window).
     pub search_radius_px: f64,
-    /// Softness of the search radius (pixels; default 1.5).
+    /// Half-width of the search radius' transition (pixels; default 3).
     pub search_softness_px: f64,
     /// Overlap at which matching without a motion prior (against the
     /// reference keyframe, for relocalisation and loop closing) succeeds
@@ -88,9 +91,9 @@ impl Default for SimulatedVoParams {
         Self {
             camera: CameraParams::default(),
             min_overlap: 0.3,
-            overlap_softness: 0.02,
+            overlap_softness: 0.05,
             search_radius_px: 15.0,
-            search_softness_px: 1.5,
+            search_softness_px: 3.0,
             prior_free_min_overlap: 0.7,
             recognition_min_overlap: 0.5,
             recognition_probability: 0.9,
@@ -162,9 +165,9 @@ impl SimulatedVoParams {
     }
 }
 
-/// The logistic function.
-fn logistic(x: f64) -> f64 {
-    1.0 / (1.0 + (-x).exp())
+/// The linear ramp `clamp(½ + x/2, 0, 1)`: 0 below −1, 1 above 1.
+fn ramp(x: f64) -> f64 {
+    (0.5 + 0.5 * x).clamp(0.0, 1.0)
 }
 
 /// SplitMix64: mixes request keys into a generator seed.
@@ -223,12 +226,12 @@ impl SimulatedVo {
         let truth = self.truth(request.reference, request.current)?;
         let p = &self.params;
         let overlap = p.camera.body_overlap(&truth);
-        let free = logistic((overlap - p.prior_free_min_overlap) / p.overlap_softness);
+        let free = ramp((overlap - p.prior_free_min_overlap) / p.overlap_softness);
         let success = match (request.purpose, request.prior) {
             (TrackPurpose::Tracking, Some(prior)) => {
                 let error_px = p.camera.image_error_px(&(prior.inverse() * truth));
-                let guided = logistic((overlap - p.min_overlap) / p.overlap_softness)
-                    * logistic((p.search_radius_px - error_px) / p.search_softness_px);
+                let guided = ramp((overlap - p.min_overlap) / p.overlap_softness)
+                    * ramp((p.search_radius_px - error_px) / p.search_softness_px);
                 1.0 - (1.0 - guided) * (1.0 - free)
             }
             _ => free,
