@@ -46,19 +46,20 @@ impl BenchSettings {
     /// Checks the fields against the experiment's regressors.
     ///
     /// # Errors
-    /// A message naming the field.
-    pub fn validate(&self, regressors: usize) -> Result<(), String> {
+    /// The offending field (under `bench.`) and what it expects.
+    pub fn validate(&self, regressors: usize) -> Result<(), (String, String)> {
         if self.predict_queries == 0 {
-            return Err("field `bench.predict_queries`: expected at least 1".into());
+            return Err(("predict_queries".into(), "at least 1".into()));
         }
         if self.learning_curve_every == 0 {
-            return Err("field `bench.learning_curve_every`: expected at least 1".into());
+            return Err(("learning_curve_every".into(), "at least 1".into()));
         }
         if let Some(b) = self.baseline
             && b >= regressors
         {
-            return Err(format!(
-                "field `bench.baseline`: expected an index into `regressors` (0..{regressors}), found {b}"
+            return Err((
+                "baseline".into(),
+                format!("an index into `regressors` (0..{regressors}), found {b}"),
             ));
         }
         Ok(())

@@ -176,73 +176,208 @@ pub enum ConfigError {
         /// Which field and what was expected.
         detail: String,
     },
+    /// A value at a known place is not acceptable.
+    #[error("{problem} at {}:{line}:{column}; expected {expected}", file.display())]
+    Located {
+        /// The file that holds the value.
+        file: PathBuf,
+        /// Line (from 1; 0 when unknown).
+        line: usize,
+        /// Column (from 1; 0 when unknown).
+        column: usize,
+        /// Path of the value (`regressors[1].kernel`).
+        path: String,
+        /// What is wrong.
+        problem: String,
+        /// What would be accepted.
+        expected: String,
+    },
+    /// The file describes several runs where one experiment is needed.
+    #[error("{}: a sweep of {runs} runs; expected a single experiment here", path.display())]
+    NotSingle {
+        /// The file.
+        path: PathBuf,
+        /// How many runs it expands to.
+        runs: usize,
+    },
 }
 
 impl ExperimentConfig {
-    /// Reads and validates an experiment file.
+    /// Reads and validates an experiment file that describes one run (a
+    /// file with `base:` is fine; one with `sweep:` or several `seeds:` is
+    /// not).
     ///
     /// # Errors
-    /// [`ConfigError`] naming the file (and line and column for YAML errors).
+    /// [`ConfigError`] naming the file, line and column.
     pub fn from_path(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::from_yaml_str(&text, path)
-    }
-
-    /// Parses and validates experiment YAML; `path` is used in messages.
-    ///
-    /// # Errors
-    /// [`ConfigError::Parse`] or [`ConfigError::Invalid`].
-    pub fn from_yaml_str(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        let config: Self = serde_saphyr::from_str(text).map_err(|e| ConfigError::Parse {
-            path: path.to_path_buf(),
-            detail: e.to_string(),
-        })?;
-        config.validate().map_err(|detail| ConfigError::Invalid {
-            path: path.to_path_buf(),
-            detail,
-        })?;
-        Ok(config)
+        let plan = crate::sweep::load_plan(path)?;
+        let runs = plan.runs.len();
+        match <[crate::sweep::RunSpec; 1]>::try_from(plan.runs) {
+            Ok([run]) => Ok(run.config),
+            Err(_) => Err(ConfigError::NotSingle {
+                path: path.to_path_buf(),
+                runs,
+            }),
+        }
     }
 
     /// Checks values that the schema alone cannot.
-    fn validate(&self) -> Result<(), String> {
+    ///
+    /// # Errors
+    /// The first [`Issue`], with the path of the offending value.
+    pub fn validate(&self) -> Result<(), Issue> {
         if self.name.is_empty()
             || !self
                 .name
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
         {
-            return Err(format!(
-                "field `name`: expected letters, digits, `-` or `_` (it names the results folder), found `{}`",
-                self.name
+            return Err(Issue::new(
+                "name",
+                format!("invalid name `{}`", self.name),
+                "letters, digits, `-` or `_` (it names the results folder)",
             ));
         }
         if self.regressors.is_empty() {
-            return Err("field `regressors`: expected at least one regressor".into());
+            return Err(Issue::new(
+                "regressors",
+                "no regressor",
+                "at least one regressor",
+            ));
         }
         for (i, r) in self.regressors.iter().enumerate() {
-            r.validate().map_err(|e| format!("regressors[{i}]: {e}"))?;
+            r.validate()
+                .map_err(|e| Issue::from_regressor(&format!("regressors[{i}]"), e))?;
         }
-        self.residuals.validate().map_err(|e| e.to_string())?;
-        self.bench.validate(self.regressors.len())?;
+        self.residuals
+            .validate()
+            .map_err(|e| Issue::from_dataset("", e))?;
+        self.bench
+            .validate(self.regressors.len())
+            .map_err(|(field, expected)| {
+                Issue::new(
+                    &format!("bench.{field}"),
+                    format!("invalid `bench.{field}`"),
+                    expected,
+                )
+            })?;
         if let MotionModelSpec::WeightedJacobian { config, .. } = &self.motion_model {
-            config.validate().map_err(|e| e.to_string())?;
+            config.validate().map_err(|e| match e {
+                gpodo_kinematics::KinematicsError::InvalidConfig { field, expected } => Issue::new(
+                    &format!("motion_model.config.{field}"),
+                    format!("invalid `motion_model.config.{field}`"),
+                    expected,
+                ),
+                other => Issue::new("motion_model.config", other.to_string(), "a valid model"),
+            })?;
         }
         self.validate_schemes()?;
         match &self.dataset {
             DatasetSpec::ResidualTable { train_fraction, .. }
                 if !(*train_fraction > 0.0 && *train_fraction < 1.0) =>
             {
-                Err("field `dataset.train_fraction`: expected a fraction in (0, 1)".into())
+                Err(Issue::new(
+                    "dataset.train_fraction",
+                    format!("training fraction {train_fraction}"),
+                    "a fraction in (0, 1)",
+                ))
             }
             DatasetSpec::Logs { train, test } if train.is_empty() || test.is_empty() => {
-                Err("field `dataset`: expected at least one `train` and one `test` log".into())
+                Err(Issue::new(
+                    "dataset",
+                    "no training or no test log",
+                    "at least one `train` and one `test` log",
+                ))
             }
             _ => Ok(()),
         }
+    }
+}
+
+/// A value of an experiment file that is not acceptable, by path
+/// (`regressors[1].kernel`); the loader turns the path into a file, line
+/// and column.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Issue {
+    /// Path of the offending value.
+    pub path: String,
+    /// What is wrong.
+    pub problem: String,
+    /// What would be accepted.
+    pub expected: String,
+}
+
+impl Issue {
+    /// An issue at `path`.
+    pub fn new(path: &str, problem: impl Into<String>, expected: impl Into<String>) -> Self {
+        Self {
+            path: path.to_string(),
+            problem: problem.into(),
+            expected: expected.into(),
+        }
+    }
+
+    /// A regressor's invalid setting, under `prefix` (`regressors[1]`).
+    pub fn from_regressor(prefix: &str, e: gpodo_regressors::RegressorError) -> Self {
+        match e {
+            gpodo_regressors::RegressorError::InvalidSpec {
+                regressor,
+                field,
+                expected,
+            } => Self::new(
+                &format!("{prefix}.{field}"),
+                format!("invalid `{field}` of {regressor}"),
+                expected,
+            ),
+            other => Self::new(prefix, other.to_string(), "a valid regressor"),
+        }
+    }
+
+    /// A front-end component's invalid setting, under `prefix`
+    /// (`schemes[2].selector` for selectors, `frontend` for settings).
+    pub fn from_frontend(prefix: &str, e: gpodo_frontends::FrontendError) -> Self {
+        match e {
+            gpodo_frontends::FrontendError::InvalidSpec {
+                selector,
+                field,
+                expected,
+            } => Self::new(
+                &format!("{prefix}.{field}"),
+                format!("invalid `{field}` of selector {selector}"),
+                expected,
+            ),
+            gpodo_frontends::FrontendError::InvalidConfig { field, expected } => Self::new(
+                &format!("frontend.{field}"),
+                format!("invalid `{field}`"),
+                expected,
+            ),
+            other => Self::new(prefix, other.to_string(), "a valid setting"),
+        }
+    }
+
+    /// A dataset setting, under `prefix` (empty for top-level sections).
+    pub fn from_dataset(prefix: &str, e: gpodo_datasets::DatasetError) -> Self {
+        match e {
+            gpodo_datasets::DatasetError::InvalidConfig { field, expected } => {
+                let path = if prefix.is_empty() {
+                    field.clone()
+                } else {
+                    format!("{prefix}.{field}")
+                };
+                Self::new(&path, format!("invalid `{field}`"), expected)
+            }
+            other => Self::new(prefix, other.to_string(), "a valid setting"),
+        }
+    }
+}
+
+impl std::fmt::Display for Issue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "field `{}`: {}; expected {}",
+            self.path, self.problem, self.expected
+        )
     }
 }
 
@@ -252,53 +387,69 @@ impl ExperimentConfig {
         self.regressors.iter().map(RegressorSpec::label).collect()
     }
 
-    fn validate_schemes(&self) -> Result<(), String> {
+    fn validate_schemes(&self) -> Result<(), Issue> {
         if self.schemes.is_empty() {
             return Ok(());
         }
         if matches!(self.dataset, DatasetSpec::ResidualTable { .. }) {
-            return Err(
-                "field `schemes`: expected rover logs (`dataset.kind: simulated` or `logs`); a residual table has no trajectory or camera frames".into(),
-            );
+            return Err(Issue::new(
+                "schemes",
+                "schemes on a residual table",
+                "rover logs (`dataset.kind: simulated` or `logs`); a residual table has no trajectory or camera frames",
+            ));
         }
         self.frontend
             .validate()
-            .map_err(|e| format!("field `frontend`: {e}"))?;
+            .map_err(|e| Issue::from_frontend("frontend", e))?;
         let labels = self.regressor_labels();
         let mut seen = std::collections::HashSet::new();
         for (i, scheme) in self.schemes.iter().enumerate() {
-            let at = |e: String| format!("schemes[{i}] (`{}`): {e}", scheme.label);
+            let at = |field: &str| format!("schemes[{i}].{field}");
             if scheme.label.trim().is_empty() {
-                return Err(format!(
-                    "schemes[{i}]: field `label`: expected a non-empty row label"
+                return Err(Issue::new(
+                    &at("label"),
+                    "empty label",
+                    "a non-empty row label",
                 ));
             }
             if !seen.insert(scheme.label.as_str()) {
-                return Err(at(
-                    "field `label`: expected a label no other scheme has".into()
+                return Err(Issue::new(
+                    &at("label"),
+                    format!("duplicate label `{}`", scheme.label),
+                    "a label no other scheme has",
                 ));
             }
-            scheme.selector.validate().map_err(|e| at(e.to_string()))?;
+            scheme
+                .selector
+                .validate()
+                .map_err(|e| Issue::from_frontend(&at("selector"), e))?;
             match (&scheme.online, &scheme.regressor) {
                 (Some(_), Some(_)) => {
-                    return Err(at(
-                        "expected either `regressor` (trained offline) or `online`, not both"
-                            .into(),
+                    return Err(Issue::new(
+                        &at("online"),
+                        "both `regressor` and `online`",
+                        "either `regressor` (trained offline) or `online`, not both",
                     ));
                 }
                 (Some(online), None) => {
                     online
                         .regressor
                         .validate()
-                        .map_err(|e| at(format!("online.regressor: {e}")))?;
+                        .map_err(|e| Issue::from_regressor(&at("online.regressor"), e))?;
                     if online.refit_every == Some(0) || online.min_targets == 0 {
-                        return Err(at(
-                            "online: expected refit_every and min_targets of at least 1".into(),
+                        return Err(Issue::new(
+                            &at("online.refit_every"),
+                            "zero targets",
+                            "refit_every and min_targets of at least 1",
                         ));
                     }
                 }
                 (None, _) => {
-                    scheme.regressor_index(&labels).map_err(at)?;
+                    scheme
+                        .regressor_index(&labels)
+                        .map_err(|(problem, expected)| {
+                            Issue::new(&at("regressor"), problem, expected)
+                        })?;
                 }
             }
             if let Some(oracle) = scheme.selector.oracle()
@@ -309,74 +460,21 @@ impl ExperimentConfig {
                     .iter()
                     .any(|s| &s.label == other && s.selector.oracle().is_none());
                 if !found {
-                    return Err(at(format!(
-                        "selector.same_as: expected the label of a scheme that is not an oracle, found `{other}`"
-                    )));
+                    return Err(Issue::new(
+                        &at("selector.same_as"),
+                        format!("no scheme `{other}`"),
+                        "the label of a scheme that is not an oracle",
+                    ));
                 }
             }
         }
+        if self.residuals.window_secs.is_none() {
+            return Err(Issue::new(
+                "residuals.window_secs",
+                "per-step rows with schemes",
+                "a window length (the front end predicts once per window)",
+            ));
+        }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn parse(yaml: &str) -> Result<ExperimentConfig, ConfigError> {
-        ExperimentConfig::from_yaml_str(yaml, Path::new("exp.yaml"))
-    }
-
-    #[test]
-    fn minimal_simulated_experiment_parses_with_defaults() {
-        let c = parse(
-            "name: t\ndataset: {kind: simulated, preset: exoter-prl, seed: 7}\nregressors:\n  - kind: zero\n",
-        )
-        .unwrap();
-        assert_eq!(c.motion_model, MotionModelSpec::default());
-        assert_eq!(c.residuals.window_secs, Some(1.0));
-    }
-
-    #[test]
-    fn unknown_field_names_file_and_position() {
-        let err = parse(
-            "name: t\ndataset: {kind: simulated, preset: exoter-prl, seed: 7}\nregresors:\n  - kind: zero\n",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            err.contains("exp.yaml") && err.contains("regresors"),
-            "{err}"
-        );
-        assert!(err.contains('3'), "line number expected: {err}");
-    }
-
-    #[test]
-    fn unknown_regressor_kind_is_an_error() {
-        let err = parse(
-            "name: t\ndataset: {kind: simulated, preset: exoter-prl, seed: 7}\nregressors:\n  - kind: exactgp\n",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(err.contains("exactgp"), "{err}");
-    }
-
-    #[test]
-    fn invalid_values_name_the_field() {
-        let err = parse(
-            "name: t\ndataset: {kind: residual_table, path: x.csv, targets: [a], train_fraction: 1.5}\nregressors:\n  - kind: zero\n",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(err.contains("train_fraction"), "{err}");
-        let err = parse(
-            "name: t\ndataset: {kind: simulated, preset: exoter-prl, seed: 7}\nregressors:\n  - kind: zero\n    variance: -1\n",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            err.contains("regressors[0]") && err.contains("variance"),
-            "{err}"
-        );
     }
 }

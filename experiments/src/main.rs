@@ -1,4 +1,5 @@
-//! `gpodo`: run experiments and simulate the testbed.
+//! `gpodo`: run experiments and sweeps, plan them, report them, benchmark
+//! regressors, simulate the testbed.
 
 use std::path::{Path, PathBuf};
 
@@ -9,15 +10,16 @@ use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_experiments::bench::run_bench;
 use gpodo_experiments::bench_report::write_bench_report;
 use gpodo_experiments::config::ExperimentConfig;
-use gpodo_experiments::pipeline::run_experiment;
-use gpodo_experiments::report::write_report;
+use gpodo_experiments::runner::{RunOptions, Shard, results_dir, run_sweep};
+use gpodo_experiments::sweep::load_plan;
+use gpodo_experiments::sweep_report::write_sweep_report;
 
 /// Learning odometry residuals with Gaussian processes, and using them to
 /// decide when a rover must look.
 #[derive(Parser)]
 #[command(name = "gpodo", version, about)]
 struct Cli {
-    /// Print only warnings and errors.
+    /// Print only warnings and errors, and no progress bar.
     #[arg(long, short, global = true)]
     quiet: bool,
     #[command(subcommand)]
@@ -26,13 +28,37 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run an experiment file and write results/NAME/report.md and metrics.json.
+    /// Run an experiment or sweep file: every run is appended to
+    /// results/NAME/runs.jsonl; a single run also writes its full report
+    /// (report.md, metrics.json, figures, trajectories), a sweep the
+    /// ablation report.
     Run {
         /// The experiment YAML.
         file: PathBuf,
-        /// Output folder (default: results/NAME, NAME from the file).
+        /// Output folder (default: results/NAME).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Continue a sweep: skip the runs already recorded.
+        #[arg(long, conflicts_with = "force")]
+        resume: bool,
+        /// Start over, replacing this shard's record.
+        #[arg(long)]
+        force: bool,
+        /// Run the i-th of N deterministic slices (`i/N`, from 0); defaults
+        /// to SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set.
+        #[arg(long)]
+        shard: Option<String>,
+    },
+    /// Print the runs a file expands to, without running them.
+    Plan {
+        /// The experiment YAML.
+        file: PathBuf,
+    },
+    /// Write the sweep report of a results folder (merging shards, and
+    /// naming missing and duplicate runs).
+    Report {
+        /// The results folder (results/NAME).
+        dir: PathBuf,
     },
     /// Benchmark every regressor of an experiment file on the same data
     /// (fit time, prediction and online-update latency, scores, learning
@@ -65,23 +91,91 @@ enum Command {
     },
 }
 
-fn run(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
-    let config = ExperimentConfig::from_path(file)?;
-    let base = file.parent().unwrap_or_else(|| Path::new("."));
-    let results =
-        run_experiment(&config, base).with_context(|| format!("experiment {}", file.display()))?;
-    let dir = out.unwrap_or_else(|| PathBuf::from("results").join(&config.name));
-    let (md, json) =
-        write_report(&results, &dir).with_context(|| format!("writing {}", dir.display()))?;
-    for r in &results.regressors {
-        tracing::info!(
-            regressor = %r.label,
-            rmse = r.evaluation.pooled.rmse,
-            mae = r.evaluation.pooled.mae,
-            "test scores"
+fn run(
+    file: &Path,
+    out: Option<PathBuf>,
+    resume: bool,
+    force: bool,
+    shard: Option<String>,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let plan = load_plan(file)?;
+    let shard = match shard {
+        Some(text) => Some(Shard::parse(&text).map_err(anyhow::Error::msg)?),
+        None => Shard::from_env().map_err(anyhow::Error::msg)?,
+    };
+    let options = RunOptions {
+        out,
+        resume,
+        force,
+        shard,
+        quiet,
+    };
+    let outcome =
+        run_sweep(&plan, &options).with_context(|| format!("sweep {}", file.display()))?;
+    println!(
+        "{} run(s) done in {:.1} s ({} skipped as recorded, {} left to other shards; {} dataset(s) prepared, {} fit(s))",
+        outcome.ran,
+        outcome.duration_secs,
+        outcome.skipped,
+        outcome.other_shards,
+        outcome.counts.datasets,
+        outcome.counts.fits
+    );
+    let dir = outcome.dir;
+    if plan.runs.len() == 1 {
+        println!("wrote {}", dir.join("report.md").display());
+        write_sweep_report(&dir, "summary.md")?;
+    } else if outcome.complete {
+        let report = write_sweep_report(&dir, "report.md")?;
+        println!("wrote {} ({} runs)", report.markdown.display(), report.runs);
+    } else {
+        println!(
+            "the sweep is not complete yet (other shards?); `gpodo report {}` merges what is there",
+            dir.display()
         );
     }
-    println!("wrote {} and {}", md.display(), json.display());
+    Ok(())
+}
+
+fn plan(file: &Path) -> anyhow::Result<()> {
+    let plan = load_plan(file)?;
+    println!(
+        "{}: {} run(s) of `{}` (sweep seed {}){}",
+        file.display(),
+        plan.runs.len(),
+        plan.name,
+        plan.seed,
+        if plan.replicates.is_empty() {
+            String::new()
+        } else {
+            format!(", seeds {:?}", plan.replicates)
+        }
+    );
+    for d in &plan.dimensions {
+        println!("  swept `{}`: {} values", d.name, d.values.len());
+    }
+    for r in &plan.runs {
+        let seed = r
+            .seed
+            .map_or(String::new(), |s| format!("  [derived seed {s}]"));
+        println!("{:4}  {}{seed}", r.index, r.key);
+    }
+    Ok(())
+}
+
+fn report(dir: &Path) -> anyhow::Result<()> {
+    let merged = gpodo_experiments::sweep_report::merge_records(dir)?;
+    let single = merged.plan.as_ref().is_some_and(|p| p.keys.len() == 1);
+    let name = if single { "summary.md" } else { "report.md" };
+    let report = write_sweep_report(dir, name)?;
+    println!(
+        "wrote {} ({} runs, {} missing, {} duplicated)",
+        report.markdown.display(),
+        report.runs,
+        report.missing,
+        report.duplicates
+    );
     Ok(())
 }
 
@@ -90,9 +184,15 @@ fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
     let base = file.parent().unwrap_or_else(|| Path::new("."));
     let results =
         run_bench(&config, base).with_context(|| format!("benchmark {}", file.display()))?;
-    let dir = out.unwrap_or_else(|| PathBuf::from("results").join(&config.name));
-    let (md, json) =
-        write_bench_report(&results, &dir).with_context(|| format!("writing {}", dir.display()))?;
+    let plan_dir = results_dir(
+        &load_plan(file)?,
+        &RunOptions {
+            out,
+            ..RunOptions::default()
+        },
+    );
+    let (md, json) = write_bench_report(&results, &plan_dir)
+        .with_context(|| format!("writing {}", plan_dir.display()))?;
     println!("wrote {} and {}", md.display(), json.display());
     Ok(())
 }
@@ -137,7 +237,15 @@ fn main() -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .init();
     match cli.command {
-        Command::Run { file, out } => run(&file, out),
+        Command::Run {
+            file,
+            out,
+            resume,
+            force,
+            shard,
+        } => run(&file, out, resume, force, shard, cli.quiet),
+        Command::Plan { file } => plan(&file),
+        Command::Report { dir } => report(&dir),
         Command::Bench { file, out } => bench(&file, out),
         Command::Simulate {
             preset,

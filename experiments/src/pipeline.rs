@@ -12,15 +12,13 @@ use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
 use gpodo_regressors::metrics::{Evaluation, evaluate};
 use gpodo_traits::{FitReport, MotionModel, ResidualDataset, ResidualRegressor};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::calibration::{ResidualStatistics, residual_statistics};
 use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};
 use crate::odometry::{DeadReckoning, dead_reckoning};
-use crate::table_two::{
-    SchemeInputs, SchemeResult, build_traverse, run_schemes, window_predictions,
-};
+use crate::shared::SharedWork;
+use crate::table_two::SchemeResult;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::Traverse;
 
@@ -204,16 +202,16 @@ fn motion_model(
 }
 
 /// Train/test rows plus what the report says about where they came from.
-struct PreparedData {
-    train: ResidualDataset,
-    test: ResidualDataset,
-    summary: DatasetSummary,
-    motion_model: Option<String>,
-    dead_reckoning: Vec<(String, DeadReckoning)>,
+pub(crate) struct PreparedData {
+    pub(crate) train: ResidualDataset,
+    pub(crate) test: ResidualDataset,
+    pub(crate) summary: DatasetSummary,
+    pub(crate) motion_model: Option<String>,
+    pub(crate) dead_reckoning: Vec<(String, DeadReckoning)>,
     /// The test runs (in the rover's joint order), the motion model and the
     /// wheel radius, for the front end.
-    test_logs: Vec<RoverLog>,
-    model: Option<(Box<dyn MotionModel>, f64)>,
+    pub(crate) test_logs: Vec<RoverLog>,
+    pub(crate) model: Option<(Box<dyn MotionModel>, f64)>,
 }
 
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
@@ -270,7 +268,10 @@ fn from_logs(
     })
 }
 
-fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, PipelineError> {
+pub(crate) fn prepare(
+    config: &ExperimentConfig,
+    base: &Path,
+) -> Result<PreparedData, PipelineError> {
     match &config.dataset {
         DatasetSpec::Simulated {
             preset,
@@ -345,7 +346,7 @@ fn prepare(config: &ExperimentConfig, base: &Path) -> Result<PreparedData, Pipel
     }
 }
 
-fn reference_statistics(
+pub(crate) fn reference_statistics(
     config: &ExperimentConfig,
     base: &Path,
 ) -> Option<(String, ResidualStatistics)> {
@@ -377,7 +378,7 @@ pub struct ModelRows {
     pub test: ResidualDataset,
 }
 
-fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer), PipelineError> {
+pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer), PipelineError> {
     if data.train.input_names != data.test.input_names
         || data.train.target_names != data.test.target_names
     {
@@ -411,7 +412,7 @@ pub fn prepare_model_rows(
 }
 
 /// Fits one regressor on the training rows and scores it on the test rows.
-fn fit_and_score(
+pub(crate) fn fit_and_score(
     spec: &gpodo_regressors::RegressorSpec,
     train: &ResidualDataset,
     test: &ResidualDataset,
@@ -448,94 +449,8 @@ pub fn run_experiment(
     base: &Path,
 ) -> Result<ExperimentResults, PipelineError> {
     let start = Instant::now();
-    let data = prepare(config, base)?;
-    let (ModelRows { train, test }, scaler) = model_rows(&data)?;
-
-    // Regressors are fitted in parallel (the slowest, exact GPs, dominate);
-    // each fit is deterministic, so the results do not depend on the order.
-    let fitted: Vec<(RegressorResult, Box<dyn ResidualRegressor>)> = config
-        .regressors
-        .par_iter()
-        .map(|spec| fit_and_score(spec, &train, &test))
-        .collect::<Result<_, _>>()?;
-    let (regressors, trained): (Vec<_>, Vec<_>) = fitted.into_iter().unzip();
-    let (traverses, window_predictions, schemes) =
-        table_two(config, base, &data, &scaler, &trained)?;
-    Ok(ExperimentResults {
-        config: config.clone(),
-        code_version: code_version(),
-        train_statistics: residual_statistics(&data.train),
-        test_statistics: residual_statistics(&data.test),
-        reference_statistics: reference_statistics(config, base),
-        dataset: data.summary,
-        motion_model: data.motion_model,
-        dead_reckoning: data.dead_reckoning,
-        regressors,
-        schemes,
-        duration_secs: start.elapsed().as_secs_f64(),
-        train_rows: Some(data.train),
-        test_rows: Some(data.test),
-        traverses,
-        window_predictions,
-    })
-}
-
-/// Traverses, window predictions and Table II.
-type TableTwo = (
-    Vec<Traverse>,
-    Vec<Option<Vec<Vec<ResidualPrediction>>>>,
-    Vec<SchemeResult>,
-);
-
-/// Builds the test traverses and runs the schemes, when there are any.
-fn table_two(
-    config: &ExperimentConfig,
-    base: &Path,
-    data: &PreparedData,
-    scaler: &Standardizer,
-    trained: &[Box<dyn ResidualRegressor>],
-) -> Result<TableTwo, PipelineError> {
-    let (Some((model, radius)), false) = (&data.model, config.schemes.is_empty()) else {
-        return Ok((Vec::new(), vec![None; trained.len()], Vec::new()));
-    };
-    let window = config.residuals.window_secs.unwrap_or(1.0);
-    let traverses = data
-        .test_logs
-        .iter()
-        .map(|log| build_traverse(log, model.as_ref(), *radius, window, scaler))
-        .collect::<Result<Vec<_>, _>>()?;
-    // Predictions of every trained regressor a scheme (or a plot) reads.
-    let labels = config.regressor_labels();
-    let mut used = vec![false; trained.len()];
-    for scheme in config.schemes.iter().filter(|s| s.online.is_none()) {
-        if let Ok(r) = scheme.regressor_index(&labels) {
-            used[r] = true;
-        }
-    }
-    let window_predictions = trained
-        .iter()
-        .zip(&used)
-        .map(|(model, &used)| {
-            used.then(|| {
-                traverses
-                    .iter()
-                    .map(|t| window_predictions(model.as_ref(), t))
-                    .collect::<Result<Vec<_>, _>>()
-            })
-            .transpose()
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    tracing::info!(
-        schemes = config.schemes.len(),
-        runs = traverses.len(),
-        "running Table II"
-    );
-    let schemes = run_schemes(&SchemeInputs {
-        config,
-        base,
-        traverses: &traverses,
-        predictions: &window_predictions,
-        regressor_labels: &labels,
-    })?;
-    Ok((traverses, window_predictions, schemes))
+    let shared = SharedWork::build(&[(config, base)])?;
+    let mut results = shared.results(config, base)?;
+    results.duration_secs = start.elapsed().as_secs_f64();
+    Ok(results)
 }

@@ -240,3 +240,52 @@ pub fn residual_map_svg(
     }
     Ok(svg)
 }
+
+/// Frames processed against trajectory RMSE, one labelled point (with a
+/// ±std bar) per row of Table II.
+///
+/// # Errors
+/// A drawing error (as `io::Error`).
+pub fn tradeoff_svg(points: &[(String, f64, f64, f64)]) -> std::io::Result<String> {
+    let max_frames = points.iter().map(|p| p.1).fold(1.0, f64::max) * 1.1;
+    let max_rmse = points.iter().map(|p| p.2 + p.3).fold(1e-3, f64::max) * 1.15;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(io)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("frames processed vs trajectory RMSE", ("sans-serif", 18))
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..max_frames, 0.0..max_rmse)
+            .map_err(io)?;
+        chart
+            .configure_mesh()
+            .x_desc("frames processed")
+            .y_desc("RMSE [m]")
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(io)?;
+        let colour = RGBColor(31, 119, 180);
+        chart
+            .draw_series(points.iter().map(|(_, f, r, s)| {
+                PathElement::new(vec![(*f, r - s), (*f, r + s)], colour.stroke_width(1))
+            }))
+            .map_err(io)?;
+        chart
+            .draw_series(
+                points
+                    .iter()
+                    .map(|(_, f, r, _)| Circle::new((*f, *r), 4, colour.filled())),
+            )
+            .map_err(io)?;
+        chart
+            .draw_series(points.iter().map(|(label, f, r, _)| {
+                Text::new(label.clone(), (*f, *r), ("sans-serif", 11).into_font())
+            }))
+            .map_err(io)?;
+        root.present().map_err(io)?;
+    }
+    Ok(svg)
+}

@@ -27,12 +27,17 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     std::fs::rename(&tmp, path)
 }
 
-/// Writes `report.md` and `metrics.json` into `dir` (created if needed) and
-/// returns their paths.
+/// Writes `report.md` and `metrics.json` into `dir` (created if needed),
+/// the residual rows, and with schemes the trajectories and (when `plots`)
+/// the figures; returns the report's and the metrics' paths.
 ///
 /// # Errors
 /// Any I/O or serialisation error.
-pub fn write_report(results: &ExperimentResults, dir: &Path) -> anyhow::Result<(PathBuf, PathBuf)> {
+pub fn write_report(
+    results: &ExperimentResults,
+    dir: &Path,
+    plots: bool,
+) -> anyhow::Result<(PathBuf, PathBuf)> {
     std::fs::create_dir_all(dir)?;
     let md = dir.join("report.md");
     let json = dir.join("metrics.json");
@@ -46,7 +51,7 @@ pub fn write_report(results: &ExperimentResults, dir: &Path) -> anyhow::Result<(
             write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
         }
     }
-    write_table_two_files(results, dir)?;
+    write_table_two_files(results, dir, plots)?;
     Ok((md, json))
 }
 
@@ -64,7 +69,11 @@ pub fn slug(label: &str) -> String {
 }
 
 /// Trajectories (TUM) and figures of Table II.
-fn write_table_two_files(results: &ExperimentResults, dir: &Path) -> anyhow::Result<()> {
+fn write_table_two_files(
+    results: &ExperimentResults,
+    dir: &Path,
+    plots: bool,
+) -> anyhow::Result<()> {
     if results.schemes.is_empty() {
         return Ok(());
     }
@@ -106,6 +115,9 @@ fn write_table_two_files(results: &ExperimentResults, dir: &Path) -> anyhow::Res
                 &traj_dir.join(format!("{file}.tum")),
                 format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
             )?;
+            if !plots {
+                continue;
+            }
             let title = format!(
                 "{}: {} frames, {} keyframes, RMSE {:.3} m",
                 scheme.label, scheme.run.frames, scheme.run.keyframes, scheme.run.metrics.rmse_m
@@ -114,6 +126,9 @@ fn write_table_two_files(results: &ExperimentResults, dir: &Path) -> anyhow::Res
                 &plot_dir.join(format!("fig5_{file}.svg")),
                 plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
             )?;
+        }
+        if !plots {
+            continue;
         }
         if let Some((label, predictions)) = residual_map_source(results, t) {
             write_atomically(

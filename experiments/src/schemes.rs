@@ -93,23 +93,26 @@ impl SchemeSpec {
     /// The index of the scheme's trained regressor among `labels`.
     ///
     /// # Errors
-    /// A message naming the reference and the valid ones.
-    pub fn regressor_index(&self, labels: &[String]) -> Result<usize, String> {
+    /// What is wrong with the reference, and what would be accepted.
+    pub fn regressor_index(&self, labels: &[String]) -> Result<usize, (String, String)> {
         match &self.regressor {
             None => Ok(0),
             Some(RegressorRef::Index(i)) if *i < labels.len() => Ok(*i),
-            Some(RegressorRef::Index(i)) => Err(format!(
-                "regressor index {i}: expected an index into `regressors` (0..{})",
-                labels.len()
+            Some(RegressorRef::Index(i)) => Err((
+                format!("regressor index {i} out of range"),
+                format!("an index into `regressors` (0..{})", labels.len()),
             )),
             Some(RegressorRef::Label(l)) => labels.iter().position(|x| x == l).ok_or_else(|| {
-                format!(
-                    "unknown regressor `{l}`; expected one of: {}",
-                    labels
-                        .iter()
-                        .map(|x| format!("`{x}`"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                (
+                    format!("unknown regressor `{l}`"),
+                    format!(
+                        "one of: {}",
+                        labels
+                            .iter()
+                            .map(|x| format!("`{x}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
                 )
             }),
         }

@@ -195,7 +195,9 @@ impl SchemeInputs<'_> {
         }
         let r = scheme
             .regressor_index(self.regressor_labels)
-            .map_err(PipelineError::Inconsistent)?;
+            .map_err(|(problem, expected)| {
+                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
+            })?;
         let predictions = self.predictions[r]
             .as_ref()
             .and_then(|p| p.get(t))
@@ -276,7 +278,9 @@ impl SchemeInputs<'_> {
         };
         let r = scheme
             .regressor_index(self.regressor_labels)
-            .map_err(PipelineError::Inconsistent)?;
+            .map_err(|(problem, expected)| {
+                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
+            })?;
         let predictions = self.predictions[r]
             .as_ref()
             .and_then(|p| p.get(t))

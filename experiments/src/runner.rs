@@ -1,0 +1,288 @@
+//! Runs a sweep: the shared work once, then every run in parallel (rayon),
+//! each appended to the record as it finishes; resumable; shardable for
+//! cluster array jobs (`--shard i/N`, or Slurm's `SLURM_ARRAY_TASK_ID` and
+//! `SLURM_ARRAY_TASK_COUNT`), each shard writing `runs.<i>.jsonl`.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ParallelProgressIterator, ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::records::{
+    RecordError, RecordWriter, RunRecord, read_records, record_files, record_path,
+};
+use crate::report::{slug, write_atomically, write_report};
+use crate::shared::{SharedCounts, SharedWork};
+use crate::sweep::{Dimension, SweepPlan};
+
+/// One slice of a sweep: runs whose plan index is `index` modulo `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// This shard, from 0.
+    pub index: usize,
+    /// Number of shards.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parses `i/N` (0 ≤ i < N).
+    ///
+    /// # Errors
+    /// A message naming the expected form.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad = || format!("shard `{text}`: expected `i/N` with 0 ≤ i < N, e.g. `0/4`");
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count): (usize, usize) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+
+    /// The shard of a Slurm array task, when `SLURM_ARRAY_TASK_ID` and
+    /// `SLURM_ARRAY_TASK_COUNT` are set (task ids from 0, as
+    /// `--array=0-(N-1)` gives).
+    ///
+    /// # Errors
+    /// A message when the variables are set but inconsistent.
+    pub fn from_env() -> Result<Option<Self>, String> {
+        let (Ok(id), Ok(count)) = (
+            std::env::var("SLURM_ARRAY_TASK_ID"),
+            std::env::var("SLURM_ARRAY_TASK_COUNT"),
+        ) else {
+            return Ok(None);
+        };
+        Self::parse(&format!("{id}/{count}"))
+            .map(Some)
+            .map_err(|e| format!("from SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT: {e}"))
+    }
+
+    /// Whether this shard runs plan entry `run_index`.
+    pub fn owns(&self, run_index: usize) -> bool {
+        run_index % self.count == self.index
+    }
+}
+
+/// How to run a sweep.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Results folder (default `results/<name>`).
+    pub out: Option<PathBuf>,
+    /// Skip runs already recorded (in any record file of the folder).
+    pub resume: bool,
+    /// Start over when this shard's record file exists.
+    pub force: bool,
+    /// Run one slice.
+    pub shard: Option<Shard>,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// What `plan.json` holds: enough for `gpodo report` to tell missing and
+/// duplicate runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanFile {
+    /// The sweep's name.
+    pub name: String,
+    /// The experiment file.
+    pub file: PathBuf,
+    /// The sweep seed.
+    pub seed: u64,
+    /// The swept dimensions.
+    pub dimensions: Vec<Dimension>,
+    /// The replicate seeds.
+    pub replicates: Vec<u64>,
+    /// Every run's key, in plan order.
+    pub keys: Vec<String>,
+}
+
+impl PlanFile {
+    /// The plan file of `plan`.
+    pub fn new(plan: &SweepPlan) -> Self {
+        Self {
+            name: plan.name.clone(),
+            file: plan.file.clone(),
+            seed: plan.seed,
+            dimensions: plan.dimensions.clone(),
+            replicates: plan.replicates.clone(),
+            keys: plan.runs.iter().map(|r| r.key.clone()).collect(),
+        }
+    }
+}
+
+/// Why a sweep could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunnerError {
+    /// Results exist and neither `--resume` nor `--force` was given.
+    #[error("{} already holds runs; pass --resume to continue the sweep or --force to start it over", path.display())]
+    ResultsExist {
+        /// The record file.
+        path: PathBuf,
+    },
+    /// Writing or reading records failed.
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    /// A run failed.
+    #[error("run `{key}`: {source}")]
+    Run {
+        /// The run's key.
+        key: String,
+        /// What failed.
+        source: Box<crate::pipeline::PipelineError>,
+    },
+    /// The shared work failed.
+    #[error(transparent)]
+    Pipeline(#[from] crate::pipeline::PipelineError),
+    /// Writing a report failed.
+    #[error("writing {}: {source}", path.display())]
+    Output {
+        /// The file or folder.
+        path: PathBuf,
+        /// What failed.
+        source: anyhow::Error,
+    },
+}
+
+/// What a sweep did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepOutcome {
+    /// The results folder.
+    pub dir: PathBuf,
+    /// Runs executed now.
+    pub ran: usize,
+    /// Runs skipped because they were recorded already.
+    pub skipped: usize,
+    /// Runs of other shards.
+    pub other_shards: usize,
+    /// Shared work done.
+    pub counts: SharedCounts,
+    /// Whether every run of the plan is now recorded (in any shard).
+    pub complete: bool,
+    /// Wall-clock time (s).
+    pub duration_secs: f64,
+}
+
+/// The results folder of a plan.
+pub fn results_dir(plan: &SweepPlan, options: &RunOptions) -> PathBuf {
+    options
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("results").join(&plan.name))
+}
+
+/// Keys recorded in any record file of `dir`.
+///
+/// # Errors
+/// [`RecordError`].
+pub fn recorded_keys(dir: &Path) -> Result<BTreeSet<String>, RecordError> {
+    let mut keys = BTreeSet::new();
+    let files = record_files(dir).map_err(|source| RecordError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    for file in files {
+        keys.extend(read_records(&file)?.into_iter().map(|r| r.key));
+    }
+    Ok(keys)
+}
+
+/// Runs the plan (or this shard of it).
+///
+/// # Errors
+/// [`RunnerError`]; runs finished before a failure stay recorded.
+pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome, RunnerError> {
+    let start = Instant::now();
+    let dir = results_dir(plan, options);
+    let output = |path: &Path, e: anyhow::Error| RunnerError::Output {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    std::fs::create_dir_all(&dir).map_err(|e| output(&dir, e.into()))?;
+    let record = record_path(&dir, options.shard.map(|s| s.index));
+    let has_runs = std::fs::metadata(&record).is_ok_and(|m| m.len() > 0);
+    if has_runs && !options.resume && !options.force {
+        return Err(RunnerError::ResultsExist { path: record });
+    }
+    let plan_path = dir.join("plan.json");
+    let plan_json = serde_json::to_string_pretty(&PlanFile::new(plan))
+        .map_err(|e| output(&plan_path, e.into()))?;
+    write_atomically(&plan_path, plan_json.as_bytes()).map_err(|e| output(&plan_path, e.into()))?;
+    let done = if options.resume {
+        recorded_keys(&dir)?
+    } else {
+        BTreeSet::new()
+    };
+    let writer = RecordWriter::open(&record, options.resume)?;
+    let mine: Vec<&crate::sweep::RunSpec> = plan
+        .runs
+        .iter()
+        .filter(|r| options.shard.is_none_or(|s| s.owns(r.index)))
+        .collect();
+    let todo: Vec<&crate::sweep::RunSpec> = mine
+        .iter()
+        .copied()
+        .filter(|r| !done.contains(&r.key))
+        .collect();
+    let single = plan.runs.len() == 1;
+    let details = plan.outputs.run_details.unwrap_or(single);
+    tracing::info!(
+        runs = plan.runs.len(),
+        this_shard = mine.len(),
+        to_run = todo.len(),
+        folder = %dir.display(),
+        "sweep"
+    );
+    let base = plan.base_dir.as_path();
+    let configs: Vec<(&crate::config::ExperimentConfig, &Path)> =
+        todo.iter().map(|r| (&r.config, base)).collect();
+    let shared = SharedWork::build(&configs)?;
+    let bar = if options.quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(todo.len() as u64);
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} ({eta} left) {msg}")
+        {
+            bar.set_style(style);
+        }
+        bar
+    };
+    todo.par_iter()
+        .progress_with(bar.clone())
+        .try_for_each(|run| -> Result<(), RunnerError> {
+            let wrap = |e| RunnerError::Run {
+                key: run.key.clone(),
+                source: Box::new(e),
+            };
+            let results = shared.results(&run.config, base).map_err(wrap)?;
+            writer.append(&RunRecord::new(run, &results))?;
+            if details {
+                let run_dir = if single {
+                    dir.clone()
+                } else {
+                    dir.join("runs").join(slug(&run.key))
+                };
+                write_report(&results, &run_dir, plan.outputs.plots)
+                    .map_err(|e| output(&run_dir, e))?;
+            }
+            Ok(())
+        })?;
+    bar.finish_and_clear();
+    let recorded = recorded_keys(&dir)?;
+    let complete = plan.runs.iter().all(|r| recorded.contains(&r.key));
+    Ok(SweepOutcome {
+        dir,
+        ran: todo.len(),
+        skipped: mine.len() - todo.len(),
+        other_shards: plan.runs.len() - mine.len(),
+        counts: shared.counts(),
+        complete,
+        duration_secs: start.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,262 @@
+//! Work shared between the runs of a sweep, done once: the data of each
+//! distinct dataset specification (simulated or loaded, residual rows,
+//! standardisation, test traverses), each regressor trained once per
+//! distinct (dataset, regressor) and its predictions on the traverses.
+//! Runs then only assemble their results and run their schemes.
+//!
+//! The stages run one after another, each in parallel over its distinct
+//! items: no run waits for another's half-done work.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use gpodo_datasets::standardize::Standardizer;
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::traverse::Traverse;
+use gpodo_traits::ResidualRegressor;
+use rayon::prelude::*;
+
+use crate::calibration::residual_statistics;
+use crate::config::ExperimentConfig;
+use crate::pipeline::{
+    ExperimentResults, ModelRows, PipelineError, PreparedData, RegressorResult, code_version,
+    fit_and_score, model_rows, prepare, reference_statistics,
+};
+use crate::table_two::{SchemeInputs, build_traverse, run_schemes, window_predictions};
+
+/// A dataset, ready for every run that uses it.
+pub struct Prepared {
+    data: PreparedData,
+    rows: ModelRows,
+    /// Test traverses (only when a run with schemes uses the dataset).
+    traverses: Vec<Traverse>,
+}
+
+/// A trained regressor and its window predictions on the traverses.
+pub struct Fitted {
+    result: RegressorResult,
+    model: Box<dyn ResidualRegressor>,
+    predictions: Option<Vec<Vec<ResidualPrediction>>>,
+}
+
+/// What was computed once.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SharedCounts {
+    /// Distinct datasets prepared.
+    pub datasets: usize,
+    /// Distinct (dataset, regressor) fits.
+    pub fits: usize,
+}
+
+/// The shared work of a set of runs.
+#[derive(Default)]
+pub struct SharedWork {
+    prepared: BTreeMap<String, Arc<Prepared>>,
+    fitted: BTreeMap<String, Arc<Fitted>>,
+    counts: SharedCounts,
+}
+
+fn json<T: serde::Serialize>(v: &T) -> String {
+    serde_json::to_string(v).unwrap_or_default()
+}
+
+/// The identity of a run's data: where relative paths start, and the
+/// dataset, motion model and residual settings.
+pub fn dataset_key(config: &ExperimentConfig, base: &Path) -> String {
+    format!(
+        "{}|{}|{}|{}",
+        base.display(),
+        json(&config.dataset),
+        json(&config.motion_model),
+        json(&config.residuals)
+    )
+}
+
+fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec) -> String {
+    format!("{dataset}|{}", json(spec))
+}
+
+impl SharedWork {
+    /// Prepares every distinct dataset and fits every distinct regressor of
+    /// `runs` (experiment, folder), in parallel within each stage.
+    ///
+    /// # Errors
+    /// The first failure.
+    pub fn build(runs: &[(&ExperimentConfig, &Path)]) -> Result<Self, PipelineError> {
+        // Distinct datasets, and whether any run of each needs traverses.
+        let mut datasets: BTreeMap<String, (&ExperimentConfig, PathBuf, bool)> = BTreeMap::new();
+        for (config, base) in runs {
+            let entry = datasets.entry(dataset_key(config, base)).or_insert((
+                config,
+                base.to_path_buf(),
+                false,
+            ));
+            entry.2 |= !config.schemes.is_empty();
+        }
+        let prepared: Vec<(String, Arc<Prepared>)> = datasets
+            .into_par_iter()
+            .map(|(key, (config, base, needs_traverses))| {
+                let start = Instant::now();
+                let data = prepare(config, &base)?;
+                let (rows, scaler) = model_rows(&data)?;
+                let traverses = if needs_traverses {
+                    build_traverses(config, &data, &scaler)?
+                } else {
+                    Vec::new()
+                };
+                tracing::info!(secs = start.elapsed().as_secs_f64(), "dataset prepared");
+                Ok((
+                    key,
+                    Arc::new(Prepared {
+                        data,
+                        rows,
+                        traverses,
+                    }),
+                ))
+            })
+            .collect::<Result<_, PipelineError>>()?;
+        let prepared: BTreeMap<String, Arc<Prepared>> = prepared.into_iter().collect();
+        // Distinct fits.
+        let mut fits: BTreeMap<String, (&gpodo_regressors::RegressorSpec, Arc<Prepared>)> =
+            BTreeMap::new();
+        for (config, base) in runs {
+            let key = dataset_key(config, base);
+            let Some(p) = prepared.get(&key) else {
+                continue;
+            };
+            for spec in &config.regressors {
+                fits.entry(fit_key(&key, spec))
+                    .or_insert((spec, Arc::clone(p)));
+            }
+        }
+        let fitted: Vec<(String, Arc<Fitted>)> = fits
+            .into_par_iter()
+            .map(|(key, (spec, p))| {
+                let (result, model) = fit_and_score(spec, &p.rows.train, &p.rows.test)?;
+                let predictions = if p.traverses.is_empty() {
+                    None
+                } else {
+                    Some(
+                        p.traverses
+                            .iter()
+                            .map(|t| window_predictions(model.as_ref(), t))
+                            .collect::<Result<Vec<_>, _>>()?,
+                    )
+                };
+                Ok((
+                    key,
+                    Arc::new(Fitted {
+                        result,
+                        model,
+                        predictions,
+                    }),
+                ))
+            })
+            .collect::<Result<_, PipelineError>>()?;
+        let counts = SharedCounts {
+            datasets: prepared.len(),
+            fits: fitted.len(),
+        };
+        Ok(Self {
+            prepared,
+            fitted: fitted.into_iter().collect(),
+            counts,
+        })
+    }
+
+    /// What was computed once.
+    pub fn counts(&self) -> SharedCounts {
+        self.counts
+    }
+
+    /// A run's results from the shared work: its regressors' scores and its
+    /// schemes (run here).
+    ///
+    /// # Errors
+    /// [`PipelineError::Inconsistent`] for a run the work was not built
+    /// for; what the schemes report.
+    pub fn results(
+        &self,
+        config: &ExperimentConfig,
+        base: &Path,
+    ) -> Result<ExperimentResults, PipelineError> {
+        let start = Instant::now();
+        let key = dataset_key(config, base);
+        let missing =
+            || PipelineError::Inconsistent(format!("no shared work for `{}`", config.name));
+        let p = self.prepared.get(&key).ok_or_else(missing)?;
+        let fitted: Vec<&Arc<Fitted>> = config
+            .regressors
+            .iter()
+            .map(|spec| self.fitted.get(&fit_key(&key, spec)).ok_or_else(missing))
+            .collect::<Result<_, _>>()?;
+        let labels = config.regressor_labels();
+        let predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>> =
+            fitted.iter().map(|f| f.predictions.clone()).collect();
+        let schemes = if config.schemes.is_empty() {
+            Vec::new()
+        } else {
+            tracing::info!(
+                schemes = config.schemes.len(),
+                runs = p.traverses.len(),
+                "running Table II"
+            );
+            run_schemes(&SchemeInputs {
+                config,
+                base,
+                traverses: &p.traverses,
+                predictions: &predictions,
+                regressor_labels: &labels,
+            })?
+        };
+        let data = &p.data;
+        Ok(ExperimentResults {
+            config: config.clone(),
+            code_version: code_version(),
+            train_statistics: residual_statistics(&data.train),
+            test_statistics: residual_statistics(&data.test),
+            reference_statistics: reference_statistics(config, base),
+            dataset: data.summary.clone(),
+            motion_model: data.motion_model.clone(),
+            dead_reckoning: data.dead_reckoning.clone(),
+            regressors: fitted.iter().map(|f| f.result.clone()).collect(),
+            schemes,
+            duration_secs: start.elapsed().as_secs_f64(),
+            train_rows: Some(data.train.clone()),
+            test_rows: Some(data.test.clone()),
+            traverses: p.traverses.clone(),
+            window_predictions: predictions,
+        })
+    }
+
+    /// The trained model of `spec` on the data of `config` (for callers
+    /// that predict with it).
+    pub fn model(
+        &self,
+        config: &ExperimentConfig,
+        base: &Path,
+        spec: &gpodo_regressors::RegressorSpec,
+    ) -> Option<&dyn ResidualRegressor> {
+        self.fitted
+            .get(&fit_key(&dataset_key(config, base), spec))
+            .map(|f| f.model.as_ref())
+    }
+}
+
+/// The test traverses of a dataset.
+fn build_traverses(
+    config: &ExperimentConfig,
+    data: &PreparedData,
+    scaler: &Standardizer,
+) -> Result<Vec<Traverse>, PipelineError> {
+    let Some((model, radius)) = &data.model else {
+        return Ok(Vec::new());
+    };
+    let window = config.residuals.window_secs.unwrap_or(1.0);
+    data.test_logs
+        .iter()
+        .map(|log| build_traverse(log, model.as_ref(), *radius, window, scaler))
+        .collect()
+}

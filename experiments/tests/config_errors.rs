@@ -1,0 +1,293 @@
+//! A corpus of malformed experiment files: each error names the file, the
+//! line and column of the offending value, and the expected form; every run
+//! of a sweep is validated before anything runs.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+
+use gpodo_experiments::sweep::load_plan;
+
+const GOOD: &str = "name: t
+dataset: { kind: simulated, preset: exoter-prl, seed: 7 }
+regressors:
+  - kind: zero
+  - kind: exact_gp
+    kernel: rbf
+";
+
+fn error_of(dir: &Path, file: &str, text: &str) -> String {
+    let path = dir.join(file);
+    std::fs::write(&path, text).unwrap();
+    match load_plan(&path) {
+        Ok(plan) => panic!("{file} was accepted ({} runs)", plan.runs.len()),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Asserts `error` starts with `problem`, names `file:line:column`, and
+/// ends with `; expected …` containing `expected`.
+fn check(error: &str, problem: &str, file: &str, line: usize, column: usize, expected: &str) {
+    assert!(
+        error.starts_with(problem),
+        "problem `{problem}` in: {error}"
+    );
+    let at = format!("{file}:{line}:{column}; expected ");
+    assert!(
+        error.contains(" at ") && error.contains(&at),
+        "position `{at}` in: {error}"
+    );
+    let tail = error.split("; expected ").nth(1).unwrap_or("");
+    assert!(tail.contains(expected), "expected `{expected}` in: {error}");
+}
+
+#[test]
+fn the_good_file_loads_and_is_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("good.yaml");
+    std::fs::write(&path, GOOD).unwrap();
+    let plan = load_plan(&path).unwrap();
+    assert_eq!(plan.runs.len(), 1);
+    assert_eq!(plan.runs[0].key, "base");
+}
+
+#[test]
+fn an_unknown_regressor_kind_names_its_position_and_the_kinds() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = GOOD.replace("kind: exact_gp", "kind: exactgp");
+    let e = error_of(dir.path(), "paper.yaml", &text);
+    let file = dir.path().join("paper.yaml");
+    check(
+        &e,
+        "unknown regressor kind `exactgp`",
+        &file.display().to_string(),
+        5,
+        11,
+        "one of zero, exact_gp, sparse_gp, ilgr",
+    );
+}
+
+#[test]
+fn an_unknown_field_names_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = GOOD.replace("regressors:", "regresors:");
+    let e = error_of(dir.path(), "x.yaml", &text);
+    check(
+        &e,
+        "unknown field `regresors`",
+        "x.yaml",
+        3,
+        1,
+        "one of name,",
+    );
+    let text = GOOD.replace("    kernel: rbf", "    kernel: rbf\n    restart: 2");
+    let e = error_of(dir.path(), "y.yaml", &text);
+    check(&e, "unknown field `restart`", "y.yaml", 7, 5, "restarts");
+}
+
+#[test]
+fn a_wrong_type_names_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = GOOD.replace("seed: 7", "seed: seven");
+    let e = error_of(dir.path(), "x.yaml", &text);
+    check(&e, "invalid type: string \"seven\"", "x.yaml", 2, 55, "u64");
+}
+
+#[test]
+fn a_bad_kernel_expression_names_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = GOOD.replace("kernel: rbf", "kernel: rbf + + linear");
+    let e = error_of(dir.path(), "x.yaml", &text);
+    check(
+        &e,
+        "kernel expression `rbf + + linear`",
+        "x.yaml",
+        6,
+        13,
+        "a kernel name",
+    );
+}
+
+#[test]
+fn an_invalid_value_names_the_field_and_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = GOOD.replace("    kernel: rbf", "    kernel: rbf\n    max_iters: 0");
+    let e = error_of(dir.path(), "x.yaml", &text);
+    check(
+        &e,
+        "invalid `max_iters` of exact_gp",
+        "x.yaml",
+        7,
+        16,
+        "at least 1",
+    );
+    let text = "name: t\ndataset: { kind: residual_table, path: x.csv, targets: [a], train_fraction: 1.5 }\nregressors: [{ kind: zero }]\n";
+    let e = error_of(dir.path(), "y.yaml", text);
+    check(
+        &e,
+        "training fraction 1.5",
+        "y.yaml",
+        2,
+        77,
+        "a fraction in (0, 1)",
+    );
+}
+
+#[test]
+fn sweeps_are_checked_before_anything_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Empty sweep, empty list, empty seeds.
+    let e = error_of(d, "a.yaml", &format!("{GOOD}sweep: {{}}\n"));
+    check(&e, "an empty sweep", "a.yaml", 7, 8, "at least one");
+    let e = error_of(
+        d,
+        "b.yaml",
+        &format!("{GOOD}sweep:\n  regressors[1].kernel: []\n"),
+    );
+    check(
+        &e,
+        "no values for `regressors[1].kernel`",
+        "b.yaml",
+        8,
+        25,
+        "non-empty list",
+    );
+    let e = error_of(d, "c.yaml", &format!("{GOOD}seeds: []\n"));
+    check(
+        &e,
+        "an empty list of seeds",
+        "c.yaml",
+        7,
+        8,
+        "at least one seed",
+    );
+    // A path past the end of a list.
+    let e = error_of(
+        d,
+        "d.yaml",
+        &format!("{GOOD}sweep:\n  regressors[5].kernel: [rbf]\n"),
+    );
+    check(
+        &e,
+        "path `regressors[5].kernel`: index 5 is out of range",
+        "d.yaml",
+        8,
+        26,
+        "a path",
+    );
+    // One bad value among good ones: the position is that value's.
+    let e = error_of(
+        d,
+        "e.yaml",
+        &format!("{GOOD}sweep:\n  regressors[1].kernel: [rbf, rbf + +, matern52]\n"),
+    );
+    assert!(e.contains("run `regressors[1].kernel=rbf + +`"), "{e}");
+    check(
+        &e,
+        "kernel expression `rbf + +`",
+        "e.yaml",
+        8,
+        31,
+        "a kernel name",
+    );
+    // A bad value deep in a swept selector.
+    let schemes = "schemes:\n  - label: a\n    selector: { kind: fixed_rate, fps: 2.5 }\n";
+    let e = error_of(
+        d,
+        "f.yaml",
+        &format!("{GOOD}{schemes}sweep:\n  schemes[0].selector.fps: [1.0, -2.0]\n"),
+    );
+    check(
+        &e,
+        "invalid `fps` of selector fixed_rate",
+        "f.yaml",
+        11,
+        34,
+        "a positive frame rate",
+    );
+    // Zip lists of different lengths.
+    let e = error_of(
+        d,
+        "g.yaml",
+        &format!(
+            "{GOOD}zip:\n  - regressors[1].kernel: [rbf, matern52]\n    regressors[1].restarts: [0]\n"
+        ),
+    );
+    check(
+        &e,
+        "lists of different lengths",
+        "g.yaml",
+        8,
+        5,
+        "one length",
+    );
+}
+
+#[test]
+fn schemes_and_selectors_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let e = error_of(
+        d,
+        "a.yaml",
+        &format!("{GOOD}schemes:\n  - label: a\n    selector: {{ kind: fixed }}\n"),
+    );
+    check(
+        &e,
+        "unknown selector kind `fixed`",
+        "a.yaml",
+        9,
+        23,
+        "one of fixed_rate, residual_schedule",
+    );
+    let e = error_of(
+        d,
+        "b.yaml",
+        &format!(
+            "{GOOD}schemes:\n  - label: a\n    regressor: exact GP\n    selector: {{ kind: residual_schedule }}\n"
+        ),
+    );
+    check(
+        &e,
+        "unknown regressor",
+        "b.yaml",
+        9,
+        16,
+        "one of: `parametric only`, `exact GP: rbf`",
+    );
+}
+
+#[test]
+fn a_missing_base_and_a_base_chain_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let e = error_of(d, "a.yaml", "base: nowhere.yaml\nname: x\n");
+    check(
+        &e,
+        "base file `nowhere.yaml` not found",
+        "a.yaml",
+        1,
+        7,
+        "an experiment file",
+    );
+    std::fs::write(d.join("good.yaml"), GOOD).unwrap();
+    // A file extending a good one inherits everything; its own error is its own.
+    let e = error_of(
+        d,
+        "b.yaml",
+        "base: good.yaml\nname: b\nregressors:\n  - kind: zero\n    variance: -1\n",
+    );
+    check(
+        &e,
+        "invalid `variance` of zero",
+        "b.yaml",
+        5,
+        15,
+        "a positive variance",
+    );
+    // The base's error positions stay in the base.
+    std::fs::write(d.join("bad-base.yaml"), GOOD.replace("seed: 7", "seed: -7")).unwrap();
+    let e = error_of(d, "c.yaml", "base: bad-base.yaml\nname: c\n");
+    assert!(e.contains("bad-base.yaml:2:"), "{e}");
+}
