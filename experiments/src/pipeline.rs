@@ -416,10 +416,12 @@ pub(crate) fn fit_and_score(
     spec: &gpodo_regressors::RegressorSpec,
     train: &ResidualDataset,
     test: &ResidualDataset,
+    progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 ) -> Result<(RegressorResult, Box<dyn ResidualRegressor>), PipelineError> {
     let label = spec.label();
     tracing::info!(regressor = %label, n = train.len(), "fitting");
     let mut model = spec.build()?;
+    model.set_progress(progress);
     let wrap = |source| PipelineError::Regressor {
         label: label.clone(),
         source,
@@ -449,7 +451,7 @@ pub fn run_experiment(
     base: &Path,
 ) -> Result<ExperimentResults, PipelineError> {
     let start = Instant::now();
-    let shared = SharedWork::build(&[(config, base)])?;
+    let shared = SharedWork::build(&[(config, base)], None)?;
     let mut results = shared.results(config, base)?;
     results.duration_secs = start.elapsed().as_secs_f64();
     Ok(results)

@@ -7,7 +7,9 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use indicatif::{ParallelProgressIterator, ProgressBar, ProgressStyle};
+use indicatif::{
+    MultiProgress, ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -241,11 +243,16 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
     let base = plan.base_dir.as_path();
     let configs: Vec<(&crate::config::ExperimentConfig, &Path)> =
         todo.iter().map(|r| (&r.config, base)).collect();
-    let shared = SharedWork::build(&configs)?;
+    let multi = if options.quiet {
+        MultiProgress::with_draw_target(ProgressDrawTarget::hidden())
+    } else {
+        MultiProgress::new()
+    };
+    let shared = SharedWork::build(&configs, Some(&multi))?;
     let bar = if options.quiet {
         ProgressBar::hidden()
     } else {
-        let bar = ProgressBar::new(todo.len() as u64);
+        let bar = multi.add(ProgressBar::new(todo.len() as u64));
         if let Ok(style) =
             ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} ({eta} left) {msg}")
         {

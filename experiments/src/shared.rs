@@ -16,6 +16,7 @@ use gpodo_datasets::standardize::Standardizer;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::Traverse;
 use gpodo_traits::ResidualRegressor;
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::calibration::residual_statistics;
@@ -84,7 +85,10 @@ impl SharedWork {
     ///
     /// # Errors
     /// The first failure.
-    pub fn build(runs: &[(&ExperimentConfig, &Path)]) -> Result<Self, PipelineError> {
+    pub fn build(
+        runs: &[(&ExperimentConfig, &Path)],
+        progress: Option<&MultiProgress>,
+    ) -> Result<Self, PipelineError> {
         // Distinct datasets, and whether any run of each needs traverses.
         let mut datasets: BTreeMap<String, (&ExperimentConfig, PathBuf, bool)> = BTreeMap::new();
         for (config, base) in runs {
@@ -134,7 +138,14 @@ impl SharedWork {
         let fitted: Vec<(String, Arc<Fitted>)> = fits
             .into_par_iter()
             .map(|(key, (spec, p))| {
-                let (result, model) = fit_and_score(spec, &p.rows.train, &p.rows.test)?;
+                let spinner = progress.map(|m| FitSpinner::new(m, &spec.label()));
+                let sink = spinner
+                    .as_ref()
+                    .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
+                let (result, model) = fit_and_score(spec, &p.rows.train, &p.rows.test, sink)?;
+                if let Some(s) = spinner {
+                    s.bar.finish_and_clear();
+                }
                 let predictions = if p.traverses.is_empty() {
                     None
                 } else {
@@ -242,6 +253,36 @@ impl SharedWork {
         self.fitted
             .get(&fit_key(&dataset_key(config, base), spec))
             .map(|f| f.model.as_ref())
+    }
+}
+
+/// A spinner line per running fit, showing the optimiser's iterations.
+struct FitSpinner {
+    bar: ProgressBar,
+    label: String,
+}
+
+impl FitSpinner {
+    fn new(multi: &MultiProgress, label: &str) -> Arc<Self> {
+        let bar = multi.add(ProgressBar::new_spinner());
+        if let Ok(style) = ProgressStyle::with_template("  {spinner} {msg} ({elapsed})") {
+            bar.set_style(style);
+        }
+        bar.set_message(format!("{label}: fitting"));
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        Arc::new(Self {
+            bar,
+            label: label.to_string(),
+        })
+    }
+}
+
+impl gpodo_traits::FitProgress for FitSpinner {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+        self.bar.set_message(format!(
+            "{}: start {start}, iteration {iteration}, objective {objective:.2}",
+            self.label
+        ));
     }
 }
 

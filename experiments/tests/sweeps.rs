@@ -32,7 +32,9 @@ seeds: [1, 2]
 
 fn gpodo(args: &[&str], cwd: &Path, threads: Option<&str>) -> Output {
     let mut cmd = Command::new(GPODO);
-    cmd.args(args).current_dir(cwd).env_remove("SLURM_ARRAY_TASK_ID");
+    cmd.args(args)
+        .current_dir(cwd)
+        .env_remove("SLURM_ARRAY_TASK_ID");
     if let Some(t) = threads {
         cmd.env("RAYON_NUM_THREADS", t);
     }
@@ -77,9 +79,16 @@ fn shards_as_separate_processes_reproduce_the_sweep() {
     ok(&plan);
     let listing = String::from_utf8_lossy(&plan.stdout);
     assert!(listing.contains("4 run(s)"), "{listing}");
-    assert!(listing.contains("schemes[1].selector.budget_m2=0.0003, seed=2"), "{listing}");
+    assert!(
+        listing.contains("schemes[1].selector.budget_m2=0.0003, seed=2"),
+        "{listing}"
+    );
 
-    ok(&gpodo(&["-q", "run", "tiny.yaml", "--out", "whole"], d, None));
+    ok(&gpodo(
+        &["-q", "run", "tiny.yaml", "--out", "whole"],
+        d,
+        None,
+    ));
     let whole = metrics_by_key(&d.join("whole"));
     assert_eq!(whole.len(), 4);
     assert!(d.join("whole/report.md").is_file());
@@ -90,8 +99,16 @@ fn shards_as_separate_processes_reproduce_the_sweep() {
         .map(|i| {
             let shard = format!("{i}/3");
             let mut cmd = Command::new(GPODO);
-            cmd.args(["-q", "run", "tiny.yaml", "--out", "sharded", "--shard", &shard])
-                .current_dir(d);
+            cmd.args([
+                "-q",
+                "run",
+                "tiny.yaml",
+                "--out",
+                "sharded",
+                "--shard",
+                &shard,
+            ])
+            .current_dir(d);
             if i == 1 {
                 cmd.env("RAYON_NUM_THREADS", "1");
             }
@@ -108,7 +125,10 @@ fn shards_as_separate_processes_reproduce_the_sweep() {
         assert!(d.join(format!("sharded/runs.{i}.jsonl")).is_file());
     }
     let sharded = metrics_by_key(&d.join("sharded"));
-    assert_eq!(sharded, whole, "sharded runs differ from the unsharded sweep");
+    assert_eq!(
+        sharded, whole,
+        "sharded runs differ from the unsharded sweep"
+    );
     let report = gpodo(&["report", "sharded"], d, None);
     ok(&report);
     let text = String::from_utf8_lossy(&report.stdout);
@@ -122,24 +142,39 @@ fn a_stopped_sweep_resumes_and_the_report_names_gaps_and_duplicates() {
     std::fs::write(d.join("tiny.yaml"), SWEEP).unwrap();
     // As if killed after half the runs: only shard 0 of 2 recorded, into
     // the sweep's own record file.
-    ok(&gpodo(&["-q", "run", "tiny.yaml", "--out", "r", "--shard", "0/2"], d, None));
+    ok(&gpodo(
+        &["-q", "run", "tiny.yaml", "--out", "r", "--shard", "0/2"],
+        d,
+        None,
+    ));
     std::fs::rename(d.join("r/runs.0.jsonl"), d.join("r/runs.jsonl")).unwrap();
     let partial = metrics_by_key(&d.join("r"));
     assert_eq!(partial.len(), 2);
     let report = gpodo(&["report", "r"], d, None);
     ok(&report);
     assert!(String::from_utf8_lossy(&report.stdout).contains("2 missing"));
-    assert!(std::fs::read_to_string(d.join("r/report.md")).unwrap().contains("Incomplete: 2 planned run(s)"));
+    assert!(
+        std::fs::read_to_string(d.join("r/report.md"))
+            .unwrap()
+            .contains("Incomplete: 2 planned run(s)")
+    );
     // Without --resume nothing is overwritten.
     let refused = gpodo(&["-q", "run", "tiny.yaml", "--out", "r"], d, None);
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
     assert_eq!(metrics_by_key(&d.join("r")), partial);
     // Resuming runs only the two missing runs.
-    let resumed = gpodo(&["-q", "run", "tiny.yaml", "--out", "r", "--resume"], d, None);
+    let resumed = gpodo(
+        &["-q", "run", "tiny.yaml", "--out", "r", "--resume"],
+        d,
+        None,
+    );
     ok(&resumed);
     let stdout = String::from_utf8_lossy(&resumed.stdout);
-    assert!(stdout.starts_with("2 run(s) done") && stdout.contains("2 skipped"), "{stdout}");
+    assert!(
+        stdout.starts_with("2 run(s) done") && stdout.contains("2 skipped"),
+        "{stdout}"
+    );
     let all = metrics_by_key(&d.join("r"));
     assert_eq!(all.len(), 4);
     for (k, m) in &partial {
@@ -162,8 +197,16 @@ fn the_same_config_gives_byte_identical_metrics() {
         "",
     );
     std::fs::write(d.join("one.yaml"), single).unwrap();
-    ok(&gpodo(&["-q", "run", "one.yaml", "--out", "a"], d, Some("2")));
-    ok(&gpodo(&["-q", "run", "one.yaml", "--out", "b"], d, Some("1")));
+    ok(&gpodo(
+        &["-q", "run", "one.yaml", "--out", "a"],
+        d,
+        Some("2"),
+    ));
+    ok(&gpodo(
+        &["-q", "run", "one.yaml", "--out", "b"],
+        d,
+        Some("1"),
+    ));
     assert_eq!(metrics_by_key(&d.join("a")), metrics_by_key(&d.join("b")));
     // A single run writes the full report and its figures.
     assert!(d.join("a/report.md").is_file() && d.join("a/metrics.json").is_file());

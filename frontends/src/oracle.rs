@@ -12,7 +12,9 @@
 //! (the squared position errors the odometry accumulates). A gap the
 //! visual odometry would probably not bridge — tracking `b` from `a` with
 //! the odometry prior succeeds with probability below
-//! `min_track_probability` — or longer than `max_gap_secs` is not allowed.
+//! `min_track_probability` — or longer than `max_gap_secs`, or with more
+//! true rotation than `max_rotation_rad` or path than `max_distance_m` (the
+//! limits of the gated schemes' turn guard), is not allowed.
 //! The plan minimises `Σ C` over consecutive chosen frames plus the tail
 //! after the last one, with at most `B` frames.
 //!
@@ -57,6 +59,12 @@ pub struct OracleParams {
     /// Least probability that visual odometry bridges a gap (default 0.99:
     /// the oracle knows the truth and takes no risk).
     pub min_track_probability: f64,
+    /// Largest true rotation between consecutive processed frames (rad;
+    /// default 0.15, the turn guard of the gated schemes; null: none).
+    pub max_rotation_rad: Option<f64>,
+    /// Longest true path between consecutive processed frames (m; default
+    /// 0.3, as the turn guard; null: none).
+    pub max_distance_m: Option<f64>,
 }
 
 impl Default for OracleParams {
@@ -67,6 +75,8 @@ impl Default for OracleParams {
             candidate_period_secs: 0.4,
             max_gap_secs: 20.0,
             min_track_probability: 0.99,
+            max_rotation_rad: Some(0.15),
+            max_distance_m: Some(0.3),
         }
     }
 }
@@ -99,6 +109,16 @@ impl OracleParams {
         }
         if !(0.0..=1.0).contains(&self.min_track_probability) {
             return bad("min_track_probability", "a probability in [0, 1]");
+        }
+        for (field, v) in [
+            ("max_rotation_rad", self.max_rotation_rad),
+            ("max_distance_m", self.max_distance_m),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return bad(field, "a positive limit, or null");
+            }
         }
         Ok(())
     }
@@ -183,12 +203,36 @@ pub fn dp_plan(
     Some((cost, chosen))
 }
 
+/// The fewest candidates (candidate 0 included) that reach the end with
+/// allowed gaps, or `None` when none does: a breadth-first pass, `O(N G)`.
+pub fn fewest_frames(n: usize, g_max: usize, gap_cost: &[f64], tail_cost: &[f64]) -> Option<usize> {
+    let mut count = vec![usize::MAX; n];
+    if n == 0 {
+        return None;
+    }
+    count[0] = 1;
+    for j in 1..n {
+        for i in j.saturating_sub(g_max)..j {
+            if count[i] != usize::MAX && gap_cost[i * g_max + (j - i - 1)].is_finite() {
+                count[j] = count[j].min(count[i] + 1);
+            }
+        }
+    }
+    (0..n)
+        .filter(|&j| count[j] != usize::MAX && tail_cost[j].is_finite())
+        .map(|j| count[j])
+        .min()
+}
+
 /// Plans the frames of a budget.
+///
+/// A budget below the fewest frames the limits allow is raised to that
+/// number (with a warning).
 ///
 /// # Errors
 /// As [`OracleParams::validate`] (except the budget, given here);
-/// [`FrontendError::InvalidSpec`] when no plan within the budget respects
-/// the gap limits.
+/// [`FrontendError::InvalidSpec`] when no plan at all respects the gap and
+/// motion limits.
 pub fn plan_frames(
     traverse: &Traverse,
     predictions: &[ResidualPrediction],
@@ -238,8 +282,16 @@ pub fn plan_frames(
         let mut odometry = Isometry3::identity();
         let mut cost = 0.0;
         let mut next = ci + 1;
+        let start_distance = traverse.distance_at(k);
         loop {
             let t = times[k];
+            let truth = &traverse.ground_truth()[k];
+            let within_limits = params
+                .max_rotation_rad
+                .is_none_or(|r| start_pose.rotation.angle_to(&truth.rotation) <= r)
+                && params
+                    .max_distance_m
+                    .is_none_or(|d| traverse.distance_at(k) - start_distance <= d);
             // Close every candidate gap that ends at or before this sample.
             while next < n && next - ci <= g_max && camera[candidates[next]] <= t {
                 let (a, b) = (
@@ -262,13 +314,13 @@ pub fn plan_frames(
                     prior,
                     purpose: TrackPurpose::Tracking,
                 });
-                if p >= params.min_track_probability {
+                if p >= params.min_track_probability && within_limits {
                     gap_cost[ci * g_max + (next - ci - 1)] = cost;
                 }
                 next += 1;
             }
-            if t - t_start > max_gap || k + 1 >= times.len() {
-                if k + 1 >= times.len() && end_time - t_start <= max_gap {
+            if t - t_start > max_gap || k + 1 >= times.len() || !within_limits {
+                if k + 1 >= times.len() && end_time - t_start <= max_gap && within_limits {
                     tail_cost[ci] = cost;
                 }
                 break;
@@ -285,6 +337,21 @@ pub fn plan_frames(
             k += 1;
         }
     }
+    // Fewer frames than the motion limits allow cannot be planned: plan the
+    // fewest that can (the report shows the planned count beside the
+    // budget).
+    let fewest = fewest_frames(n, g_max, &gap_cost, &tail_cost);
+    let budget = match fewest {
+        Some(f) if f > budget => {
+            tracing::warn!(
+                budget,
+                fewest = f,
+                "oracle: the budget cannot respect the gap and motion limits; planning the fewest frames that can"
+            );
+            f
+        }
+        _ => budget,
+    };
     let Some((cost, chosen)) = dp_plan(n, g_max, &gap_cost, &tail_cost, budget) else {
         return Err(FrontendError::InvalidSpec {
             selector: "oracle".into(),
@@ -332,6 +399,25 @@ mod tests {
             best = best.min(cost);
         }
         best
+    }
+
+    #[test]
+    fn the_fewest_frames_are_found() {
+        // 0 → 2 → 4 → end, with 0 → 1 → 3 → end just as short.
+        let inf = f64::INFINITY;
+        let g_max = 2;
+        let gap = vec![
+            1.0, 1.0, // from 0: to 1, to 2
+            inf, 1.0, // from 1: to 3
+            inf, 1.0, // from 2: to 4
+            inf, inf, // from 3
+            inf, inf, // from 4
+        ];
+        let tail = vec![inf, inf, inf, 1.0, 1.0];
+        assert_eq!(fewest_frames(5, g_max, &gap, &tail), Some(3));
+        assert_eq!(dp_plan(5, g_max, &gap, &tail, 2), None);
+        assert!(dp_plan(5, g_max, &gap, &tail, 3).is_some());
+        assert_eq!(fewest_frames(5, g_max, &gap, &[inf; 5]), None);
     }
 
     #[test]

@@ -12,6 +12,8 @@
 //!   learned inducing inputs);
 //! * [`ilgr::Ilgr`]: incremental local Gaussian regression (§VI; Meier,
 //!   Hennig & Schaal 2014), learning online one sample at a time;
+//! * [`knn::Knn`]: k-nearest-neighbour regression, the worked example of
+//!   adding a regressor (`experiments/README.md`);
 //! * [`hyperopt`]: the optimiser both GPs learn their hyperparameters with
 //!   (argmin L-BFGS or nonlinear CG, bounds, seeded restarts);
 //! * [`metrics`]: RMSE and MAE per output (Table I), negative log predictive
@@ -25,6 +27,7 @@ pub mod exact_gp;
 pub mod hyperopt;
 pub mod ilgr;
 pub mod kernels;
+pub mod knn;
 pub mod metrics;
 pub mod scaling;
 pub mod sparse_gp;
@@ -35,6 +38,7 @@ pub use error::RegressorError;
 pub use exact_gp::{ExactGp, ExactGpParams};
 pub use ilgr::{Ilgr, IlgrParams};
 pub use kernels::{Kernel, KernelExpr};
+pub use knn::{Knn, KnnParams};
 pub use sparse_gp::{SparseGp, SparseGpParams};
 pub use spec::RegressorSpec;
 pub use zero::ZeroResidual;

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::exact_gp::{ExactGp, ExactGpParams, OutputSharing};
 use crate::ilgr::{Ilgr, IlgrParams};
+use crate::knn::{Knn, KnnParams};
 use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
 use crate::{RegressorError, ZeroResidual};
 
@@ -27,6 +28,9 @@ pub enum RegressorSpec {
     SparseGp(SparseGpParams),
     /// Incremental local Gaussian regression (§VI), learning online.
     Ilgr(IlgrParams),
+    /// k-nearest-neighbour regression (the worked example of adding a
+    /// regressor).
+    Knn(KnnParams),
 }
 
 impl RegressorSpec {
@@ -70,6 +74,12 @@ impl RegressorSpec {
                 to_json(p),
                 to_json(&IlgrParams::default()),
             ),
+            Self::Knn(p) => (
+                format!("k-NN (k={})", p.k),
+                &["k"][..],
+                to_json(p),
+                to_json(&KnnParams::default()),
+            ),
         };
         let mut changed = Vec::new();
         non_default_settings("", &params, &defaults, &mut changed);
@@ -102,6 +112,7 @@ impl RegressorSpec {
             Self::ExactGp(p) => p.check(),
             Self::SparseGp(p) => p.check(),
             Self::Ilgr(p) => p.check(),
+            Self::Knn(p) => p.check(),
         }
     }
 
@@ -116,6 +127,7 @@ impl RegressorSpec {
             Self::ExactGp(p) => Box::new(ExactGp::new(p.clone())?),
             Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
             Self::Ilgr(p) => Box::new(Ilgr::new(p.clone())?),
+            Self::Knn(p) => Box::new(Knn::new(p.clone())?),
         })
     }
 }

@@ -346,3 +346,41 @@ fn regressors_are_send_and_sync() {
     check::<ExactGp>();
     check::<ExactGpState>();
 }
+
+/// Records the optimiser's reports.
+#[derive(Default)]
+struct Recorder(std::sync::Mutex<Vec<(usize, u64, f64)>>);
+
+impl gpodo_traits::FitProgress for Recorder {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+        self.0.lock().unwrap().push((start, iteration, objective));
+    }
+}
+
+#[test]
+fn a_fit_reports_its_iterations_without_changing_its_result() {
+    let (x, y) = sine_data(60, 23);
+    let data = dataset(&x, &y);
+    let params = ExactGpParams {
+        restarts: 1,
+        ..ExactGpParams::default()
+    };
+    let recorder = std::sync::Arc::new(Recorder::default());
+    let mut watched = ExactGp::new(params.clone()).unwrap();
+    watched.set_progress(Some(recorder.clone()));
+    let report = watched.fit(&data).unwrap();
+    let mut quiet = ExactGp::new(params).unwrap();
+    assert_eq!(quiet.fit(&data).unwrap().objective, report.objective);
+    let seen = recorder.0.lock().unwrap().clone();
+    assert!(seen.len() > 3, "{seen:?}");
+    // Both starts report, iterations count up within a start, and the best
+    // objective so far never falls.
+    assert!(seen.iter().any(|s| s.0 == 0) && seen.iter().any(|s| s.0 == 1));
+    for w in seen.windows(2) {
+        if w[0].0 == w[1].0 {
+            assert!(w[1].1 > w[0].1 && w[1].2 >= w[0].2 - 1e-9, "{w:?}");
+        }
+    }
+    let best = seen.iter().map(|s| s.2).fold(f64::NEG_INFINITY, f64::max);
+    assert!((best - report.objective.unwrap()).abs() < 1e-6 * best.abs());
+}

@@ -24,6 +24,6 @@ mod selector;
 pub use error::Error;
 pub use matrix::SampleMatrix;
 pub use motion::{BodyTwist, MotionEstimate, MotionModel};
-pub use regressor::{FitReport, Predictions, ResidualDataset, ResidualRegressor};
+pub use regressor::{FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor};
 pub use sample::{ImuSample, JointState, ProprioceptiveSample};
 pub use selector::{FrameContext, FrameDecision, FrameSelector};

@@ -102,6 +102,14 @@ pub struct FitReport {
     pub parameters: Vec<(String, f64)>,
 }
 
+/// Receives a fit's progress: the optimiser's iterations (for progress
+/// bars and logs; the fit's result never depends on it).
+pub trait FitProgress: Send + Sync {
+    /// Iteration `iteration` of start `start` ended with the best objective
+    /// `objective` so far (e.g. the log marginal likelihood).
+    fn iteration(&self, start: usize, iteration: u64, objective: f64);
+}
+
 /// A regressor of odometry residuals.
 ///
 /// `fit` learns from a batch; `predict` returns mean and variance per output;
@@ -167,6 +175,12 @@ pub trait ResidualRegressor: Send + Sync {
     /// Whether [`ResidualRegressor::update`] learns online.
     fn supports_online_update(&self) -> bool {
         false
+    }
+
+    /// Where to report the optimiser's progress during `fit` (models
+    /// without an iterative fit ignore it).
+    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn FitProgress>>) {
+        let _ = progress;
     }
 
     /// Learns from one more sample (online learning).

@@ -19,6 +19,7 @@ use super::params::{ExactGpParams, OutputSharing};
 use super::posterior::Posterior;
 use crate::RegressorError;
 use crate::dense::to_faer;
+use crate::hyperopt::ProgressSink;
 use crate::kernels::Kernel;
 use crate::scaling::{
     GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
@@ -67,6 +68,7 @@ struct Fitted {
 pub struct ExactGp {
     params: ExactGpParams,
     fitted: Option<Fitted>,
+    progress: ProgressSink,
 }
 
 fn backend(e: RegressorError) -> Error {
@@ -87,6 +89,7 @@ impl ExactGp {
         Ok(Self {
             params,
             fitted: None,
+            progress: ProgressSink::default(),
         })
     }
 
@@ -138,6 +141,7 @@ impl ExactGp {
         Ok(Self {
             params: state.params.clone(),
             fitted: Some(Fitted { state, posteriors }),
+            progress: ProgressSink::default(),
         })
     }
 
@@ -175,6 +179,7 @@ impl ExactGp {
                     x.as_ref(),
                     yg.as_ref(),
                     &params,
+                    &self.progress,
                 )?;
                 evaluations += opt.evaluations;
                 tracing::debug!(
@@ -288,6 +293,10 @@ impl ResidualRegressor for ExactGp {
 
     fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
         self.fit_impl(data).map_err(backend)
+    }
+
+    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>) {
+        self.progress = ProgressSink(progress);
     }
 
     fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {

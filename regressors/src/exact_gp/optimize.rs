@@ -8,7 +8,7 @@ use faer::MatRef;
 use super::likelihood::log_marginal_likelihood;
 use super::params::ExactGpParams;
 use crate::RegressorError;
-use crate::hyperopt::{Coordinates, LogBounds, Objective, maximize};
+use crate::hyperopt::{Coordinates, LogBounds, Objective, ProgressSink, maximize};
 use crate::kernels::Kernel;
 
 /// The outcome of hyperparameter learning.
@@ -64,6 +64,7 @@ pub fn maximize_lml(
     x: MatRef<'_, f64>,
     y: MatRef<'_, f64>,
     params: &ExactGpParams,
+    progress: &ProgressSink,
 ) -> Result<Optimized, RegressorError> {
     let mut bounds: Vec<LogBounds> = kernel
         .param_kinds()
@@ -84,7 +85,13 @@ pub fn maximize_lml(
         y,
     };
     let value_scale = 1.0 / (y.nrows() * y.ncols()).max(1) as f64;
-    let out = maximize(&objective, &coords, value_scale, &params.settings())?;
+    let out = maximize(
+        &objective,
+        &coords,
+        value_scale,
+        &params.settings(),
+        progress.0.as_ref(),
+    )?;
     let (kernel, noise_variance) = objective.hyperparameters(&out.coords);
     Ok(Optimized {
         kernel,

@@ -116,6 +116,21 @@ pub struct Maximized {
     pub start_values: Vec<f64>,
 }
 
+/// Where a fit reports its optimiser's iterations (none by default); the
+/// fit's result never depends on it.
+#[derive(Clone, Default)]
+pub struct ProgressSink(pub Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>);
+
+impl std::fmt::Debug for ProgressSink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "ProgressSink(set)"
+        } else {
+            "ProgressSink(none)"
+        })
+    }
+}
+
 /// A point, the cost there and its gradient.
 type Evaluated = (Vec<f64>, f64, Vec<f64>);
 
@@ -227,6 +242,7 @@ pub fn maximize(
     coords: &Coordinates,
     value_scale: f64,
     settings: &OptimizerSettings,
+    progress: Option<&std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 ) -> Result<Maximized, RegressorError> {
     let start0: Vec<f64> = coords
         .start
@@ -279,7 +295,13 @@ pub fn maximize(
         };
         let scale = problem.scale.get();
         let tol_cost = settings.relative_cost_tolerance * initial.abs().max(1.0);
-        let outcome = solver::run(&problem, start_u, settings, tol_cost);
+        let outcome = solver::run(
+            &problem,
+            start_u,
+            settings,
+            tol_cost,
+            progress.map(|p| (p, start, scale)),
+        );
         match outcome {
             Ok(n) => iterations += n,
             Err(e) if problem.best.borrow().is_some() => {
@@ -354,7 +376,7 @@ mod tests {
             perturb: vec![true, false, true],
         };
         for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
-            let out = maximize(&objective, &coords, 1.0, &settings(optimizer)).unwrap();
+            let out = maximize(&objective, &coords, 1.0, &settings(optimizer), None).unwrap();
             assert!((out.coords[0] - 0.5).abs() < 1e-6, "{out:?}");
             assert!((out.coords[1] + 2.0).abs() < 1e-6, "{out:?}");
             assert!(

@@ -2,6 +2,9 @@
 //! conjugate gradient, both with a Moré–Thuente line search and the same
 //! stopping rules (gradient norm, change of the objective).
 
+use std::sync::Arc;
+
+use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     Error as ArgminError, Executor, IterState, KV, Problem, Solver, State, TerminationReason,
     TerminationStatus,
@@ -10,6 +13,7 @@ use argmin::solver::conjugategradient::NonlinearConjugateGradient;
 use argmin::solver::conjugategradient::beta::PolakRibiere;
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
+use gpodo_traits::FitProgress;
 
 use super::{Negated, Optimizer, OptimizerSettings};
 
@@ -59,14 +63,40 @@ impl<O, S: Solver<O, HyperState>> Solver<O, HyperState> for Converging<S> {
     }
 }
 
+/// Reports each iteration to a [`FitProgress`] (an argmin observer), as
+/// the objective to maximise: `−cost / scale`.
+struct Reporter {
+    progress: Arc<dyn FitProgress>,
+    start: usize,
+    scale: f64,
+}
+
+impl Observe<HyperState> for Reporter {
+    fn observe_iter(&mut self, state: &HyperState, _kv: &KV) -> Result<(), ArgminError> {
+        self.progress.iteration(
+            self.start,
+            state.get_iter(),
+            -state.get_best_cost() / self.scale,
+        );
+        Ok(())
+    }
+}
+
 /// Runs one start from `u0`; returns the iterations. The best point seen is
-/// recorded by `problem` whatever happens.
+/// recorded by `problem` whatever happens; `progress` (with the start's
+/// number and the objective's scale) hears of every iteration.
 pub(super) fn run(
     problem: &Negated<'_>,
     u0: Vec<f64>,
     settings: &OptimizerSettings,
     tol_cost: f64,
+    progress: Option<(&Arc<dyn FitProgress>, usize, f64)>,
 ) -> Result<u64, ArgminError> {
+    let reporter = progress.map(|(p, start, scale)| Reporter {
+        progress: Arc::clone(p),
+        start,
+        scale,
+    });
     let converging = |inner| Converging {
         inner,
         tol_grad: settings.gradient_tolerance,
@@ -83,20 +113,24 @@ pub(super) fn run(
             let solver = LBFGS::new(line_search, 10)
                 .with_tolerance_grad(settings.gradient_tolerance)?
                 .with_tolerance_cost(tol_cost)?;
-            Executor::new(problem, converging(solver))
-                .configure(|s| s.param(u0).max_iters(settings.max_iters))
-                .run()
-                .map(|r| r.state().get_iter())
+            let mut executor = Executor::new(problem, converging(solver))
+                .configure(|s| s.param(u0).max_iters(settings.max_iters));
+            if let Some(r) = reporter {
+                executor = executor.add_observer(r, ObserverMode::Always);
+            }
+            executor.run().map(|r| r.state().get_iter())
         }
         Optimizer::ConjugateGradient => {
             let line_search = line_search.with_c(1e-4, 0.1)?;
             let solver = NonlinearConjugateGradient::new(line_search, PolakRibiere::new())
                 .restart_iters(u0.len() as u64)
                 .restart_orthogonality(0.1);
-            Executor::new(problem, converging_cg(solver))
-                .configure(|s| s.param(u0).max_iters(settings.max_iters))
-                .run()
-                .map(|r| r.state().get_iter())
+            let mut executor = Executor::new(problem, converging_cg(solver))
+                .configure(|s| s.param(u0).max_iters(settings.max_iters));
+            if let Some(r) = reporter {
+                executor = executor.add_observer(r, ObserverMode::Always);
+            }
+            executor.run().map(|r| r.state().get_iter())
         }
     }
 }

@@ -19,7 +19,7 @@ use super::params::{Approximation, SparseGpParams};
 use super::posterior::SparsePosterior;
 use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
-use crate::hyperopt::{Coordinates, LogBounds, Objective, maximize};
+use crate::hyperopt::{Coordinates, LogBounds, Objective, ProgressSink, maximize};
 use crate::kernels::Kernel;
 use crate::scaling::{
     GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
@@ -58,6 +58,7 @@ pub struct SparseGpState {
 pub struct SparseGp {
     params: SparseGpParams,
     fitted: Option<(SparseGpState, SparsePosterior)>,
+    progress: ProgressSink,
 }
 
 /// The objective over `(log θ, log σ², Z)` (Z only when learned).
@@ -124,6 +125,7 @@ impl SparseGp {
         Ok(Self {
             params,
             fitted: None,
+            progress: ProgressSink::default(),
         })
     }
 
@@ -176,6 +178,7 @@ impl SparseGp {
         Ok(Self {
             params: state.params.clone(),
             fitted: Some((state, posterior)),
+            progress: ProgressSink::default(),
         })
     }
 
@@ -219,7 +222,13 @@ impl SparseGp {
                 perturb,
             };
             let value_scale = 1.0 / (y.nrows() * y.ncols()) as f64;
-            let out = maximize(&objective, &coords, value_scale, &p.settings())?;
+            let out = maximize(
+                &objective,
+                &coords,
+                value_scale,
+                &p.settings(),
+                self.progress.0.as_ref(),
+            )?;
             tracing::debug!(
                 objective = out.value,
                 evaluations = out.evaluations,
@@ -311,6 +320,10 @@ impl ResidualRegressor for SparseGp {
 
     fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
         self.fit_impl(data).map_err(backend)
+    }
+
+    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>) {
+        self.progress = ProgressSink(progress);
     }
 
     fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
