@@ -38,8 +38,7 @@ fn gpodo(args: &[&str], cwd: &Path, threads: Option<&str>) -> Output {
     if let Some(t) = threads {
         cmd.env("RAYON_NUM_THREADS", t);
     }
-    let out = cmd.output().unwrap();
-    out
+    cmd.output().unwrap()
 }
 
 fn ok(out: &Output) {
