@@ -11,8 +11,10 @@
 //! `C(a, b) = Σ_k ‖p̂_k − p_k‖²` over the sensor samples `t_a ≤ t_k < t_b`
 //! (the squared position errors the odometry accumulates). A gap the
 //! visual odometry would probably not bridge — tracking `b` from `a` with
-//! the odometry prior succeeds with probability below
-//! `min_track_probability` — or longer than `max_gap_secs`, or with more
+//! the odometry prior, or matching them without a prior (the tracker's
+//! reference keyframe may lie further back than `a`), succeeds with
+//! probability below `min_track_probability` — or longer than
+//! `max_gap_secs`, or with more
 //! true rotation than `max_rotation_rad` or path than `max_distance_m` (the
 //! limits of the gated schemes' turn guard), is not allowed.
 //! The plan minimises `Σ C` over consecutive chosen frames plus the tail
@@ -308,12 +310,22 @@ pub fn plan_frames(
                     MotionPrior::None => None,
                     _ => Some(odometry),
                 };
-                let p = vo.success_probability(&TrackRequest {
+                let guided = vo.success_probability(&TrackRequest {
                     reference: a,
                     current: b,
                     prior,
                     purpose: TrackPurpose::Tracking,
                 });
+                // The tracker's reference keyframe may lie further back
+                // than the previous frame: the two frames must also match
+                // without a prior (they overlap that much).
+                let unaided = vo.success_probability(&TrackRequest {
+                    reference: a,
+                    current: b,
+                    prior: None,
+                    purpose: TrackPurpose::Relocalisation,
+                });
+                let p = guided.min(unaided);
                 if p >= params.min_track_probability && within_limits {
                     gap_cost[ci * g_max + (next - ci - 1)] = cost;
                 }
