@@ -267,7 +267,9 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
                 key: run.key.clone(),
                 source: Box::new(e),
             };
-            let results = shared.results(&run.config, base).map_err(wrap)?;
+            let mut results = shared.results(&run.config, base).map_err(wrap)?;
+            // A run's wall time: since the sweep started (shared work included).
+            results.duration_secs = start.elapsed().as_secs_f64();
             writer.append(&RunRecord::new(run, &results))?;
             if details {
                 let run_dir = if single {

@@ -22,10 +22,12 @@ pub struct TrajectoryMetrics {
     pub travel_distance_error_percent: f64,
 }
 
-/// Compares `estimate` with `truth`, sample by sample (same length).
+/// Compares `estimate` with `truth`, sample by sample (same length);
+/// `distance_m` is the distance travelled (the traverse's path length).
 pub fn trajectory_metrics(
     estimate: &[Isometry3<f64>],
     truth: &[Isometry3<f64>],
+    distance_m: f64,
 ) -> TrajectoryMetrics {
     let n = estimate.len().min(truth.len());
     if n == 0 {
@@ -36,10 +38,6 @@ pub fn trajectory_metrics(
         .zip(truth)
         .map(|(e, t)| (e.translation.vector - t.translation.vector).norm())
         .collect();
-    let distance_m: f64 = truth
-        .windows(2)
-        .map(|w| (w[1].translation.vector - w[0].translation.vector).norm())
-        .sum();
     let final_error_m = errors[n - 1];
     TrajectoryMetrics {
         rmse_m: (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt(),
@@ -71,7 +69,7 @@ mod tests {
             Isometry3::translation(2.0, 0.0, 0.4),
             Isometry3::translation(3.5, 0.0, 0.0),
         ];
-        let m = trajectory_metrics(&estimate, &truth);
+        let m = trajectory_metrics(&estimate, &truth, 3.0);
         let rmse = ((0.09 + 0.16 + 0.25) / 4.0f64).sqrt();
         assert!((m.rmse_m - rmse).abs() < 1e-15);
         assert_eq!(m.max_error_m, 0.5);

@@ -570,7 +570,11 @@ impl<'a> Session<'a> {
             .iter()
             .map(|(node, relative)| optimized.poses[*node] * relative)
             .collect();
-        self.run.metrics = trajectory_metrics(&self.run.trajectory, self.traverse.ground_truth());
+        self.run.metrics = trajectory_metrics(
+            &self.run.trajectory,
+            self.traverse.ground_truth(),
+            self.traverse.path_length_m(),
+        );
         let cost = &self.params.cost;
         self.run.compute_ms =
             self.run.frames as f64 * cost.frame_ms + self.run.keyframes as f64 * cost.keyframe_ms;

@@ -42,6 +42,33 @@ pub struct Traverse {
     cumulative_m: Vec<f64>,
 }
 
+/// Stride over which the path length is measured (s): summing sample-to-
+/// sample steps would add up the ground truth's jitter.
+pub const PATH_STRIDE_SECS: f64 = 1.0;
+
+/// Path length up to each sample: straight segments between anchors at
+/// least [`PATH_STRIDE_SECS`] apart, interpolated in time between them.
+fn cumulative_distance(times: &[f64], truth: &[Isometry3<f64>]) -> Vec<f64> {
+    let n = times.len();
+    let mut anchors = vec![0];
+    for k in 1..n {
+        if times[k] - times[anchors[anchors.len() - 1]] >= PATH_STRIDE_SECS || k == n - 1 {
+            anchors.push(k);
+        }
+    }
+    let mut out = vec![0.0; n];
+    let mut acc = 0.0;
+    for w in anchors.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let segment = (truth[b].translation.vector - truth[a].translation.vector).norm();
+        for k in a..=b {
+            out[k] = acc + segment * (times[k] - times[a]) / (times[b] - times[a]);
+        }
+        acc += segment;
+    }
+    out
+}
+
 impl Traverse {
     /// Checks and builds a traverse: `times_secs` strictly increasing,
     /// one ground-truth pose per sample, one twist per step (`n − 1`),
@@ -114,14 +141,7 @@ impl Traverse {
                 "camera frames outside the sampled span [{t0}, {t1}] s"
             )));
         }
-        let mut cumulative_m = Vec::with_capacity(n);
-        let mut acc = 0.0;
-        cumulative_m.push(0.0);
-        for k in 1..n {
-            acc += (ground_truth[k].translation.vector - ground_truth[k - 1].translation.vector)
-                .norm();
-            cumulative_m.push(acc);
-        }
+        let cumulative_m = cumulative_distance(&times_secs, &ground_truth);
         Ok(Self {
             name,
             times_secs,
@@ -178,8 +198,8 @@ impl Traverse {
         self.cumulative_m[k]
     }
 
-    /// Ground-truth path length of the whole traverse (m), summed over
-    /// samples.
+    /// Ground-truth path length of the whole traverse (m), over 1-s
+    /// strides.
     pub fn path_length_m(&self) -> f64 {
         self.cumulative_m[self.cumulative_m.len() - 1]
     }

@@ -229,10 +229,15 @@ fn an_online_learner_picks_up_a_constant_residual_and_then_looks_less() {
             .filter(|f| f.time_secs >= a && f.time_secs < b)
             .count()
     };
-    let (early, late) = (count(0.0, 150.0), count(750.0, 900.0));
+    // Frames per second while the model knows nothing (the first 40 s)
+    // and once it has learned (the last 150 s).
+    let (early, late) = (
+        count(0.0, 40.0) as f64 / 40.0,
+        count(750.0, 900.0) as f64 / 150.0,
+    );
     let last = run.predictions.last().unwrap().1;
     println!(
-        "targets {}, frames early {early}, late {late}, final prediction {:?} ± {:?}",
+        "targets {}, frames early {early:.2}/s, late {late:.2}/s, final prediction {:?} ± {:?}",
         run.online_targets,
         last.mean,
         last.variance.map(f64::sqrt)
@@ -247,8 +252,8 @@ fn an_online_learner_picks_up_a_constant_residual_and_then_looks_less() {
     assert!(run.online_targets > 50);
     assert!((last.mean.x - 0.006).abs() < 0.002, "{:?}", last.mean);
     // The VO noise in the targets sets a floor to the model's variance;
-    // once the mean is learned the frames fall by a fifth or more.
-    assert!(late * 5 < early * 4, "early {early}, late {late}");
+    // once the mean is learned the rover looks at most two thirds as often.
+    assert!(late < 0.67 * early, "early {early:.2}/s, late {late:.2}/s");
 }
 
 #[test]
@@ -257,14 +262,14 @@ fn the_oracle_respects_its_budget_and_gap_limit() {
     let vo = SimulatedVo::new(SimulatedVoParams::default(), &t).unwrap();
     let predictions = vec![ResidualPrediction::uninformed(1e-6); t.windows().len()];
     let params = OracleParams {
-        frames: Some(40),
+        frames: Some(60),
         max_gap_secs: 10.0,
         max_distance_m: None,
         ..OracleParams::default()
     };
-    let plan = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 40).unwrap();
+    let plan = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 60).unwrap();
     assert!(
-        plan.frames.len() <= 40 && plan.frames.len() >= 20,
+        plan.frames.len() <= 60 && plan.frames.len() >= 20,
         "{}",
         plan.frames.len()
     );
@@ -273,11 +278,11 @@ fn the_oracle_respects_its_budget_and_gap_limit() {
         assert!(w[1] - w[0] <= 10.0 + 1e-9);
     }
     // A larger budget cannot cost more.
-    let more = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 80).unwrap();
+    let more = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 90).unwrap();
     assert!(more.cost <= plan.cost);
     // Too small a budget to respect the gap limit plans the fewest that do.
     let raised = plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, &params, 5).unwrap();
-    assert!(raised.frames.len() > 5 && raised.frames.len() <= 40);
+    assert!(raised.frames.len() > 5 && raised.frames.len() <= 60);
     // A distance limit holds between consecutive frames.
     let limited = OracleParams {
         max_distance_m: Some(0.2),
