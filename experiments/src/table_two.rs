@@ -178,6 +178,28 @@ pub struct SchemeInputs<'a> {
 }
 
 impl SchemeInputs<'_> {
+    /// The label and window predictions on traverse `t` of the trained
+    /// regressor `scheme` names.
+    fn trained_predictions(
+        &self,
+        scheme: &SchemeSpec,
+        t: usize,
+    ) -> Result<(String, Vec<ResidualPrediction>), PipelineError> {
+        let r = scheme
+            .regressor_index(self.regressor_labels)
+            .map_err(|(problem, expected)| {
+                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
+            })?;
+        let predictions = self.predictions[r]
+            .as_ref()
+            .and_then(|p| p.get(t))
+            .cloned()
+            .ok_or_else(|| {
+                PipelineError::Inconsistent(format!("no predictions of regressor {r}"))
+            })?;
+        Ok((self.regressor_labels[r].clone(), predictions))
+    }
+
     fn source(
         &self,
         scheme: &SchemeSpec,
@@ -193,19 +215,7 @@ impl SchemeInputs<'_> {
             )?;
             return Ok((Box::new(learner), label));
         }
-        let r = scheme
-            .regressor_index(self.regressor_labels)
-            .map_err(|(problem, expected)| {
-                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
-            })?;
-        let predictions = self.predictions[r]
-            .as_ref()
-            .and_then(|p| p.get(t))
-            .cloned()
-            .ok_or_else(|| {
-                PipelineError::Inconsistent(format!("no predictions of regressor {r}"))
-            })?;
-        let label = self.regressor_labels[r].clone();
+        let (label, predictions) = self.trained_predictions(scheme, t)?;
         Ok((
             Box::new(Precomputed::new(label.clone(), predictions)),
             label,
@@ -276,16 +286,7 @@ impl SchemeInputs<'_> {
                 })?,
             (None, None) => 0,
         };
-        let r = scheme
-            .regressor_index(self.regressor_labels)
-            .map_err(|(problem, expected)| {
-                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
-            })?;
-        let predictions = self.predictions[r]
-            .as_ref()
-            .and_then(|p| p.get(t))
-            .cloned()
-            .unwrap_or_default();
+        let (_, predictions) = self.trained_predictions(scheme, t)?;
         let vo = build_vo(self.config, self.base, traverse)?;
         let plan: OraclePlan = plan_frames(
             traverse,

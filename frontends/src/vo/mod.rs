@@ -98,6 +98,69 @@ pub trait VisualOdometry: Send {
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef>;
 }
 
+/// The error of a relative pose measurement: `σ_t = (σ_t0 + k_t ‖t‖) / o^p`,
+/// `σ_r = (σ_r0 + k_r |θ|) / o^p` for a relative motion `(t, θ)` seen with
+/// overlap `o` (floored at 0.05).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorModel {
+    /// σ_t0 (m).
+    pub translation_sigma_m: f64,
+    /// k_t.
+    pub translation_sigma_per_m: f64,
+    /// σ_r0 (rad).
+    pub rotation_sigma_rad: f64,
+    /// k_r.
+    pub rotation_sigma_per_rad: f64,
+    /// p.
+    pub overlap_exponent: f64,
+}
+
+impl ErrorModel {
+    /// Checks the fields (positive floors, non-negative slopes); errors
+    /// name the field under `vo.`.
+    ///
+    /// # Errors
+    /// [`crate::FrontendError::InvalidConfig`].
+    pub fn validate(&self) -> Result<(), crate::FrontendError> {
+        for (field, v, floor) in [
+            ("translation_sigma_m", self.translation_sigma_m, true),
+            ("rotation_sigma_rad", self.rotation_sigma_rad, true),
+            (
+                "translation_sigma_per_m",
+                self.translation_sigma_per_m,
+                false,
+            ),
+            ("rotation_sigma_per_rad", self.rotation_sigma_per_rad, false),
+            ("overlap_exponent", self.overlap_exponent, false),
+        ] {
+            let ok = v.is_finite() && if floor { v > 0.0 } else { v >= 0.0 };
+            if !ok {
+                return Err(crate::FrontendError::InvalidConfig {
+                    field: format!("vo.{field}"),
+                    expected: if floor {
+                        "a positive standard deviation".into()
+                    } else {
+                        "a non-negative number".into()
+                    },
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// `(σ_r, σ_t)` of a measurement of `relative` at `overlap`.
+    pub fn sigmas(&self, relative: &Isometry3<f64>, overlap: f64) -> (f64, f64) {
+        let shrink = overlap.max(0.05).powf(self.overlap_exponent);
+        (
+            (self.rotation_sigma_rad + self.rotation_sigma_per_rad * relative.rotation.angle())
+                / shrink,
+            (self.translation_sigma_m
+                + self.translation_sigma_per_m * relative.translation.vector.norm())
+                / shrink,
+        )
+    }
+}
+
 /// Block-diagonal covariance with isotropic rotation and translation
 /// standard deviations, rotation first.
 pub fn isotropic_covariance(rotation_sigma_rad: f64, translation_sigma_m: f64) -> Matrix6<f64> {

@@ -13,7 +13,7 @@ use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    CameraParams, FrameRef, TrackOutcome, TrackRequest, VisualOdometry, VoMeasurement,
+    CameraParams, ErrorModel, FrameRef, TrackOutcome, TrackRequest, VisualOdometry, VoMeasurement,
     isotropic_covariance,
 };
 use crate::FrontendError;
@@ -76,6 +76,17 @@ impl Default for ReplayVoParams {
 }
 
 impl ReplayVoParams {
+    /// The measurement error model of these settings (overlap exponent 1).
+    pub fn error_model(&self) -> ErrorModel {
+        ErrorModel {
+            translation_sigma_m: self.translation_sigma_m,
+            translation_sigma_per_m: self.translation_sigma_per_m,
+            rotation_sigma_rad: self.rotation_sigma_rad,
+            rotation_sigma_per_rad: self.rotation_sigma_per_rad,
+            overlap_exponent: 1.0,
+        }
+    }
+
     /// Checks every field.
     ///
     /// # Errors
@@ -94,22 +105,7 @@ impl ReplayVoParams {
         if !(self.time_tolerance_secs.is_finite() && self.time_tolerance_secs > 0.0) {
             return bad("time_tolerance_secs", "a positive duration");
         }
-        for (field, v) in [
-            ("translation_sigma_m", self.translation_sigma_m),
-            ("rotation_sigma_rad", self.rotation_sigma_rad),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(field, "a positive standard deviation");
-            }
-        }
-        for (field, v) in [
-            ("translation_sigma_per_m", self.translation_sigma_per_m),
-            ("rotation_sigma_per_rad", self.rotation_sigma_per_rad),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(field, "a non-negative number");
-            }
-        }
+        self.error_model().validate()?;
         if !(0.0..=1.0).contains(&self.recognition_min_overlap) {
             return bad("recognition_min_overlap", "a fraction in [0, 1]");
         }
@@ -196,12 +192,7 @@ impl VisualOdometry for ReplayVo {
         };
         let p = &self.params;
         let overlap = p.camera.body_overlap(&relative);
-        let shrink = overlap.max(0.05);
-        let sigma_r =
-            (p.rotation_sigma_rad + p.rotation_sigma_per_rad * relative.rotation.angle()) / shrink;
-        let sigma_t = (p.translation_sigma_m
-            + p.translation_sigma_per_m * relative.translation.vector.norm())
-            / shrink;
+        let (sigma_r, sigma_t) = p.error_model().sigmas(&relative, overlap);
         TrackOutcome::Tracked(VoMeasurement {
             relative,
             covariance: isotropic_covariance(sigma_r, sigma_t),

@@ -39,7 +39,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    CameraParams, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
+    CameraParams, ErrorModel, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
     VoMeasurement, isotropic_covariance,
 };
 use crate::FrontendError;
@@ -109,6 +109,17 @@ impl Default for SimulatedVoParams {
 }
 
 impl SimulatedVoParams {
+    /// The measurement error model of these settings.
+    pub fn error_model(&self) -> ErrorModel {
+        ErrorModel {
+            translation_sigma_m: self.translation_sigma_m,
+            translation_sigma_per_m: self.translation_sigma_per_m,
+            rotation_sigma_rad: self.rotation_sigma_rad,
+            rotation_sigma_per_rad: self.rotation_sigma_per_rad,
+            overlap_exponent: self.overlap_exponent,
+        }
+    }
+
     /// Checks every field.
     ///
     /// # Errors
@@ -141,23 +152,7 @@ impl SimulatedVoParams {
                 return bad(field, "a positive number");
             }
         }
-        for (field, v) in [
-            ("translation_sigma_m", self.translation_sigma_m),
-            ("translation_sigma_per_m", self.translation_sigma_per_m),
-            ("rotation_sigma_rad", self.rotation_sigma_rad),
-            ("rotation_sigma_per_rad", self.rotation_sigma_per_rad),
-            ("overlap_exponent", self.overlap_exponent),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(field, "a non-negative number");
-            }
-        }
-        if self.translation_sigma_m <= 0.0 || self.rotation_sigma_rad <= 0.0 {
-            return bad(
-                "translation_sigma_m",
-                "positive error floors (translation_sigma_m, rotation_sigma_rad)",
-            );
-        }
+        self.error_model().validate()?;
         if self.max_candidates == 0 {
             return bad("max_candidates", "at least 1");
         }
@@ -242,14 +237,7 @@ impl SimulatedVo {
     /// The error standard deviations `(rotation, translation)` of a
     /// measurement of `truth` at `overlap`.
     pub fn error_sigmas(&self, truth: &Isometry3<f64>, overlap: f64) -> (f64, f64) {
-        let p = &self.params;
-        let shrink = overlap.max(0.05).powf(p.overlap_exponent);
-        let rotation =
-            (p.rotation_sigma_rad + p.rotation_sigma_per_rad * truth.rotation.angle()) / shrink;
-        let translation = (p.translation_sigma_m
-            + p.translation_sigma_per_m * truth.translation.vector.norm())
-            / shrink;
-        (rotation, translation)
+        self.params.error_model().sigmas(truth, overlap)
     }
 }
 
