@@ -284,6 +284,40 @@ impl<'a> Session<'a> {
         self.run.keyframes += 1;
     }
 
+    /// Matches `node` (frame `current`) without a prior against the
+    /// keyframes place recognition proposes among those older than
+    /// `before_secs`, best first; the first match becomes an edge of `kind`.
+    fn match_recognised(
+        &mut self,
+        node: usize,
+        current: FrameRef,
+        before_secs: f64,
+        purpose: TrackPurpose,
+        kind: EdgeKind,
+    ) -> Option<(usize, VoMeasurement)> {
+        let known: Vec<FrameRef> = self
+            .keyframes
+            .iter()
+            .filter_map(|&k| self.frame_of(k))
+            .filter(|f| f.time_secs < before_secs)
+            .collect();
+        for candidate in self.vo.recognise(current, &known) {
+            let request = TrackRequest {
+                reference: candidate,
+                current,
+                prior: None,
+                purpose,
+            };
+            if let TrackOutcome::Tracked(m) = self.vo.track(&request)
+                && let Some(kf) = self.node_of_frame(candidate.index)
+            {
+                self.add_vo_edge(kf, node, &m, kind);
+                return Some((kf, m));
+            }
+        }
+        None
+    }
+
     /// Looks for a loop from the new keyframe `node` to an old one.
     fn close_loop(&mut self, node: usize, time_secs: f64) {
         if !self.params.loop_closure.enabled {
@@ -293,26 +327,17 @@ impl<'a> Session<'a> {
             return;
         };
         let horizon = time_secs - self.params.loop_closure.min_separation_secs;
-        let old: Vec<FrameRef> = self
-            .keyframes
-            .iter()
-            .filter_map(|&k| self.frame_of(k))
-            .filter(|f| f.time_secs < horizon)
-            .collect();
-        for candidate in self.vo.recognise(current, &old) {
-            let request = TrackRequest {
-                reference: candidate,
+        if self
+            .match_recognised(
+                node,
                 current,
-                prior: None,
-                purpose: TrackPurpose::LoopClosure,
-            };
-            if let TrackOutcome::Tracked(m) = self.vo.track(&request)
-                && let Some(kf) = self.node_of_frame(candidate.index)
-            {
-                self.add_vo_edge(kf, node, &m, EdgeKind::LoopClosure);
-                self.run.loop_closures += 1;
-                return;
-            }
+                horizon,
+                TrackPurpose::LoopClosure,
+                EdgeKind::LoopClosure,
+            )
+            .is_some()
+        {
+            self.run.loop_closures += 1;
         }
     }
 
@@ -325,26 +350,13 @@ impl<'a> Session<'a> {
 
     /// Tries to relocalise `node` against a recognised keyframe.
     fn relocalise(&mut self, node: usize, current: FrameRef) -> Option<(usize, VoMeasurement)> {
-        let known: Vec<FrameRef> = self
-            .keyframes
-            .iter()
-            .filter_map(|&k| self.frame_of(k))
-            .collect();
-        for candidate in self.vo.recognise(current, &known) {
-            let request = TrackRequest {
-                reference: candidate,
-                current,
-                prior: None,
-                purpose: TrackPurpose::Relocalisation,
-            };
-            if let TrackOutcome::Tracked(m) = self.vo.track(&request)
-                && let Some(kf) = self.node_of_frame(candidate.index)
-            {
-                self.add_vo_edge(kf, node, &m, EdgeKind::Relocalisation);
-                return Some((kf, m));
-            }
-        }
-        None
+        self.match_recognised(
+            node,
+            current,
+            f64::INFINITY,
+            TrackPurpose::Relocalisation,
+            EdgeKind::Relocalisation,
+        )
     }
 
     /// Learns from the VO over the interval since the target anchor.
