@@ -104,6 +104,9 @@ fn run(
         Some(text) => Some(Shard::parse(&text).map_err(anyhow::Error::msg)?),
         None => Shard::from_env().map_err(anyhow::Error::msg)?,
     };
+    // A single experiment is simply run again; a sweep keeps its record
+    // unless told to resume or start over.
+    let force = force || (plan.runs.len() == 1 && !resume);
     let options = RunOptions {
         out,
         resume,
