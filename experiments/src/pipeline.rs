@@ -104,7 +104,7 @@ pub struct ExperimentResults {
     pub test_rows: Option<ResidualDataset>,
     /// The test runs as the front end saw them (for trajectories and plots).
     #[serde(skip)]
-    pub traverses: Vec<Traverse>,
+    pub traverses: std::sync::Arc<Vec<Traverse>>,
     /// Each regressor's window predictions on each traverse, where computed
     /// (`[regressor][traverse]`).
     #[serde(skip)]

@@ -288,7 +288,7 @@ fn table_two(s: &mut String, r: &ExperimentResults) {
         s,
         "## Table II — localisation and mapping per scheme\n\nEach scheme runs the visual front end (simulated VO, keyframes, loop closing, factrs pose graph fusing VO with the residual-corrected wheel odometry) over the test run; errors are positions at every sensor sample against ground truth. Frames and RMSE are also given relative to the first scheme. Compute = frames × frame cost + keyframes × keyframe cost. Trajectories (TUM) are in `trajectories/`, figures in `plots/`.\n"
     );
-    for traverse in &r.traverses {
+    for traverse in r.traverses.iter() {
         let rows: Vec<_> = r
             .schemes
             .iter()

@@ -15,7 +15,6 @@ use std::time::Instant;
 use gpodo_datasets::standardize::Standardizer;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::Traverse;
-use gpodo_traits::ResidualRegressor;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
@@ -31,14 +30,15 @@ use crate::table_two::{SchemeInputs, build_traverse, run_schemes, window_predict
 pub struct Prepared {
     data: PreparedData,
     rows: ModelRows,
-    /// Test traverses (only when a run with schemes uses the dataset).
-    traverses: Vec<Traverse>,
+    /// Test traverses (only when a run with schemes uses the dataset),
+    /// shared by every run's results.
+    traverses: Arc<Vec<Traverse>>,
 }
 
-/// A trained regressor and its window predictions on the traverses.
+/// A trained regressor's scores and its window predictions on the
+/// traverses (the model itself is not needed once they are made).
 pub struct Fitted {
     result: RegressorResult,
-    model: Box<dyn ResidualRegressor>,
     predictions: Option<Vec<Vec<ResidualPrediction>>>,
 }
 
@@ -116,7 +116,7 @@ impl SharedWork {
                     Arc::new(Prepared {
                         data,
                         rows,
-                        traverses,
+                        traverses: Arc::new(traverses),
                     }),
                 ))
             })
@@ -160,7 +160,6 @@ impl SharedWork {
                     key,
                     Arc::new(Fitted {
                         result,
-                        model,
                         predictions,
                     }),
                 ))
@@ -237,22 +236,9 @@ impl SharedWork {
             duration_secs: start.elapsed().as_secs_f64(),
             train_rows: Some(data.train.clone()),
             test_rows: Some(data.test.clone()),
-            traverses: p.traverses.clone(),
+            traverses: Arc::clone(&p.traverses),
             window_predictions: predictions,
         })
-    }
-
-    /// The trained model of `spec` on the data of `config` (for callers
-    /// that predict with it).
-    pub fn model(
-        &self,
-        config: &ExperimentConfig,
-        base: &Path,
-        spec: &gpodo_regressors::RegressorSpec,
-    ) -> Option<&dyn ResidualRegressor> {
-        self.fitted
-            .get(&fit_key(&dataset_key(config, base), spec))
-            .map(|f| f.model.as_ref())
     }
 }
 
