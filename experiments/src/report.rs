@@ -209,6 +209,7 @@ pub fn markdown(r: &ExperimentResults) -> String {
     table_one(&mut s, r);
     table_two(&mut s, r);
     hyperparameter_section(&mut s, r);
+    start_section(&mut s, r);
     dead_reckoning_section(&mut s, r);
     statistics_section(&mut s, r);
     s
@@ -430,6 +431,54 @@ fn hyperparameter_section(s: &mut String, r: &ExperimentResults) {
             } else {
                 shortest.join(", ")
             }
+        );
+    }
+    s.push('\n');
+}
+
+/// The optimiser's candidate starts of every fitted model: how multimodal
+/// each problem was, and which starts the optimiser ran from.
+fn start_section(s: &mut String, r: &ExperimentResults) {
+    let with_starts: Vec<&RegressorResult> = r
+        .regressors
+        .iter()
+        .filter(|reg| !reg.fit.starts.is_empty())
+        .collect();
+    if with_starts.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "## Optimiser starts\n\nEvery candidate start scored by the objective (LML or bound, standardised units); the optimiser ran from the best ones and kept the highest optimum (marked **bold**). Evaluations and iterations are summed over the runs.\n\n| Regressor | start | objective at start | objective reached |\n|---|---|---:|---:|"
+    );
+    let value = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
+    for reg in with_starts {
+        let best = reg
+            .fit
+            .starts
+            .iter()
+            .filter_map(|st| st.final_objective)
+            .fold(f64::NEG_INFINITY, f64::max);
+        for st in &reg.fit.starts {
+            let reached = match st.final_objective {
+                Some(v) if v == best => format!("**{v:.2}**"),
+                other => value(other),
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} |",
+                reg.label,
+                st.label,
+                value(st.start_objective),
+                reached
+            );
+        }
+        let _ = writeln!(
+            s,
+            "| {} | evaluations {}, iterations {} | | |",
+            reg.label,
+            reg.fit.evaluations.map_or("–".into(), |e| e.to_string()),
+            reg.fit.iterations.map_or("–".into(), |i| i.to_string()),
         );
     }
     s.push('\n');

@@ -384,3 +384,59 @@ fn a_fit_reports_its_iterations_without_changing_its_result() {
     let best = seen.iter().map(|s| s.2).fold(f64::NEG_INFINITY, f64::max);
     assert!((best - report.objective.unwrap()).abs() < 1e-6 * best.abs());
 }
+
+#[test]
+fn start_policy_is_deterministic_and_optimises_the_best_scored_candidates() {
+    let mut rng = rng(33);
+    let x = inputs(&mut rng, 60, 4);
+    let y = targets(&mut rng, &x, 0.1);
+    let data = dataset(&x, &y);
+    let fit = || {
+        let mut gp = ExactGp::new(ExactGpParams::default()).unwrap();
+        gp.fit(&data).unwrap()
+    };
+    let (a, b) = (fit(), fit());
+    assert_eq!(a.starts, b.starts, "same data, same seed, same candidates");
+    assert_eq!(a.objective, b.objective);
+    // Three bases (lengthscale 1, √D, median distance) with two
+    // perturbations each.
+    assert_eq!(a.starts.len(), 9, "{:#?}", a.starts);
+    let optimised: Vec<_> = a
+        .starts
+        .iter()
+        .filter(|s| s.final_objective.is_some())
+        .collect();
+    assert_eq!(optimised.len(), 2);
+    let lowest_chosen = optimised
+        .iter()
+        .map(|s| s.start_objective.unwrap())
+        .fold(f64::INFINITY, f64::min);
+    for s in a.starts.iter().filter(|s| s.final_objective.is_none()) {
+        assert!(
+            s.start_objective.unwrap() <= lowest_chosen,
+            "{s:?} beat a chosen start"
+        );
+    }
+    // The reported optimum is the best optimised candidate's, and no
+    // optimiser run ends below where it started.
+    let best = optimised
+        .iter()
+        .map(|s| s.final_objective.unwrap())
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!((a.objective.unwrap() - best).abs() < 1e-6 * best.abs());
+    for s in &optimised {
+        assert!(s.final_objective.unwrap() >= s.start_objective.unwrap());
+    }
+    // `init.lengthscale` overrides the candidates: one base, its perturbations.
+    let mut gp = ExactGp::new(ExactGpParams {
+        init: KernelInit {
+            lengthscale: Some(2.0),
+            ..KernelInit::default()
+        },
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    let report = gp.fit(&data).unwrap();
+    assert_eq!(report.starts.len(), 3);
+    assert!(report.starts[0].label.starts_with("init"));
+}

@@ -24,6 +24,8 @@ mod selector;
 pub use error::Error;
 pub use matrix::SampleMatrix;
 pub use motion::{BodyTwist, MotionEstimate, MotionModel};
-pub use regressor::{FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor};
+pub use regressor::{
+    FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, StartRecord,
+};
 pub use sample::{ImuSample, JointState, ProprioceptiveSample};
 pub use selector::{FrameContext, FrameDecision, FrameSelector};

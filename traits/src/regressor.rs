@@ -100,6 +100,27 @@ pub struct FitReport {
     /// natural units; empty for models without any.
     #[serde(default)]
     pub parameters: Vec<(String, f64)>,
+    /// Optimiser iterations, if any.
+    #[serde(default)]
+    pub iterations: Option<u64>,
+    /// Every candidate start the optimiser considered, with its objective
+    /// there and, for the starts it ran from, where it ended (shows how
+    /// multimodal the problem was); empty for models without an optimiser.
+    #[serde(default)]
+    pub starts: Vec<StartRecord>,
+}
+
+/// One candidate start of a fit's optimiser.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct StartRecord {
+    /// Which start, e.g. `lengthscale 1` or `lengthscale √D, perturbed #1`
+    /// (prefixed by the output group when groups are fitted apart).
+    pub label: String,
+    /// The objective at the start (`None`: it could not be evaluated).
+    pub start_objective: Option<f64>,
+    /// The objective where the optimiser ended from this start (`None`:
+    /// the optimiser did not run from it).
+    pub final_objective: Option<f64>,
 }
 
 /// Receives a fit's progress: the optimiser's iterations (for progress

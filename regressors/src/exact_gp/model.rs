@@ -164,7 +164,7 @@ impl ExactGp {
             n_samples: n,
             ..Default::default()
         };
-        let (mut objective, mut evaluations, mut jitter) = (0.0, 0, 0.0f64);
+        let (mut objective, mut evaluations, mut iterations, mut jitter) = (0.0, 0, 0, 0.0f64);
         let mut groups = Vec::new();
         let mut posteriors = Vec::new();
         for (g, outputs) in group_outputs.into_iter().enumerate() {
@@ -173,15 +173,23 @@ impl ExactGp {
             let (kernel, noise) = if self.params.optimize {
                 let mut params = self.params.clone();
                 params.seed = params.seed.wrapping_add(g as u64);
-                let opt = maximize_lml(
-                    &kernel0,
-                    self.params.noise_variance,
-                    x.as_ref(),
-                    yg.as_ref(),
-                    &params,
-                    &self.progress,
-                )?;
+                let opt = maximize_lml(x.as_ref(), yg.as_ref(), &params, &self.progress)?;
                 evaluations += opt.evaluations;
+                iterations += opt.iterations;
+                let group_prefix = match self.params.outputs {
+                    OutputSharing::Shared => String::new(),
+                    OutputSharing::Independent => format!(
+                        "{}: ",
+                        data.target_names
+                            .get(outputs[0])
+                            .cloned()
+                            .unwrap_or_default()
+                    ),
+                };
+                report.starts.extend(opt.starts.into_iter().map(|mut s| {
+                    s.label = format!("{group_prefix}{}", s.label);
+                    s
+                }));
                 tracing::debug!(
                     group = g,
                     lml = opt.lml,
@@ -227,6 +235,7 @@ impl ExactGp {
         }
         report.objective = Some(objective);
         report.evaluations = self.params.optimize.then_some(evaluations);
+        report.iterations = self.params.optimize.then_some(iterations);
         report.jitter = Some(jitter);
         report.duration_secs = start.elapsed().as_secs_f64();
         self.fitted = Some(Fitted {

@@ -1,14 +1,16 @@
 //! Hyperparameter learning of the exact GP: the log marginal likelihood and
 //! its analytic gradient in `log θ` (kernel hyperparameters, then the noise
 //! variance), maximised by [`crate::hyperopt::maximize`] within the bounds
-//! of [`ExactGpParams::bounds`].
+//! of [`ExactGpParams::bounds`], from the best of several scored candidate
+//! starts ([`crate::hyperopt::starts`]).
 
 use faer::MatRef;
+use gpodo_traits::StartRecord;
 
 use super::likelihood::log_marginal_likelihood;
 use super::params::ExactGpParams;
 use crate::RegressorError;
-use crate::hyperopt::{Coordinates, LogBounds, Objective, ProgressSink, maximize};
+use crate::hyperopt::{LogBounds, Objective, ProgressSink, starts};
 use crate::kernels::Kernel;
 
 /// The outcome of hyperparameter learning.
@@ -24,8 +26,8 @@ pub struct Optimized {
     pub evaluations: usize,
     /// Optimiser iterations over all starts.
     pub iterations: u64,
-    /// Best log marginal likelihood of each start.
-    pub start_lml: Vec<f64>,
+    /// Every candidate start: its LML and, when optimised, the LML reached.
+    pub starts: Vec<StartRecord>,
 }
 
 /// The log marginal likelihood as a function of `(log θ, log σ_n²)`.
@@ -52,45 +54,56 @@ impl Objective for Lml<'_> {
     }
 }
 
-/// Learns the kernel hyperparameters and noise variance of `kernel` on
-/// `(x, y)` by maximising the log marginal likelihood.
+/// Learns the kernel hyperparameters and noise variance of
+/// `params.kernel` on `(x, y)` by maximising the log marginal likelihood:
+/// the candidate starts of [`starts::kernel_bases`] and their seeded perturbations
+/// ([`StartPolicy`](crate::hyperopt::StartPolicy)) are scored by their LML,
+/// the optimiser runs from the best `start.optimize_best` (plus `restarts`
+/// perturbations of the best), and the highest optimum wins.
 ///
 /// # Errors
 /// [`RegressorError::Optimizer`] or [`RegressorError::NotPositiveDefinite`]
 /// when no start produced a finite objective.
 pub fn maximize_lml(
-    kernel: &Kernel,
-    noise_variance: f64,
     x: MatRef<'_, f64>,
     y: MatRef<'_, f64>,
     params: &ExactGpParams,
     progress: &ProgressSink,
 ) -> Result<Optimized, RegressorError> {
-    let mut bounds: Vec<LogBounds> = kernel
+    let template = params.kernel.build(x.ncols(), &params.init);
+    let mut bounds: Vec<LogBounds> = template
         .param_kinds()
         .into_iter()
         .map(|k| LogBounds::new(params.bounds.of(k)))
         .collect();
     bounds.push(LogBounds::new(params.bounds.noise_variance));
-    let mut start = kernel.log_params();
-    start.push(noise_variance.ln());
-    let coords = Coordinates {
-        perturb: vec![true; start.len()],
-        start,
-        bounds,
-    };
     let objective = Lml {
-        template: kernel,
+        template: &template,
         x,
         y,
     };
+    let perturb = vec![true; bounds.len()];
+    let candidates = starts::with_perturbations(
+        starts::kernel_bases(&params.kernel, &params.init, x, params.noise_variance),
+        &bounds,
+        &perturb,
+        params.start.perturbations,
+        params.seed,
+    );
     let value_scale = 1.0 / (y.nrows() * y.ncols()).max(1) as f64;
-    let out = maximize(
+    let (out, records) = starts::maximize_best(
         &objective,
-        &coords,
+        candidates,
+        |c| {
+            let (kernel, noise) = objective.hyperparameters(c);
+            log_marginal_likelihood(&kernel, noise, x, y, false).map(|e| e.lml)
+        },
+        &bounds,
+        &perturb,
+        &params.start,
         value_scale,
         &params.settings(),
-        progress.0.as_ref(),
+        progress,
     )?;
     let (kernel, noise_variance) = objective.hyperparameters(&out.coords);
     Ok(Optimized {
@@ -99,6 +112,6 @@ pub fn maximize_lml(
         lml: out.value,
         evaluations: out.evaluations,
         iterations: out.iterations,
-        start_lml: out.start_values,
+        starts: records,
     })
 }

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
 pub use crate::hyperopt::Optimizer;
-use crate::hyperopt::OptimizerSettings;
+use crate::hyperopt::{OptimizerSettings, StartPolicy};
 use crate::kernels::{KernelExpr, KernelInit, ParamKind};
 
 /// How the output columns share hyperparameters.
@@ -146,8 +146,14 @@ pub struct ExactGpParams {
     /// Z-score inputs and outputs with training statistics (default true);
     /// predictions are mapped back (variance × std²).
     pub standardize: bool,
-    /// Initial kernel hyperparameters.
+    /// Initial kernel hyperparameters. Setting `init.lengthscale` replaces
+    /// the candidate lengthscales of the start policy by that one value.
     pub init: KernelInit,
+    /// How the optimiser's start is chosen: candidate starts (lengthscale
+    /// 1, `√D`, the median input distance, seeded perturbations of each)
+    /// scored by their log marginal likelihood, the optimiser run from the
+    /// best few (default: 2 perturbations each, the best 2 optimised).
+    pub start: StartPolicy,
     /// Initial noise variance in standardised units (default 0.01, the
     /// authors' `0.01·var(Y)`).
     pub noise_variance: f64,
@@ -157,10 +163,10 @@ pub struct ExactGpParams {
     pub optimizer: Optimizer,
     /// Iteration limit per start (default 200).
     pub max_iters: u64,
-    /// Extra starts from seeded random perturbations of the initial
-    /// hyperparameters (default 0); the best log marginal likelihood wins.
+    /// Extra optimiser runs from seeded random perturbations of the best
+    /// candidate start (default 0); the best log marginal likelihood wins.
     pub restarts: usize,
-    /// Seed of the restart perturbations (default 0).
+    /// Seed of the candidate and restart perturbations (default 0).
     pub seed: u64,
     /// Stop when the norm of the gradient of the mean log likelihood per
     /// target value (in the optimiser's coordinates) falls below this
@@ -181,6 +187,7 @@ impl Default for ExactGpParams {
             outputs: OutputSharing::Shared,
             standardize: true,
             init: KernelInit::default(),
+            start: StartPolicy::default(),
             noise_variance: 0.01,
             optimize: true,
             optimizer: Optimizer::Lbfgs,
@@ -218,6 +225,7 @@ impl ExactGpParams {
             ));
         }
         self.bounds.check_init(&self.init, "exact_gp")?;
+        self.start.check("exact_gp")?;
         self.settings().check("exact_gp", self.optimize)
     }
 

@@ -31,6 +31,16 @@ impl LogBounds {
         }
     }
 
+    /// The lower bound of `log θ` (−∞ when free).
+    pub fn lower(&self) -> f64 {
+        self.lo
+    }
+
+    /// The upper bound of `log θ` (+∞ when free).
+    pub fn upper(&self) -> f64 {
+        self.hi
+    }
+
     /// `log θ` used for the optimiser's coordinate `u`: `u` clamped.
     pub fn to_log(&self, u: f64) -> f64 {
         u.clamp(self.lo, self.hi)

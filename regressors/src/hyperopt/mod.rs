@@ -2,12 +2,15 @@
 //! objective (a log marginal likelihood or a variational bound) with its
 //! analytic gradient, over coordinates that are the logarithms of positive
 //! hyperparameters (bounded, [`LogBounds`]) or free values (inducing
-//! inputs), with argmin's L-BFGS or nonlinear conjugate gradient
-//! (Moré–Thuente line search), from the initial point and optional seeded
-//! restarts. The best point evaluated wins, by objective alone.
+//! inputs), with a bounded projected L-BFGS ([`ProjectedLbfgs`], L-BFGS-B's
+//! behaviour) or argmin's nonlinear conjugate gradient, from a start chosen
+//! among scored candidates ([`starts`]) and optional seeded restarts. The
+//! best point evaluated wins, by objective alone.
 
 mod bounds;
+mod projected_lbfgs;
 mod solver;
+pub mod starts;
 
 use std::cell::{Cell, RefCell};
 
@@ -18,6 +21,8 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 pub use bounds::LogBounds;
+pub use projected_lbfgs::ProjectedLbfgs;
+pub use starts::StartPolicy;
 
 use crate::RegressorError;
 
@@ -25,12 +30,13 @@ use crate::RegressorError;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Optimizer {
-    /// L-BFGS (memory 10) with a Moré–Thuente line search (default; the
-    /// authors' scripts used L-BFGS-B).
+    /// Bounded L-BFGS (memory 10) with L-BFGS-B's behaviour: a projected
+    /// search that never leaves the bounds (default; the authors' scripts
+    /// and GPy use scipy's L-BFGS-B).
     #[default]
     Lbfgs,
     /// Polak–Ribière nonlinear conjugate gradient with restarts (the paper's
-    /// wording, §V-A).
+    /// wording, §V-A); bounds act as quadratic penalties.
     ConjugateGradient,
 }
 
@@ -297,6 +303,7 @@ pub fn maximize(
         let tol_cost = settings.relative_cost_tolerance * initial.abs().max(1.0);
         let outcome = solver::run(
             &problem,
+            &coords.bounds,
             start_u,
             settings,
             tol_cost,

@@ -1,6 +1,7 @@
-//! One optimiser start with argmin: L-BFGS or Polak–Ribière nonlinear
-//! conjugate gradient, both with a Moré–Thuente line search and the same
-//! stopping rules (gradient norm, change of the objective).
+//! One optimiser start with argmin: the bounded projected L-BFGS
+//! ([`ProjectedLbfgs`], L-BFGS-B's behaviour) or Polak–Ribière nonlinear
+//! conjugate gradient (Moré–Thuente line search, bounds as penalties), with
+//! the same stopping rules (gradient norm, change of the objective).
 
 use std::sync::Arc;
 
@@ -12,10 +13,10 @@ use argmin::core::{
 use argmin::solver::conjugategradient::NonlinearConjugateGradient;
 use argmin::solver::conjugategradient::beta::PolakRibiere;
 use argmin::solver::linesearch::MoreThuenteLineSearch;
-use argmin::solver::quasinewton::LBFGS;
 use gpodo_traits::FitProgress;
 
-use super::{Negated, Optimizer, OptimizerSettings};
+use super::projected_lbfgs::ProjectedLbfgs;
+use super::{LogBounds, Negated, Optimizer, OptimizerSettings};
 
 type HyperState = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 
@@ -87,6 +88,7 @@ impl Observe<HyperState> for Reporter {
 /// number and the objective's scale) hears of every iteration.
 pub(super) fn run(
     problem: &Negated<'_>,
+    bounds: &[LogBounds],
     u0: Vec<f64>,
     settings: &OptimizerSettings,
     tol_cost: f64,
@@ -97,23 +99,21 @@ pub(super) fn run(
         start,
         scale,
     });
-    let converging = |inner| Converging {
-        inner,
-        tol_grad: settings.gradient_tolerance,
-        tol_cost,
-    };
     let converging_cg = |inner| Converging {
         inner,
         tol_grad: settings.gradient_tolerance,
         tol_cost,
     };
-    let line_search = MoreThuenteLineSearch::new();
     match settings.optimizer {
         Optimizer::Lbfgs => {
-            let solver = LBFGS::new(line_search, 10)
-                .with_tolerance_grad(settings.gradient_tolerance)?
-                .with_tolerance_cost(tol_cost)?;
-            let mut executor = Executor::new(problem, converging(solver))
+            let solver = ProjectedLbfgs::new(
+                bounds.iter().map(LogBounds::lower).collect(),
+                bounds.iter().map(LogBounds::upper).collect(),
+                10,
+                settings.gradient_tolerance,
+                tol_cost,
+            );
+            let mut executor = Executor::new(problem, solver)
                 .configure(|s| s.param(u0).max_iters(settings.max_iters));
             if let Some(r) = reporter {
                 executor = executor.add_observer(r, ObserverMode::Always);
@@ -121,7 +121,7 @@ pub(super) fn run(
             executor.run().map(|r| r.state().get_iter())
         }
         Optimizer::ConjugateGradient => {
-            let line_search = line_search.with_c(1e-4, 0.1)?;
+            let line_search = MoreThuenteLineSearch::new().with_c(1e-4, 0.1)?;
             let solver = NonlinearConjugateGradient::new(line_search, PolakRibiere::new())
                 .restart_iters(u0.len() as u64)
                 .restart_orthogonality(0.1);

@@ -16,6 +16,34 @@ pub fn column_means(x: MatRef<'_, f64>) -> Vec<f64> {
         .collect()
 }
 
+/// Rows used by [`median_pairwise_distance`] at most (evenly strided).
+const MEDIAN_ROWS: usize = 400;
+
+/// The median Euclidean distance between distinct rows of `x` (the
+/// "median heuristic" for a lengthscale), over at most 400 evenly strided
+/// rows so that it stays cheap at any `n`; `None` with fewer than two rows
+/// or when every distance is zero.
+pub fn median_pairwise_distance(x: MatRef<'_, f64>) -> Option<f64> {
+    let n = x.nrows();
+    let stride = n.div_ceil(MEDIAN_ROWS).max(1);
+    let rows: Vec<usize> = (0..n).step_by(stride).collect();
+    let mut distances = Vec::with_capacity(rows.len() * rows.len().saturating_sub(1) / 2);
+    for (a, &i) in rows.iter().enumerate() {
+        for &j in &rows[a + 1..] {
+            let sq: f64 = (0..x.ncols())
+                .map(|q| (x[(i, q)] - x[(j, q)]).powi(2))
+                .sum();
+            distances.push(sq.sqrt());
+        }
+    }
+    if distances.is_empty() {
+        return None;
+    }
+    let mid = distances.len() / 2;
+    let (_, median, _) = distances.select_nth_unstable_by(mid, f64::total_cmp);
+    (median.is_finite() && *median > 0.0).then_some(*median)
+}
+
 /// `(x − shift) / scale`, column by column.
 pub fn shift_scale(x: MatRef<'_, f64>, shift: &[f64], scale: &[f64]) -> Mat<f64> {
     Mat::from_fn(x.nrows(), x.ncols(), |i, q| {

@@ -16,6 +16,7 @@ mod stationary;
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
+pub use distance::median_pairwise_distance;
 pub use expr::{KernelExpr, KernelExprError, KernelInit};
 pub use linear::{Linear, White};
 pub use stationary::{Family, Stationary};

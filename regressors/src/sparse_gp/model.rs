@@ -19,7 +19,7 @@ use super::params::{Approximation, SparseGpParams};
 use super::posterior::SparsePosterior;
 use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
-use crate::hyperopt::{Coordinates, LogBounds, Objective, ProgressSink, maximize};
+use crate::hyperopt::{LogBounds, Objective, ProgressSink, starts};
 use crate::kernels::Kernel;
 use crate::scaling::{
     GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
@@ -199,35 +199,45 @@ impl SparseGp {
             approximation: p.approximation,
             jitter: p.jitter,
         };
-        let (kernel, noise, z, evaluations) = if p.optimize {
+        let mut fit_record = (None, None, Vec::new());
+        let (kernel, noise, z) = if p.optimize {
             let mut bounds: Vec<LogBounds> = kernel0
                 .param_kinds()
                 .into_iter()
                 .map(|k| LogBounds::new(p.bounds.of(k)))
                 .collect();
             bounds.push(LogBounds::new(p.bounds.noise_variance));
-            let mut start = kernel0.log_params();
-            start.push(p.noise_variance.ln());
-            let mut perturb = vec![true; start.len()];
-            if learn_inducing {
-                for i in 0..z0.nrows() {
-                    start.extend((0..z0.ncols()).map(|q| z0[(i, q)]));
-                }
-                bounds.resize(start.len(), LogBounds::unbounded());
-                perturb.resize(start.len(), false);
-            }
-            let coords = Coordinates {
-                start,
-                bounds,
-                perturb,
+            let mut perturb = vec![true; bounds.len()];
+            let inducing: Vec<f64> = if learn_inducing {
+                (0..z0.nrows())
+                    .flat_map(|i| (0..z0.ncols()).map(move |q| (i, q)))
+                    .map(|(i, q)| z0[(i, q)])
+                    .collect()
+            } else {
+                Vec::new()
             };
+            bounds.resize(bounds.len() + inducing.len(), LogBounds::unbounded());
+            perturb.resize(bounds.len(), false);
+            let bases = starts::kernel_bases(&p.kernel, &p.init, x.as_ref(), p.noise_variance)
+                .into_iter()
+                .map(|(label, mut c)| {
+                    c.extend_from_slice(&inducing);
+                    (label, c)
+                })
+                .collect();
+            let candidates =
+                starts::with_perturbations(bases, &bounds, &perturb, p.start.perturbations, p.seed);
             let value_scale = 1.0 / (y.nrows() * y.ncols()) as f64;
-            let out = maximize(
+            let (out, records) = starts::maximize_best(
                 &objective,
-                &coords,
+                candidates,
+                |c| objective.evaluate(c).map(|(v, _)| v),
+                &bounds,
+                &perturb,
+                &p.start,
                 value_scale,
                 &p.settings(),
-                self.progress.0.as_ref(),
+                &self.progress,
             )?;
             tracing::debug!(
                 objective = out.value,
@@ -235,10 +245,10 @@ impl SparseGp {
                 iterations = out.iterations,
                 "sparse GP hyperparameters learned"
             );
-            let (kernel, noise, z) = objective.unpack(&out.coords);
-            (kernel, noise, z, Some(out.evaluations))
+            fit_record = (Some(out.evaluations), Some(out.iterations), records);
+            objective.unpack(&out.coords)
         } else {
-            (kernel0.clone(), p.noise_variance, z0.clone(), None)
+            (kernel0.clone(), p.noise_variance, z0.clone())
         };
         let posterior = SparsePosterior::new(
             kernel.clone(),
@@ -260,9 +270,11 @@ impl SparseGp {
             n_samples: data.len(),
             duration_secs: start.elapsed().as_secs_f64(),
             objective: Some(posterior.objective),
-            evaluations,
+            evaluations: fit_record.0,
             jitter: Some(p.jitter + posterior.extra_jitter),
             parameters,
+            iterations: fit_record.1,
+            starts: fit_record.2,
         };
         let state = SparseGpState {
             params: self.params.clone(),

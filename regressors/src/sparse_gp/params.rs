@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
 use crate::exact_gp::Bounds;
-use crate::hyperopt::{Optimizer, OptimizerSettings};
+use crate::hyperopt::{Optimizer, OptimizerSettings, StartPolicy};
 use crate::kernels::{KernelExpr, KernelInit};
 
 /// Which sparse approximation.
@@ -75,6 +75,9 @@ pub struct SparseGpParams {
     pub standardize: bool,
     /// Initial kernel hyperparameters.
     pub init: KernelInit,
+    /// How the optimiser's start is chosen (as the exact GP's: candidate
+    /// lengthscales scored by the objective, the best few optimised).
+    pub start: StartPolicy,
     /// Initial noise variance in standardised units (default 0.01).
     pub noise_variance: f64,
     /// Diagonal jitter added to `K_uu` in standardised units (default 1e-6,
@@ -109,6 +112,7 @@ impl Default for SparseGpParams {
             inducing: InducingParams::default(),
             standardize: true,
             init: KernelInit::default(),
+            start: StartPolicy::default(),
             noise_variance: 0.01,
             jitter: 1e-6,
             optimize: true,
@@ -151,6 +155,7 @@ impl SparseGpParams {
             );
         }
         self.bounds.check_init(&self.init, "sparse_gp")?;
+        self.start.check("sparse_gp")?;
         self.settings().check("sparse_gp", self.optimize)
     }
 

@@ -1,0 +1,326 @@
+//! The multi-start policy shared by the GP regressors: the log marginal
+//! likelihood in 20–30 lengthscales is multimodal, and a single start can
+//! land in an optimum hundreds of nats below another (on the ExoTeR table,
+//! `√D` lengthscales end 386 nats below GPy's unit lengthscales). So a
+//! handful of deterministic candidate starts — named base points and seeded
+//! perturbations of them — is scored by the objective alone (no gradient,
+//! one factorisation each), the optimiser runs from the best few, and the
+//! best optimum wins. Every candidate's starting value (and final value, for
+//! those optimised) is kept, so a report can show how multimodal a problem
+//! was.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use faer::MatRef;
+use gpodo_traits::StartRecord;
+
+use super::{
+    Coordinates, LogBounds, Maximized, Objective, OptimizerSettings, ProgressSink, maximize,
+};
+use crate::RegressorError;
+use crate::kernels::{KernelExpr, KernelInit, ParamKind, median_pairwise_distance};
+
+/// How the GP regressors choose where their optimiser starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StartPolicy {
+    /// Seeded perturbations (one standard normal per `log θ`) scored beside
+    /// each base candidate (default 2).
+    pub perturbations: usize,
+    /// How many of the best-scored candidates the optimiser runs from
+    /// (default 2); the highest optimum wins.
+    pub optimize_best: usize,
+}
+
+impl Default for StartPolicy {
+    fn default() -> Self {
+        Self {
+            perturbations: 2,
+            optimize_best: 2,
+        }
+    }
+}
+
+impl StartPolicy {
+    /// Checks the fields, naming the bad one for `regressor`.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] when `optimize_best` is 0.
+    pub fn check(&self, regressor: &str) -> Result<(), RegressorError> {
+        if self.optimize_best == 0 {
+            return Err(RegressorError::InvalidSpec {
+                regressor: regressor.into(),
+                field: "start.optimize_best".into(),
+                expected: "at least 1".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One candidate start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// What the start is, e.g. `lengthscale 1` or `√D, perturbed #2`.
+    pub label: String,
+    /// The optimiser's coordinates there (inside the bounds).
+    pub coords: Vec<f64>,
+    /// The objective there; `None` when it could not be evaluated.
+    pub value: Option<f64>,
+}
+
+/// The base candidates and `perturbations` seeded perturbations of each
+/// (seed `seed`; a perturbation moves every coordinate with `perturb[i]` by
+/// one standard normal and clamps it into its bounds), in a fixed order:
+/// each base, then its perturbations.
+pub fn with_perturbations(
+    bases: Vec<(String, Vec<f64>)>,
+    bounds: &[LogBounds],
+    perturb: &[bool],
+    perturbations: usize,
+    seed: u64,
+) -> Vec<(String, Vec<f64>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::with_capacity(bases.len() * (1 + perturbations));
+    for (label, base) in bases {
+        let base: Vec<f64> = base
+            .iter()
+            .zip(bounds)
+            .map(|(c, b)| b.from_log(*c))
+            .collect();
+        for k in 1..=perturbations {
+            let moved: Vec<f64> = base
+                .iter()
+                .zip(bounds.iter().zip(perturb))
+                .map(|(c, (b, &p))| {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    if p { b.from_log(c + z) } else { *c }
+                })
+                .collect();
+            out.push((format!("{label}, perturbed #{k}"), moved));
+        }
+        out.insert(out.len() - perturbations, (label, base));
+    }
+    out
+}
+
+/// Scores every candidate with `score` and returns them all, in their
+/// given order, with their values (a failed evaluation scores `None`).
+pub fn score_all(
+    candidates: Vec<(String, Vec<f64>)>,
+    score: impl Fn(&[f64]) -> Result<f64, RegressorError>,
+) -> Vec<Candidate> {
+    candidates
+        .into_iter()
+        .map(|(label, coords)| {
+            let value = score(&coords).ok().filter(|v| v.is_finite());
+            Candidate {
+                label,
+                coords,
+                value,
+            }
+        })
+        .collect()
+}
+
+/// The indices of the `k` best-scored candidates, best first (ties keep
+/// the earlier candidate first; unscored candidates are never chosen).
+pub fn best(candidates: &[Candidate], k: usize) -> Vec<usize> {
+    let mut scored: Vec<(usize, f64)> = candidates
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| c.value.map(|v| (i, v)))
+        .collect();
+    scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    scored.into_iter().take(k).map(|(i, _)| i).collect()
+}
+
+/// The base candidate starts of a GP with kernel `expr` on standardised
+/// inputs `x`, as `log θ` followed by `log σ_n²`: the user's `init.lengthscale` alone when it
+/// is set, otherwise lengthscale 1 (GPy's default in standardised units),
+/// `√D` and the median distance between training inputs (the kernels
+/// without lengthscales have one base). Duplicates are dropped.
+pub fn kernel_bases(
+    expr: &KernelExpr,
+    init: &KernelInit,
+    x: MatRef<'_, f64>,
+    noise_variance: f64,
+) -> Vec<(String, Vec<f64>)> {
+    let d = x.ncols();
+    let mut lengthscales: Vec<(String, Option<f64>)> = match init.lengthscale {
+        Some(l) => vec![(format!("init (lengthscale {l})"), Some(l))],
+        None => {
+            let mut v = vec![
+                ("lengthscale 1".to_string(), Some(1.0)),
+                ("lengthscale √D".to_string(), Some((d.max(1) as f64).sqrt())),
+            ];
+            if let Some(m) = median_pairwise_distance(x) {
+                v.push(("lengthscale = median distance".to_string(), Some(m)));
+            }
+            v
+        }
+    };
+    let has_lengthscales = expr
+        .build(d, init)
+        .param_kinds()
+        .contains(&ParamKind::Lengthscale);
+    if !has_lengthscales {
+        lengthscales.truncate(1);
+        lengthscales[0] = ("init".to_string(), init.lengthscale);
+    }
+    let mut bases: Vec<(String, Vec<f64>)> = Vec::new();
+    for (label, lengthscale) in lengthscales {
+        let init = KernelInit {
+            lengthscale,
+            ..*init
+        };
+        let mut coords = expr.build(d, &init).log_params();
+        coords.push(noise_variance.ln());
+        if !bases.iter().any(|(_, c)| *c == coords) {
+            bases.push((label, coords));
+        }
+    }
+    bases
+}
+
+/// Scores `candidates` with `score` (the objective without its gradient),
+/// runs [`maximize`] from the best `policy.optimize_best` of them (the
+/// first with `settings.restarts` extra perturbed runs, the others with
+/// none) and returns the highest optimum, with every candidate's record
+/// (restarts appended as records of their own). Evaluations and iterations
+/// are summed over all runs.
+///
+/// # Errors
+/// The last optimiser error when no run produced a finite objective, or
+/// [`RegressorError::Optimizer`] when no candidate could be scored.
+#[allow(clippy::too_many_arguments)]
+pub fn maximize_best(
+    objective: &dyn Objective,
+    candidates: Vec<(String, Vec<f64>)>,
+    score: impl Fn(&[f64]) -> Result<f64, RegressorError>,
+    bounds: &[LogBounds],
+    perturb: &[bool],
+    policy: &StartPolicy,
+    value_scale: f64,
+    settings: &OptimizerSettings,
+    progress: &ProgressSink,
+) -> Result<(Maximized, Vec<StartRecord>), RegressorError> {
+    let scored = score_all(candidates, score);
+    let mut records: Vec<StartRecord> = scored
+        .iter()
+        .map(|c| StartRecord {
+            label: c.label.clone(),
+            start_objective: c.value,
+            final_objective: None,
+        })
+        .collect();
+    let (mut best_run, mut evaluations, mut iterations) = (None::<Maximized>, 0, 0);
+    let mut last_error = None;
+    for (rank, i) in best(&scored, policy.optimize_best).into_iter().enumerate() {
+        let mut settings = *settings;
+        if rank > 0 {
+            settings.restarts = 0;
+        }
+        let coords = Coordinates {
+            start: scored[i].coords.clone(),
+            bounds: bounds.to_vec(),
+            perturb: perturb.to_vec(),
+        };
+        match maximize(
+            objective,
+            &coords,
+            value_scale,
+            &settings,
+            progress.0.as_ref(),
+        ) {
+            Ok(out) => {
+                records[i].final_objective = out.start_values.first().copied();
+                for (k, v) in out.start_values.iter().enumerate().skip(1) {
+                    records.push(StartRecord {
+                        label: format!("{}, restart #{k}", scored[i].label),
+                        start_objective: None,
+                        final_objective: Some(*v),
+                    });
+                }
+                evaluations += out.evaluations;
+                iterations += out.iterations;
+                if best_run.as_ref().is_none_or(|b| out.value > b.value) {
+                    best_run = Some(out);
+                }
+            }
+            Err(e) => last_error = Some(e),
+        }
+    }
+    let Some(mut out) = best_run else {
+        return Err(last_error.unwrap_or_else(|| RegressorError::Optimizer {
+            optimizer: format!("{:?}", settings.optimizer),
+            detail: "no candidate start could be evaluated".into(),
+        }));
+    };
+    out.evaluations = evaluations;
+    out.iterations = iterations;
+    Ok((out, records))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perturbations_follow_their_base_and_stay_in_bounds() {
+        let bounds = [LogBounds::new([0.5, 2.0]), LogBounds::unbounded()];
+        let bases = vec![
+            ("a".to_string(), vec![0.0, 1.0]),
+            ("b".into(), vec![5.0, 2.0]),
+        ];
+        let all = with_perturbations(bases.clone(), &bounds, &[true, false], 2, 7);
+        let labels: Vec<&str> = all.iter().map(|(l, _)| l.as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "a",
+                "a, perturbed #1",
+                "a, perturbed #2",
+                "b",
+                "b, perturbed #1",
+                "b, perturbed #2"
+            ]
+        );
+        // Base b was clamped into its bound; unperturbed coordinates stay.
+        assert_eq!(all[3].1, vec![2.0f64.ln(), 2.0]);
+        for (_, c) in &all {
+            assert!(c[0] >= 0.5f64.ln() - 1e-15 && c[0] <= 2.0f64.ln() + 1e-15);
+        }
+        assert_eq!(all[1].1[1], 1.0);
+        // Deterministic: the same seed gives the same candidates.
+        assert_eq!(
+            all,
+            with_perturbations(bases, &bounds, &[true, false], 2, 7)
+        );
+    }
+
+    #[test]
+    fn picks_the_highest_scored_candidates_and_skips_failures() {
+        let candidates = vec![
+            ("low".to_string(), vec![0.0]),
+            ("fails".into(), vec![1.0]),
+            ("high".into(), vec![2.0]),
+            ("tie".into(), vec![3.0]),
+            ("high again".into(), vec![4.0]),
+        ];
+        let scored = score_all(candidates, |c| match c[0] as i32 {
+            0 => Ok(-10.0),
+            1 => Err(RegressorError::InvalidData {
+                detail: "nope".into(),
+            }),
+            3 => Ok(-10.0),
+            _ => Ok(-1.0),
+        });
+        assert_eq!(scored[1].value, None);
+        assert_eq!(best(&scored, 2), vec![2, 4]);
+        assert_eq!(best(&scored, 10), vec![2, 4, 0, 3]);
+    }
+}
