@@ -90,6 +90,54 @@ pub fn par() -> faer::Par {
     faer::get_global_parallelism()
 }
 
+/// Columns per block of [`for_column_blocks`].
+const COLUMN_BLOCK: usize = 64;
+
+/// Runs `f(j0, columns, per_column)` over blocks of up to 64 columns of
+/// `out` (`columns` holds columns `j0..j0 + columns.len()` as mutable
+/// slices, `per_column` the matching entries of `per_column_out`), in
+/// parallel when faer's global parallelism is Rayon. Each block is written
+/// by exactly one call and any reduction over `per_column_out` is left to
+/// the caller, in column order, so the result is bit-identical whatever
+/// the thread count.
+pub fn for_column_blocks<T: Send>(
+    out: &mut Mat<f64>,
+    per_column_out: &mut [T],
+    f: impl Fn(usize, &mut [&mut [f64]], &mut [T]) + Sync,
+) {
+    debug_assert_eq!(per_column_out.len(), out.ncols());
+    let run = |b: usize, block: MatMut<'_, f64>, per_column: &mut [T]| {
+        // Owned faer matrices are column-major with unit row stride, so
+        // every column of a view of one is a slice.
+        let mut columns: Vec<&mut [f64]> = block
+            .col_iter_mut()
+            .filter_map(|c| c.try_as_col_major_mut().map(|c| c.as_slice_mut()))
+            .collect();
+        debug_assert_eq!(columns.len(), per_column.len());
+        f(b * COLUMN_BLOCK, &mut columns, per_column);
+    };
+    match par() {
+        faer::Par::Seq => {
+            let n = out.ncols();
+            for (b, j0) in (0..n).step_by(COLUMN_BLOCK).enumerate() {
+                let j1 = (j0 + COLUMN_BLOCK).min(n);
+                run(
+                    b,
+                    out.as_mut().subcols_mut(j0, j1 - j0),
+                    &mut per_column_out[j0..j1],
+                );
+            }
+        }
+        faer::Par::Rayon(_) => {
+            use rayon::prelude::*;
+            out.par_col_chunks_mut(COLUMN_BLOCK)
+                .zip(per_column_out.par_chunks_mut(COLUMN_BLOCK))
+                .enumerate()
+                .for_each(|(b, (block, per_column))| run(b, block, per_column));
+        }
+    }
+}
+
 /// `dst = alpha·a·b` (or `dst += …` with [`Accum::Add`]) with faer's GEMM,
 /// run sequentially when the inner dimension dwarfs the output (e.g.
 /// `K_uf K_fu`, `m × n` by `n × m` with `n ≫ m`): faer's parallel GEMM splits

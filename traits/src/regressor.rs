@@ -121,6 +121,12 @@ pub struct StartRecord {
     /// The objective where the optimiser ended from this start (`None`:
     /// the optimiser did not run from it).
     pub final_objective: Option<f64>,
+    /// Objective evaluations of the optimiser's run from this start.
+    #[serde(default)]
+    pub evaluations: Option<usize>,
+    /// Iterations of the optimiser's run from this start.
+    #[serde(default)]
+    pub iterations: Option<u64>,
 }
 
 /// Receives a fit's progress: the optimiser's iterations (for progress

@@ -32,8 +32,18 @@ impl Cholesky {
     /// [`RegressorError::NotPositiveDefinite`] when even the largest jitter
     /// fails, or when `k` holds NaN.
     pub fn factor(k: Mat<f64>) -> Result<Self, RegressorError> {
+        Self::factor_shifted(&k, 0.0)
+    }
+
+    /// Factorises `k + shift·I` (e.g. a kernel matrix plus its noise
+    /// variance) without modifying `k`: one copy of `k` is made, and made
+    /// again only when a jitter has to be retried.
+    ///
+    /// # Errors
+    /// As [`Cholesky::factor`].
+    pub fn factor_shifted(k: &Mat<f64>, shift: f64) -> Result<Self, RegressorError> {
         let n = k.nrows();
-        let mean_diag = (0..n).map(|i| k[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
+        let mean_diag = (0..n).map(|i| (k[(i, i)] + shift).abs()).sum::<f64>() / n.max(1) as f64;
         let scale = if mean_diag.is_finite() && mean_diag > 0.0 {
             mean_diag
         } else {
@@ -51,8 +61,11 @@ impl Cholesky {
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;
             if attempt > 0 {
-                work.copy_from(&k);
-                for i in 0..n {
+                work.copy_from(k);
+            }
+            for i in 0..n {
+                work[(i, i)] += shift;
+                if jitter > 0.0 {
                     work[(i, i)] += jitter;
                 }
             }
@@ -119,6 +132,13 @@ impl Cholesky {
 
     /// `K⁻¹` (full, symmetric).
     pub fn inverse(&self) -> Mat<f64> {
+        let mut out = self.inverse_lower();
+        symmetrize_from_lower(&mut out);
+        out
+    }
+
+    /// `K⁻¹` in its lower triangle (read nothing above the diagonal).
+    pub fn inverse_lower(&self) -> Mat<f64> {
         let n = self.l.nrows();
         let mut out = Mat::zeros(n, n);
         let mut buffer = MemBuffer::new(llt::inverse::inverse_scratch::<f64>(n, par()));
@@ -128,7 +148,6 @@ impl Cholesky {
             par(),
             MemStack::new(&mut buffer),
         );
-        symmetrize_from_lower(&mut out);
         out
     }
 }

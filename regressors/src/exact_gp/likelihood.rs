@@ -12,11 +12,11 @@
 //! (`n³`, faer) and a few `O(n²d)` products, with no per-hyperparameter
 //! `n × n` temporaries (see the kernels' `accumulate_gradient`).
 
-use faer::{Accum, MatRef};
+use faer::{Mat, MatRef};
 
 use super::cholesky::Cholesky;
 use crate::RegressorError;
-use crate::dense::{gemm, trace};
+use crate::dense::{column, for_column_blocks, trace};
 use crate::kernels::Kernel;
 
 /// `log 2π`.
@@ -43,6 +43,40 @@ pub fn lml_from_factor(chol: &Cholesky, y: MatRef<'_, f64>, alpha: MatRef<'_, f6
     -0.5 * data_fit - 0.5 * p as f64 * chol.log_det() - 0.5 * (n * p) as f64 * LN_2PI
 }
 
+/// `W = A Aᵀ − p K_y⁻¹` (full, symmetric) from the lower triangle of
+/// `K_y⁻¹` and `A = K_y⁻¹ Y` (`n × p`), in one pass over column blocks (in
+/// parallel, see [`for_column_blocks`]): each entry below the diagonal is
+/// read once from its column, each entry above it from the matching row of
+/// the block's columns (contiguous in the inverse's earlier columns).
+fn weights(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
+    let (n, p) = (alpha.nrows(), alpha.ncols());
+    let scale = -(p as f64);
+    let alpha_cols: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|c| column(alpha, c)).collect();
+    let outer = |i: usize, j: usize| -> f64 { alpha_cols.iter().map(|a| a[i] * a[j]).sum() };
+    let mut w = Mat::<f64>::zeros(n, n);
+    let mut unused = vec![(); n];
+    for_column_blocks(&mut w, &mut unused, |j0, columns, _| {
+        let j1 = j0 + columns.len();
+        for (jj, col) in columns.iter_mut().enumerate() {
+            let j = j0 + jj;
+            let inv = column(inverse_lower, j);
+            for i in j..n {
+                col[i] = outer(i, j) + scale * inv[i];
+            }
+        }
+        // Above the diagonal: W_ij = W_ji for i < j, read from column i
+        // (`i` is a row of the block, not an index into `columns`).
+        #[allow(clippy::needless_range_loop)]
+        for i in 0..j1 {
+            let inv = column(inverse_lower, i);
+            for j in j0.max(i + 1)..j1 {
+                columns[j - j0][i] = outer(i, j) + scale * inv[j];
+            }
+        }
+    });
+    w
+}
+
 /// Evaluates the log marginal likelihood, and its gradient when asked.
 ///
 /// # Errors
@@ -54,13 +88,9 @@ pub fn log_marginal_likelihood(
     y: MatRef<'_, f64>,
     with_gradient: bool,
 ) -> Result<LmlEvaluation, RegressorError> {
-    let (n, p) = (y.nrows(), y.ncols());
+    let n = y.nrows();
     let cache = kernel.gram_with_cache(x);
-    let mut ky = cache.k.clone();
-    for i in 0..n {
-        ky[(i, i)] += noise_variance;
-    }
-    let chol = Cholesky::factor(ky)?;
+    let chol = Cholesky::factor_shifted(&cache.k, noise_variance)?;
     let alpha = chol.solve(y);
     let lml = lml_from_factor(&chol, y, alpha.as_ref());
     if !lml.is_finite() {
@@ -70,20 +100,7 @@ pub fn log_marginal_likelihood(
         });
     }
     let gradient = with_gradient.then(|| {
-        // W = A Aᵀ − p K_y⁻¹, in place of the inverse.
-        let mut w = chol.inverse();
-        for j in 0..n {
-            for v in w.col_as_slice_mut(j) {
-                *v *= -(p as f64);
-            }
-        }
-        gemm(
-            w.as_mut(),
-            Accum::Add,
-            alpha.as_ref(),
-            alpha.transpose(),
-            1.0,
-        );
+        let w = weights(chol.inverse_lower().as_ref(), alpha.as_ref());
         let mut g = vec![0.0; kernel.n_params() + 1];
         let m = kernel.n_params();
         kernel.accumulate_gradient(x, &cache, w.as_ref(), &mut g[..m]);

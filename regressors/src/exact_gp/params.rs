@@ -172,9 +172,9 @@ pub struct ExactGpParams {
     /// target value (in the optimiser's coordinates) falls below this
     /// (default 1e-5).
     pub gradient_tolerance: f64,
-    /// Stop when an iteration changes the objective by less than this
-    /// fraction of its initial magnitude (default 1e-10, about scipy's
-    /// L-BFGS-B `factr = 1e7` that GPy uses).
+    /// Stop when an iteration changes the objective by at most this
+    /// fraction of its magnitude (default 2.2e-9: scipy's L-BFGS-B rule
+    /// with GPy's `factr = 1e7`, see [`crate::hyperopt::CostTolerance`]).
     pub relative_cost_tolerance: f64,
     /// Hyperparameter bounds.
     pub bounds: Bounds,
@@ -195,7 +195,7 @@ impl Default for ExactGpParams {
             restarts: 0,
             seed: 0,
             gradient_tolerance: 1e-5,
-            relative_cost_tolerance: 1e-10,
+            relative_cost_tolerance: 2.2e-9,
             bounds: Bounds::default(),
         }
     }

@@ -53,9 +53,31 @@ pub struct OptimizerSettings {
     pub seed: u64,
     /// Stop when the gradient norm (normalised objective) falls below this.
     pub gradient_tolerance: f64,
-    /// Stop when an iteration changes the objective by less than this
-    /// fraction of its initial magnitude.
+    /// Stop when an iteration changes the objective by at most this
+    /// fraction of its magnitude (scipy's L-BFGS-B rule,
+    /// `(f_k − f_{k+1}) / max(|f_k|, |f_{k+1}|, 1) ≤ factr·ε`).
     pub relative_cost_tolerance: f64,
+}
+
+/// The relative-decrease stopping rule of scipy's L-BFGS-B, on an objective
+/// scaled by `unit` (one unit of the unscaled objective): stop when
+/// `|f_k − f_{k+1}| ≤ relative · max(|f_k|, |f_{k+1}|, unit)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CostTolerance {
+    /// The fraction (`factr·ε` in scipy's terms; GPy's default is
+    /// `1e7 · 2.2e-16 ≈ 2.2e-9`).
+    pub relative: f64,
+    /// The scaled value of one unit of the objective.
+    pub unit: f64,
+}
+
+impl CostTolerance {
+    /// Whether a step from cost `previous` to `current` is small enough to
+    /// stop.
+    pub fn converged(&self, previous: f64, current: f64) -> bool {
+        (previous - current).abs()
+            <= self.relative * previous.abs().max(current.abs()).max(self.unit)
+    }
 }
 
 impl OptimizerSettings {
@@ -291,8 +313,8 @@ pub fn maximize(
             }
             problem.evaluate(&start_u).map(|(cost, _)| cost)
         });
-        let initial = match initial {
-            Ok(cost) => cost,
+        match initial {
+            Ok(_) => {}
             Err(e) => {
                 evaluations += problem.evaluations.get();
                 last_error = Some(e);
@@ -300,7 +322,10 @@ pub fn maximize(
             }
         };
         let scale = problem.scale.get();
-        let tol_cost = settings.relative_cost_tolerance * initial.abs().max(1.0);
+        let tol_cost = CostTolerance {
+            relative: settings.relative_cost_tolerance,
+            unit: scale,
+        };
         let outcome = solver::run(
             &problem,
             &coords.bounds,

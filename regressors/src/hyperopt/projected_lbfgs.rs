@@ -15,6 +15,7 @@
 
 use std::collections::VecDeque;
 
+use super::CostTolerance;
 use argmin::core::{
     CostFunction, Error as ArgminError, Gradient, IterState, KV, Problem, Solver, State,
     TerminationReason, TerminationStatus,
@@ -35,7 +36,7 @@ pub struct ProjectedLbfgs {
     upper: Vec<f64>,
     memory: usize,
     tol_projected_gradient: f64,
-    tol_cost: f64,
+    tol_cost: CostTolerance,
     pairs: VecDeque<(Vec<f64>, Vec<f64>)>,
     /// Why the search stopped, when it stopped itself.
     stopped: Option<TerminationReason>,
@@ -44,13 +45,13 @@ pub struct ProjectedLbfgs {
 impl ProjectedLbfgs {
     /// A solver for the box `[lower, upper]` with `memory` correction pairs,
     /// stopping at a projected-gradient norm below `tol_projected_gradient`
-    /// or a decrease of the cost below `tol_cost`.
+    /// or a relative decrease of the cost within `tol_cost`.
     pub fn new(
         lower: Vec<f64>,
         upper: Vec<f64>,
         memory: usize,
         tol_projected_gradient: f64,
-        tol_cost: f64,
+        tol_cost: CostTolerance,
     ) -> Self {
         Self {
             lower,
@@ -259,7 +260,7 @@ where
                 self.pairs.pop_front();
             }
         }
-        if f - f_new < self.tol_cost {
+        if self.tol_cost.converged(f, f_new) {
             self.stopped = Some(TerminationReason::SolverConverged);
         }
         if self.projected_gradient_norm(&x_new, &g_new) < self.tol_projected_gradient {
@@ -287,6 +288,12 @@ mod tests {
     use argmin::core::Executor;
 
     use super::*;
+
+    /// No stopping on the cost: the tests converge on the gradient.
+    const NEVER: CostTolerance = CostTolerance {
+        relative: 0.0,
+        unit: 1.0,
+    };
 
     /// `½ xᵀ A x − bᵀ x` with a coupled SPD `A`.
     struct Quadratic {
@@ -387,7 +394,7 @@ mod tests {
     fn agrees_with_the_unbounded_optimum_inside_the_box() {
         // A x = b solved by hand: the optimum lies inside [-5, 5]³.
         let q = Quadratic::new();
-        let solver = ProjectedLbfgs::new(vec![-5.0; 3], vec![5.0; 3], 10, 1e-10, 0.0);
+        let solver = ProjectedLbfgs::new(vec![-5.0; 3], vec![5.0; 3], 10, 1e-10, NEVER);
         let (x, _, iters) = solve(Quadratic::new(), solver, vec![0.0; 3]);
         let residual: Vec<f64> = q.ax(&x).iter().zip(&q.b).map(|(a, b)| a - b).collect();
         assert!(
@@ -396,7 +403,7 @@ mod tests {
         );
         assert!(iters < 20, "a 3-D quadratic took {iters} iterations");
 
-        let solver = ProjectedLbfgs::new(vec![-2.0; 4], vec![2.0; 4], 10, 1e-10, 0.0);
+        let solver = ProjectedLbfgs::new(vec![-2.0; 4], vec![2.0; 4], 10, 1e-10, NEVER);
         let (x, cost, _) = solve(Rosenbrock, solver, vec![-1.2, 1.0, -1.2, 1.0]);
         assert!(cost < 1e-14, "{cost}");
         assert!(x.iter().all(|v| (v - 1.0).abs() < 1e-6), "{x:?}");
@@ -408,7 +415,7 @@ mod tests {
         // free and must minimise the quadratic with x₂ fixed at 0.5.
         let q = Quadratic::new();
         let upper = vec![10.0, 10.0, 0.5];
-        let solver = ProjectedLbfgs::new(vec![-10.0; 3], upper.clone(), 10, 1e-12, 0.0);
+        let solver = ProjectedLbfgs::new(vec![-10.0; 3], upper.clone(), 10, 1e-12, NEVER);
         let (x, _, _) = solve(Quadratic::new(), solver, vec![0.0; 3]);
         assert_eq!(x[2], 0.5, "the bound binds exactly: {x:?}");
         let g = q.gradient(&x).unwrap();
@@ -426,13 +433,13 @@ mod tests {
 
     #[test]
     fn a_bound_that_does_not_bind_changes_nothing() {
-        let wide = ProjectedLbfgs::new(vec![-1e3; 4], vec![1e3; 4], 10, 1e-10, 0.0);
+        let wide = ProjectedLbfgs::new(vec![-1e3; 4], vec![1e3; 4], 10, 1e-10, NEVER);
         let unbounded = ProjectedLbfgs::new(
             vec![f64::NEG_INFINITY; 4],
             vec![f64::INFINITY; 4],
             10,
             1e-10,
-            0.0,
+            NEVER,
         );
         let x0 = vec![-1.2, 1.0, -1.2, 1.0];
         let (a, ca, ia) = solve(Rosenbrock, wide, x0.clone());
@@ -459,7 +466,7 @@ mod tests {
                 Rosenbrock.gradient(x)
             }
         }
-        let solver = ProjectedLbfgs::new(vec![0.0; 4], vec![1.0; 4], 10, 1e-10, 0.0);
+        let solver = ProjectedLbfgs::new(vec![0.0; 4], vec![1.0; 4], 10, 1e-10, NEVER);
         let (x, cost, _) = solve(Guarded, solver, vec![0.9, 0.0, 0.3, 0.7]);
         assert!(cost < 1e-12 && x.iter().all(|v| (v - 1.0).abs() < 1e-6));
     }

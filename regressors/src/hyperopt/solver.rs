@@ -16,7 +16,7 @@ use argmin::solver::linesearch::MoreThuenteLineSearch;
 use gpodo_traits::FitProgress;
 
 use super::projected_lbfgs::ProjectedLbfgs;
-use super::{LogBounds, Negated, Optimizer, OptimizerSettings};
+use super::{CostTolerance, LogBounds, Negated, Optimizer, OptimizerSettings};
 
 type HyperState = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 
@@ -25,7 +25,7 @@ type HyperState = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 struct Converging<S> {
     inner: S,
     tol_grad: f64,
-    tol_cost: f64,
+    tol_cost: CostTolerance,
 }
 
 impl<O, S: Solver<O, HyperState>> Solver<O, HyperState> for Converging<S> {
@@ -56,7 +56,10 @@ impl<O, S: Solver<O, HyperState>> Solver<O, HyperState> for Converging<S> {
         {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
-        if state.get_iter() > 0 && (state.get_prev_cost() - state.get_cost()).abs() < self.tol_cost
+        if state.get_iter() > 0
+            && self
+                .tol_cost
+                .converged(state.get_prev_cost(), state.get_cost())
         {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
@@ -91,7 +94,7 @@ pub(super) fn run(
     bounds: &[LogBounds],
     u0: Vec<f64>,
     settings: &OptimizerSettings,
-    tol_cost: f64,
+    tol_cost: CostTolerance,
     progress: Option<(&Arc<dyn FitProgress>, usize, f64)>,
 ) -> Result<u64, ArgminError> {
     let reporter = progress.map(|(p, start, scale)| Reporter {

@@ -33,6 +33,10 @@ pub struct StartPolicy {
     /// How many of the best-scored candidates the optimiser runs from
     /// (default 2); the highest optimum wins.
     pub optimize_best: usize,
+    /// When several candidates are optimised, each first runs this many
+    /// iterations and only the leader goes on to convergence (default 20;
+    /// 0 runs every one to convergence).
+    pub race_iterations: u64,
 }
 
 impl Default for StartPolicy {
@@ -40,6 +44,7 @@ impl Default for StartPolicy {
         Self {
             perturbations: 2,
             optimize_best: 2,
+            race_iterations: 20,
         }
     }
 }
@@ -59,6 +64,33 @@ impl StartPolicy {
         }
         Ok(())
     }
+}
+
+/// Reports a run's starts to the fit's progress under numbers that follow
+/// the runs before it, so that every optimiser run of a fit has its own.
+struct Numbered {
+    inner: std::sync::Arc<dyn gpodo_traits::FitProgress>,
+    first: usize,
+}
+
+impl gpodo_traits::FitProgress for Numbered {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+        self.inner
+            .iteration(self.first + start, iteration, objective);
+    }
+}
+
+/// The progress sink of the run that is numbered `first`.
+fn numbered(
+    progress: &ProgressSink,
+    first: usize,
+) -> Option<std::sync::Arc<dyn gpodo_traits::FitProgress>> {
+    progress.0.as_ref().map(|inner| {
+        std::sync::Arc::new(Numbered {
+            inner: std::sync::Arc::clone(inner),
+            first,
+        }) as std::sync::Arc<dyn gpodo_traits::FitProgress>
+    })
 }
 
 /// One candidate start.
@@ -187,9 +219,10 @@ pub fn kernel_bases(
 }
 
 /// Scores `candidates` with `score` (the objective without its gradient),
-/// runs [`maximize`] from the best `policy.optimize_best` of them (the
-/// first with `settings.restarts` extra perturbed runs, the others with
-/// none) and returns the highest optimum, with every candidate's record
+/// runs [`maximize`] from the best `policy.optimize_best` of them — all
+/// for `policy.race_iterations` iterations, then the leader alone to
+/// convergence, with `settings.restarts` extra perturbed runs — and
+/// returns the highest optimum, with every candidate's record
 /// (restarts appended as records of their own). Evaluations and iterations
 /// are summed over all runs.
 ///
@@ -214,35 +247,76 @@ pub fn maximize_best(
         .map(|c| StartRecord {
             label: c.label.clone(),
             start_objective: c.value,
-            final_objective: None,
+            ..StartRecord::default()
         })
         .collect();
     let (mut best_run, mut evaluations, mut iterations) = (None::<Maximized>, 0, 0);
     let mut last_error = None;
-    for (rank, i) in best(&scored, policy.optimize_best).into_iter().enumerate() {
+    let mut run_number = 0;
+    let chosen = best(&scored, policy.optimize_best);
+    let mut runs: Vec<(usize, Vec<f64>)> = chosen
+        .iter()
+        .map(|&i| (i, scored[i].coords.clone()))
+        .collect();
+    if chosen.len() > 1 && policy.race_iterations > 0 {
+        // The race: every chosen candidate runs a few iterations, and only
+        // the leader goes on (from where it stopped).
+        let short = OptimizerSettings {
+            max_iters: policy.race_iterations,
+            restarts: 0,
+            ..*settings
+        };
+        let mut leader: Option<(usize, Vec<f64>, f64)> = None;
+        for (i, start) in runs {
+            let coords = Coordinates {
+                start,
+                bounds: bounds.to_vec(),
+                perturb: perturb.to_vec(),
+            };
+            let sink = numbered(progress, run_number);
+            run_number += 1;
+            match maximize(objective, &coords, value_scale, &short, sink.as_ref()) {
+                Ok(out) => {
+                    records[i].final_objective = Some(out.value);
+                    records[i].evaluations = Some(out.evaluations);
+                    records[i].iterations = Some(out.iterations);
+                    evaluations += out.evaluations;
+                    iterations += out.iterations;
+                    if leader.as_ref().is_none_or(|l| out.value > l.2) {
+                        leader = Some((i, out.coords.clone(), out.value));
+                    }
+                    if best_run.as_ref().is_none_or(|b| out.value > b.value) {
+                        best_run = Some(out);
+                    }
+                }
+                Err(e) => last_error = Some(e),
+            }
+        }
+        runs = leader.map(|(i, c, _)| vec![(i, c)]).unwrap_or_default();
+    }
+    for (rank, (i, start)) in runs.into_iter().enumerate() {
         let mut settings = *settings;
         if rank > 0 {
             settings.restarts = 0;
         }
         let coords = Coordinates {
-            start: scored[i].coords.clone(),
+            start,
             bounds: bounds.to_vec(),
             perturb: perturb.to_vec(),
         };
-        match maximize(
-            objective,
-            &coords,
-            value_scale,
-            &settings,
-            progress.0.as_ref(),
-        ) {
+        let sink = numbered(progress, run_number);
+        run_number += 1 + settings.restarts;
+        match maximize(objective, &coords, value_scale, &settings, sink.as_ref()) {
             Ok(out) => {
-                records[i].final_objective = out.start_values.first().copied();
+                let record = &mut records[i];
+                record.final_objective = out.start_values.first().copied();
+                record.evaluations = Some(record.evaluations.unwrap_or(0) + out.evaluations);
+                record.iterations = Some(record.iterations.unwrap_or(0) + out.iterations);
                 for (k, v) in out.start_values.iter().enumerate().skip(1) {
                     records.push(StartRecord {
                         label: format!("{}, restart #{k}", scored[i].label),
-                        start_objective: None,
                         final_objective: Some(*v),
+                        ..StartRecord::default()
                     });
                 }
                 evaluations += out.evaluations;

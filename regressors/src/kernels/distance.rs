@@ -6,7 +6,7 @@
 
 use faer::{Accum, Mat, MatRef};
 
-use crate::dense::gemm;
+use crate::dense::{for_column_blocks, gemm};
 
 /// Column means of `x`.
 pub fn column_means(x: MatRef<'_, f64>) -> Vec<f64> {
@@ -80,12 +80,14 @@ pub fn scaled_sq_dist(
         z2.as_ref().transpose(),
         -2.0,
     );
-    for (j, norm_j) in n2.iter().enumerate() {
-        let col = r2.col_as_slice_mut(j);
-        for (v, norm_i) in col.iter_mut().zip(&n1) {
-            *v = (*v + norm_i + norm_j).max(0.0);
+    let mut unused = vec![(); r2.ncols()];
+    for_column_blocks(&mut r2, &mut unused, |j0, columns, _| {
+        for (col, norm_j) in columns.iter_mut().zip(&n2[j0..]) {
+            for (v, norm_i) in col.iter_mut().zip(&n1) {
+                *v = (*v + norm_i + norm_j).max(0.0);
+            }
         }
-    }
+    });
     if same {
         for i in 0..r2.nrows().min(r2.ncols()) {
             r2[(i, i)] = 0.0;

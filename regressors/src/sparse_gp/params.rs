@@ -98,7 +98,8 @@ pub struct SparseGpParams {
     pub seed: u64,
     /// Gradient-norm stopping tolerance (default 1e-5), as for the exact GP.
     pub gradient_tolerance: f64,
-    /// Relative objective-change stopping tolerance (default 1e-10).
+    /// Relative objective-change stopping tolerance (default 2.2e-9), as
+    /// for the exact GP.
     pub relative_cost_tolerance: f64,
     /// Hyperparameter bounds (as for the exact GP).
     pub bounds: Bounds,
@@ -121,7 +122,7 @@ impl Default for SparseGpParams {
             restarts: 0,
             seed: 0,
             gradient_tolerance: 1e-5,
-            relative_cost_tolerance: 1e-10,
+            relative_cost_tolerance: 2.2e-9,
             bounds: Bounds::default(),
         }
     }
