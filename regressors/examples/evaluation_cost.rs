@@ -1,0 +1,79 @@
+//! Times each step of one exact-GP evaluation (RBF-ARD, d = 28, 3 outputs,
+//! seeded data): the Gram matrix, the Cholesky factor, the inverse, the
+//! log marginal likelihood alone and with its gradient, averaged over 10
+//! repetitions. Compare with the LAPACK floor of `bench/peers/dense_floor.py`
+//! at the same `n`.
+//!
+//! ```sh
+//! cargo run --release -p gpodo-regressors --example evaluation_cost -- 1869
+//! ```
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+use faer::Mat;
+use gpodo_regressors::exact_gp::cholesky::Cholesky;
+use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
+use gpodo_regressors::kernels::{KernelExpr, KernelInit};
+use rand::{Rng, SeedableRng};
+use std::time::Instant;
+/// Prints the mean time of each step at `n` (first argument, default 1869).
+fn main() {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(1869);
+    let d = 28;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let x: Mat<f64> = Mat::from_fn(n, d, |_, _| rng.random_range(-1.7..1.7));
+    let y = Mat::from_fn(n, 3, |i, c| x[(i, c)].sin() + rng.random_range(-0.2..0.2));
+    let kernel = KernelExpr::Leaf("rbf".into()).build(d, &KernelInit::default());
+    let reps = 10;
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(kernel.gram_with_cache(x.as_ref()));
+    }
+    println!(
+        "gram            {:8.2} ms",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64
+    );
+    let mut k = kernel.gram(x.as_ref());
+    for i in 0..n {
+        k[(i, i)] += 0.1;
+    }
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(Cholesky::factor(k.clone()).unwrap());
+    }
+    println!(
+        "factor          {:8.2} ms",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64
+    );
+    let c = Cholesky::factor(k.clone()).unwrap();
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(c.inverse());
+    }
+    println!(
+        "inverse         {:8.2} ms",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64
+    );
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(
+            log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), false).unwrap(),
+        );
+    }
+    println!(
+        "lml only        {:8.2} ms",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64
+    );
+    let t = Instant::now();
+    for _ in 0..reps {
+        std::hint::black_box(
+            log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap(),
+        );
+    }
+    println!(
+        "lml + gradient  {:8.2} ms",
+        t.elapsed().as_secs_f64() * 1e3 / reps as f64
+    );
+}
