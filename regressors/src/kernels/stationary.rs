@@ -109,40 +109,26 @@ impl Stationary {
     /// (column blocks in parallel, see [`for_column_blocks`]).
     fn apply_profile(&self, family: Family, r2: &mut Mat<f64>, s: Option<&mut Mat<f64>>) {
         let var = self.variance;
-        match s {
-            Some(s) => {
-                let mut unused = vec![(); r2.ncols()];
-                {
-                    let r2 = r2.as_ref();
-                    for_column_blocks(s, &mut unused, |j0, columns, _| {
-                        for (jj, scol) in columns.iter_mut().enumerate() {
-                            let rcol = column(r2, j0 + jj);
-                            for (sv, r) in scol.iter_mut().zip(rcol.iter()) {
-                                *sv = var * family.profile(*r).1;
-                            }
-                        }
-                    });
+        let mut unused = vec![(); r2.ncols()];
+        if let Some(s) = s {
+            // `S` first: it reads `r²` before `r2` becomes `K`.
+            let r2 = r2.as_ref();
+            for_column_blocks(s, &mut unused, |j0, columns, _| {
+                for (jj, scol) in columns.iter_mut().enumerate() {
+                    let rcol = column(r2, j0 + jj);
+                    for (sv, r) in scol.iter_mut().zip(rcol.iter()) {
+                        *sv = var * family.profile(*r).1;
+                    }
                 }
-                let mut unused = vec![(); r2.ncols()];
-                for_column_blocks(r2, &mut unused, |_, columns, _| {
-                    for col in columns.iter_mut() {
-                        for v in col.iter_mut() {
-                            *v = var * family.profile(*v).0;
-                        }
-                    }
-                });
-            }
-            None => {
-                let mut unused = vec![(); r2.ncols()];
-                for_column_blocks(r2, &mut unused, |_, columns, _| {
-                    for col in columns.iter_mut() {
-                        for v in col.iter_mut() {
-                            *v = var * family.profile(*v).0;
-                        }
-                    }
-                });
-            }
+            });
         }
+        for_column_blocks(r2, &mut unused, |_, columns, _| {
+            for col in columns.iter_mut() {
+                for v in col.iter_mut() {
+                    *v = var * family.profile(*v).0;
+                }
+            }
+        });
     }
 
     /// Adds `Σ_ij W_ij ∂K_ij/∂θ` for `θ = (log σ², log ℓ_1, …)` to `out`,
