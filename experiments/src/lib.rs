@@ -1,31 +1,26 @@
 //! The gpodo experiment runner: reads a YAML experiment, runs the paper's
 //! pipeline (simulate or load → motion model → residual dataset →
-//! regressors → evaluation) and writes `report.md` and `metrics.json`.
+//! regressors → evaluation → Table II schemes) and writes `report.md`,
+//! `metrics.json` and the sweep's `summary.md`.
 //!
-//! * [`config`]: the experiment file schema, with errors naming file, line
-//!   and column;
-//! * [`pipeline`]: the run itself;
-//! * [`calibration`]: statistics of residual tables, to compare the
-//!   simulator with the real ExoTeR data;
-//! * [`odometry`]: dead reckoning with the motion model;
-//! * [`schemes`] and [`table_two`]: the SLAM schemes of Table II run
-//!   through the visual front end, with [`plots`] (Fig. 3 and Fig. 5);
-//! * [`report`]: the Markdown and JSON outputs;
-//! * [`bench`](mod@bench) and [`bench_report`]: `gpodo bench`, every regressor timed
-//!   and scored on the same splits against the exact-GP baseline.
+//! The crate flows one way; no module imports a later stage:
+//!
+//! 1. [`config`]: the experiment file's schema and its checks;
+//! 2. [`plan`]: a file (with `base:`, `sweep:`, `zip:`, `seeds:`) expanded
+//!    into validated runs;
+//! 3. [`execute`]: the data, the fits and the schemes of those runs, each
+//!    done once when runs share it, and `gpodo bench`'s timings;
+//! 4. [`report`]: Markdown, JSON, CSV and SVG from the results;
+//! 5. [`runner`]: drives the stages for `gpodo run`, recording each run.
+//!
+//! [`error`] holds the errors of the first three stages, [`output`] the
+//! atomic file writes every stage that writes shares. See
+//! `ARCHITECTURE.md` for the path of one `gpodo run`.
 
-pub mod bench;
-pub mod bench_report;
-pub mod calibration;
 pub mod config;
-pub mod odometry;
-pub mod pipeline;
-pub mod plots;
-pub mod records;
+pub mod error;
+pub mod execute;
+pub mod output;
+pub mod plan;
 pub mod report;
 pub mod runner;
-pub mod schemes;
-pub mod shared;
-pub mod sweep;
-pub mod sweep_report;
-pub mod table_two;

@@ -7,12 +7,12 @@ use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 use gpodo_datasets::log::write_log_csv;
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
-use gpodo_experiments::bench::run_bench;
-use gpodo_experiments::bench_report::write_bench_report;
 use gpodo_experiments::config::ExperimentConfig;
+use gpodo_experiments::execute::bench::run_bench;
+use gpodo_experiments::plan::load_plan;
+use gpodo_experiments::report::bench::write_bench_report;
+use gpodo_experiments::report::sweep::write_sweep_report;
 use gpodo_experiments::runner::{RunOptions, Shard, results_dir, run_sweep};
-use gpodo_experiments::sweep::load_plan;
-use gpodo_experiments::sweep_report::write_sweep_report;
 
 /// Learning odometry residuals with Gaussian processes, and using them to
 /// decide when a rover must look.
@@ -168,7 +168,7 @@ fn plan(file: &Path) -> anyhow::Result<()> {
 }
 
 fn report(dir: &Path) -> anyhow::Result<()> {
-    let merged = gpodo_experiments::sweep_report::merge_records(dir)?;
+    let merged = gpodo_experiments::report::sweep::merge_records(dir)?;
     let single = merged.plan.as_ref().is_some_and(|p| p.keys.len() == 1);
     let name = if single { "summary.md" } else { "report.md" };
     let report = write_sweep_report(dir, name)?;

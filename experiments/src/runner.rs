@@ -13,12 +13,15 @@ use indicatif::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::records::{
+use crate::config::ExperimentConfig;
+use crate::error::PipelineError;
+use crate::execute::records::{
     RecordError, RecordWriter, RunRecord, read_records, record_files, record_path,
 };
-use crate::report::{slug, write_atomically, write_report};
-use crate::shared::{SharedCounts, SharedWork};
-use crate::sweep::{Dimension, SweepPlan};
+use crate::execute::shared::{SharedCounts, SharedWork};
+use crate::output::{slug, write_atomically};
+use crate::plan::{PlanFile, RunSpec, SweepPlan};
+use crate::report::write_report;
 
 /// One slice of a sweep: runs whose plan index is `index` modulo `count`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -86,38 +89,6 @@ pub struct RunOptions {
     pub quiet: bool,
 }
 
-/// What `plan.json` holds: enough for `gpodo report` to tell missing and
-/// duplicate runs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PlanFile {
-    /// The sweep's name.
-    pub name: String,
-    /// The experiment file.
-    pub file: PathBuf,
-    /// The sweep seed.
-    pub seed: u64,
-    /// The swept dimensions.
-    pub dimensions: Vec<Dimension>,
-    /// The replicate seeds.
-    pub replicates: Vec<u64>,
-    /// Every run's key, in plan order.
-    pub keys: Vec<String>,
-}
-
-impl PlanFile {
-    /// The plan file of `plan`.
-    pub fn new(plan: &SweepPlan) -> Self {
-        Self {
-            name: plan.name.clone(),
-            file: plan.file.clone(),
-            seed: plan.seed,
-            dimensions: plan.dimensions.clone(),
-            replicates: plan.replicates.clone(),
-            keys: plan.runs.iter().map(|r| r.key.clone()).collect(),
-        }
-    }
-}
-
 /// Why a sweep could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum RunnerError {
@@ -136,11 +107,11 @@ pub enum RunnerError {
         /// The run's key.
         key: String,
         /// What failed.
-        source: Box<crate::pipeline::PipelineError>,
+        source: Box<PipelineError>,
     },
     /// The shared work failed.
     #[error(transparent)]
-    Pipeline(#[from] crate::pipeline::PipelineError),
+    Pipeline(#[from] PipelineError),
     /// Writing a report failed.
     #[error("writing {}: {source}", path.display())]
     Output {
@@ -221,12 +192,12 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         BTreeSet::new()
     };
     let writer = RecordWriter::open(&record, options.resume)?;
-    let mine: Vec<&crate::sweep::RunSpec> = plan
+    let mine: Vec<&RunSpec> = plan
         .runs
         .iter()
         .filter(|r| options.shard.is_none_or(|s| s.owns(r.index)))
         .collect();
-    let todo: Vec<&crate::sweep::RunSpec> = mine
+    let todo: Vec<&RunSpec> = mine
         .iter()
         .copied()
         .filter(|r| !done.contains(&r.key))
@@ -241,8 +212,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         "sweep"
     );
     let base = plan.base_dir.as_path();
-    let configs: Vec<(&crate::config::ExperimentConfig, &Path)> =
-        todo.iter().map(|r| (&r.config, base)).collect();
+    let configs: Vec<(&ExperimentConfig, &Path)> = todo.iter().map(|r| (&r.config, base)).collect();
     let multi = if options.quiet {
         MultiProgress::with_draw_target(ProgressDrawTarget::hidden())
     } else {

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use gpodo_experiments::sweep::load_plan;
+use gpodo_experiments::plan::load_plan;
 
 const GOOD: &str = "name: t
 dataset: { kind: simulated, preset: exoter-prl, seed: 7 }

@@ -27,6 +27,7 @@ pub mod oracle;
 pub mod params;
 pub mod prediction;
 pub mod run;
+pub mod scheme;
 pub mod spec;
 pub mod traverse;
 pub mod tum;

@@ -10,9 +10,10 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::records::{RecordError, RunRecord, read_records, record_files};
-use crate::report::write_atomically;
-use crate::runner::PlanFile;
+use crate::execute::records::{RecordError, RunRecord, read_records, record_files};
+use crate::output::write_atomically;
+use crate::plan::PlanFile;
+use crate::report::table::Table;
 
 /// Mean and sample standard deviation of a set of values.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -176,46 +177,6 @@ fn exact_gp_row(r: &RunRecord) -> Option<usize> {
         .position(|s| matches!(s, gpodo_regressors::RegressorSpec::ExactGp(_)))
 }
 
-/// A table: header, rows of cells, and a CSV twin.
-struct Table {
-    header: Vec<String>,
-    rows: Vec<Vec<String>>,
-    csv: Vec<Vec<String>>,
-}
-
-impl Table {
-    fn markdown(&self) -> String {
-        let mut s = format!("| {} |\n|", self.header.join(" | "));
-        for (i, _) in self.header.iter().enumerate() {
-            s.push_str(if i == 0 { "---|" } else { "---:|" });
-        }
-        s.push('\n');
-        for row in &self.rows {
-            let _ = writeln!(s, "| {} |", row.join(" | "));
-        }
-        s
-    }
-
-    fn csv_text(&self) -> String {
-        let escape = |c: &String| {
-            if c.contains([',', '"', '\n']) {
-                format!("\"{}\"", c.replace('"', "\"\""))
-            } else {
-                c.clone()
-            }
-        };
-        let mut s = String::new();
-        for row in &self.csv {
-            let _ = writeln!(
-                s,
-                "{}",
-                row.iter().map(escape).collect::<Vec<_>>().join(",")
-            );
-        }
-        s
-    }
-}
-
 /// Table I: each (setting, regressor) over seeds.
 fn table_one(records: &[RunRecord]) -> Option<Table> {
     let mut groups: BTreeMap<(String, usize, String), Vec<&RunRecord>> = BTreeMap::new();
@@ -232,41 +193,32 @@ fn table_one(records: &[RunRecord]) -> Option<Table> {
     if order.is_empty() {
         return None;
     }
-    let mut table = Table {
-        header: [
-            "setting",
-            "regressor",
-            "runs",
-            "RMSE",
-            "MAE",
-            "NLPD",
-            "95% coverage",
-            "RMSE / exact GP",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: Vec::new(),
-        csv: vec![
-            [
-                "setting",
-                "regressor",
-                "runs",
-                "rmse_mean",
-                "rmse_std",
-                "mae_mean",
-                "mae_std",
-                "nlpd_mean",
-                "coverage95_mean",
-                "rmse_ratio_exact_gp_mean",
-            ]
-            .map(String::from)
-            .to_vec(),
-        ],
-    };
+    let mut table = Table::new(&[
+        "setting",
+        "regressor",
+        "runs",
+        "RMSE",
+        "MAE",
+        "NLPD",
+        "95% coverage",
+        "RMSE / exact GP",
+    ])
+    .with_csv(&[
+        "setting",
+        "regressor",
+        "runs",
+        "rmse_mean",
+        "rmse_std",
+        "mae_mean",
+        "mae_std",
+        "nlpd_mean",
+        "coverage95_mean",
+        "rmse_ratio_exact_gp_mean",
+    ]);
     for key in order {
         let runs = &groups[&key];
         let (set, i, label) = key;
-        let get = |f: &dyn Fn(&crate::records::RegressorMetrics) -> f64| -> Vec<f64> {
+        let get = |f: &dyn Fn(&crate::execute::records::RegressorMetrics) -> f64| -> Vec<f64> {
             runs.iter().map(|r| f(&r.metrics.regressors[i])).collect()
         };
         let ratio: Vec<f64> = runs
@@ -284,7 +236,7 @@ fn table_one(records: &[RunRecord]) -> Option<Table> {
             Stat::of(&ratio),
         );
         let show = |s: Option<Stat>, d: usize| s.map_or("–".into(), |s| s.show(d));
-        table.rows.push(vec![
+        table.push(vec![
             set.clone(),
             label.clone(),
             runs.len().to_string(),
@@ -299,7 +251,7 @@ fn table_one(records: &[RunRecord]) -> Option<Table> {
                 format!("{}", if std { s.std } else { s.mean })
             })
         };
-        table.csv.push(vec![
+        table.push_csv(vec![
             set,
             label,
             runs.len().to_string(),
@@ -333,56 +285,47 @@ fn table_two(records: &[RunRecord]) -> Option<Table> {
     if order.is_empty() {
         return None;
     }
-    let mut table = Table {
-        header: [
-            "setting",
-            "scheme",
-            "run",
-            "runs",
-            "#Frames",
-            "#Keyframes",
-            "RMSE [m]",
-            "Max E. [m]",
-            "Final E. [m]",
-            "Travel Distance E. [%]",
-            "frames / first",
-            "RMSE / first",
-            "VO losses",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: Vec::new(),
-        csv: vec![
-            [
-                "setting",
-                "scheme",
-                "traverse",
-                "runs",
-                "frames_mean",
-                "frames_std",
-                "keyframes_mean",
-                "rmse_m_mean",
-                "rmse_m_std",
-                "max_error_m_mean",
-                "final_error_m_mean",
-                "travel_distance_error_percent_mean",
-                "frames_ratio_first_mean",
-                "rmse_ratio_first_mean",
-                "tracking_losses_mean",
-            ]
-            .map(String::from)
-            .to_vec(),
-        ],
-    };
+    let mut table = Table::new(&[
+        "setting",
+        "scheme",
+        "run",
+        "runs",
+        "#Frames",
+        "#Keyframes",
+        "RMSE [m]",
+        "Max E. [m]",
+        "Final E. [m]",
+        "Travel Distance E. [%]",
+        "frames / first",
+        "RMSE / first",
+        "VO losses",
+    ])
+    .with_csv(&[
+        "setting",
+        "scheme",
+        "traverse",
+        "runs",
+        "frames_mean",
+        "frames_std",
+        "keyframes_mean",
+        "rmse_m_mean",
+        "rmse_m_std",
+        "max_error_m_mean",
+        "final_error_m_mean",
+        "travel_distance_error_percent_mean",
+        "frames_ratio_first_mean",
+        "rmse_ratio_first_mean",
+        "tracking_losses_mean",
+    ]);
     for key in order {
         let runs = &groups[&key];
         let (label, traverse) = names[&key].clone();
-        let get = |f: &dyn Fn(&crate::records::SchemeMetrics) -> f64| -> Vec<f64> {
+        let get = |f: &dyn Fn(&crate::execute::records::SchemeMetrics) -> f64| -> Vec<f64> {
             runs.iter()
                 .map(|(r, i)| f(&r.metrics.schemes[*i]))
                 .collect()
         };
-        let first = |f: &dyn Fn(&crate::records::SchemeMetrics) -> f64| -> Vec<f64> {
+        let first = |f: &dyn Fn(&crate::execute::records::SchemeMetrics) -> f64| -> Vec<f64> {
             runs.iter()
                 .filter_map(|(r, i)| {
                     let m = &r.metrics.schemes[*i];
@@ -419,10 +362,10 @@ fn table_two(records: &[RunRecord]) -> Option<Table> {
                 .zip(digits)
                 .map(|(s, d)| s.map_or("–".into(), |s| s.show(d))),
         );
-        table.rows.push(row);
+        table.push(row);
         let mean = |s: &Option<Stat>| s.map_or(String::new(), |s| s.mean.to_string());
         let std = |s: &Option<Stat>| s.map_or(String::new(), |s| s.std.to_string());
-        table.csv.push(vec![
+        table.push_csv(vec![
             key.0,
             label,
             traverse,
@@ -551,21 +494,20 @@ fn ablations(records: &[RunRecord], plan: Option<&PlanFile>) -> Vec<(String, Tab
                     .map(|(v, _)| v)
             })
             .collect();
-        let mut table = Table {
-            header: std::iter::once(dim.name.clone())
+        let mut table = Table::new(
+            &std::iter::once(dim.name.clone())
                 .chain(columns.iter().map(|(n, _, _)| n.clone()))
-                .collect(),
-            rows: Vec::new(),
-            csv: vec![
-                std::iter::once(dim.name.clone())
-                    .chain(
-                        columns
-                            .iter()
-                            .flat_map(|(n, _, _)| [format!("{n} mean"), format!("{n} std")]),
-                    )
-                    .collect(),
-            ],
-        };
+                .collect::<Vec<_>>(),
+        )
+        .with_csv(
+            &std::iter::once(dim.name.clone())
+                .chain(
+                    columns
+                        .iter()
+                        .flat_map(|(n, _, _)| [format!("{n} mean"), format!("{n} std")]),
+                )
+                .collect::<Vec<_>>(),
+        );
         for (v, value) in values.iter().enumerate() {
             let mut row = vec![format!("`{value}`")];
             let mut csv = vec![value.clone()];
@@ -584,8 +526,8 @@ fn ablations(records: &[RunRecord], plan: Option<&PlanFile>) -> Vec<(String, Tab
                 csv.push(cell.map_or(String::new(), |s| s.mean.to_string()));
                 csv.push(cell.map_or(String::new(), |s| s.std.to_string()));
             }
-            table.rows.push(row);
-            table.csv.push(csv);
+            table.push(row);
+            table.push_csv(csv);
         }
         out.push((dim.name.clone(), table));
     }
@@ -595,7 +537,8 @@ fn ablations(records: &[RunRecord], plan: Option<&PlanFile>) -> Vec<(String, Tab
 /// The frames-versus-RMSE figure of Table II's rows.
 fn tradeoff_svg(records: &[RunRecord]) -> Option<String> {
     let table = table_two(records)?;
-    let points: Vec<(String, f64, f64, f64)> = table.csv[1..]
+    let points: Vec<(String, f64, f64, f64)> = table
+        .csv_rows()
         .iter()
         .filter_map(|row| {
             let frames: f64 = row.get(4)?.parse().ok()?;
@@ -609,7 +552,7 @@ fn tradeoff_svg(records: &[RunRecord]) -> Option<String> {
             Some((label, frames, rmse, std))
         })
         .collect();
-    crate::plots::tradeoff_svg(&points).ok()
+    crate::report::plots::tradeoff_svg(&points).ok()
 }
 
 /// What `write_sweep_report` wrote.

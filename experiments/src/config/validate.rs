@@ -1,226 +1,9 @@
-//! The experiment file: what data, which motion model, how residuals are
-//! formed, which regressors. Unknown fields are errors, and every error names
-//! the file, line and column.
-//!
-//! ```yaml
-//! name: paper
-//! dataset: { kind: simulated, preset: exoter-prl, seed: 7 }
-//! motion_model: { kind: weighted_jacobian }
-//! residuals: { window_secs: 1.0 }
-//! regressors:
-//!   - kind: zero
-//! ```
+//! Checks of an experiment that the schema alone cannot make, each failure
+//! an [`Issue`] at the path of the offending value.
 
-use std::path::{Path, PathBuf};
-
-use gpodo_datasets::residuals::ResidualConfig;
-use gpodo_datasets::sim::preset::Preset;
-use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
-use gpodo_regressors::RegressorSpec;
-
-use crate::bench::BenchSettings;
-use crate::schemes::SchemeSpec;
-use gpodo_frontends::FrontendParams;
-use serde::{Deserialize, Serialize};
-
-/// A whole experiment.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ExperimentConfig {
-    /// Name; results go to `results/<name>/` unless told otherwise.
-    pub name: String,
-    /// Free text shown at the top of the report.
-    #[serde(default)]
-    pub description: Option<String>,
-    /// Where the data come from.
-    pub dataset: DatasetSpec,
-    /// The parametric motion model (ignored for residual tables).
-    #[serde(default)]
-    pub motion_model: MotionModelSpec,
-    /// How log steps become residual rows (ignored for residual tables).
-    #[serde(default)]
-    pub residuals: ResidualConfig,
-    /// Regressors to train and evaluate, in report order.
-    pub regressors: Vec<RegressorSpec>,
-    /// A residual table (e.g. the authors' real ExoTeR data) whose
-    /// statistics the report shows beside this experiment's, to judge how
-    /// close a simulated testbed is to the real rover. Skipped with a warning
-    /// when the file is missing.
-    #[serde(default)]
-    pub compare_with: Option<ReferenceTable>,
-    /// Settings of `gpodo bench` (ignored by `gpodo run`).
-    #[serde(default)]
-    pub bench: BenchSettings,
-    /// The visual front end of Table II (visual odometry, keyframes, back
-    /// end); every field has a default.
-    #[serde(default)]
-    pub frontend: FrontendParams,
-    /// The SLAM schemes of Table II, run on every test run (needs rover
-    /// logs: `simulated` or `logs` data).
-    #[serde(default)]
-    pub schemes: Vec<SchemeSpec>,
-}
-
-/// A reference residual table.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ReferenceTable {
-    /// CSV file (relative to the experiment file).
-    pub path: PathBuf,
-    /// Its target columns.
-    pub targets: Vec<String>,
-}
-
-/// Where the data come from.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum DatasetSpec {
-    /// The built-in simulated testbed.
-    Simulated {
-        /// Preset (`exoter-prl`).
-        preset: Preset,
-        /// Seed of every random draw.
-        seed: u64,
-        /// Override of the preset's number of training runs.
-        #[serde(default)]
-        training_runs: Option<usize>,
-        /// Override of the preset's training run duration (s).
-        #[serde(default)]
-        training_run_secs: Option<f64>,
-        /// Override of the longest the test traverse may take (s); a shorter
-        /// value cuts the traverse (quick runs, tests).
-        #[serde(default)]
-        test_max_secs: Option<f64>,
-    },
-    /// Rover logs in gpodo's trajectory CSV format (paths relative to the
-    /// experiment file).
-    Logs {
-        /// Training runs.
-        train: Vec<PathBuf>,
-        /// Test runs.
-        test: Vec<PathBuf>,
-    },
-    /// A residual table (features and targets already computed), split in
-    /// time order.
-    ResidualTable {
-        /// CSV file (relative to the experiment file).
-        path: PathBuf,
-        /// Input columns; omitted, every column that is not a target.
-        #[serde(default)]
-        inputs: Option<Vec<String>>,
-        /// Target columns.
-        targets: Vec<String>,
-        /// Fraction of rows (the first ones) used for training.
-        train_fraction: f64,
-    },
-}
-
-/// The parametric motion model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum MotionModelSpec {
-    /// The weighted Jacobian model of §III.
-    WeightedJacobian {
-        /// Rover description YAML (relative to the experiment file);
-        /// omitted, the built-in ExoTeR-like rover.
-        #[serde(default)]
-        rover: Option<PathBuf>,
-        /// Model settings.
-        #[serde(default)]
-        config: WeightedJacobianConfig,
-    },
-    /// The ideal skid-steer model.
-    SkidSteer {
-        /// Rover description YAML; omitted, the ExoTeR-like rover.
-        #[serde(default)]
-        rover: Option<PathBuf>,
-        /// Angular rate source.
-        #[serde(default)]
-        yaw: YawSource,
-    },
-}
-
-impl Default for MotionModelSpec {
-    fn default() -> Self {
-        Self::WeightedJacobian {
-            rover: None,
-            config: WeightedJacobianConfig::default(),
-        }
-    }
-}
-
-/// Why an experiment file could not be read.
-#[derive(Debug, thiserror::Error)]
-pub enum ConfigError {
-    /// The file could not be read.
-    #[error("cannot read {}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
-    },
-    /// The YAML is malformed or does not match the schema.
-    #[error("{}: {detail}", path.display())]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// The parser's message, with line and column.
-        detail: String,
-    },
-    /// A field has an invalid value.
-    #[error("{}: {detail}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// Which field and what was expected.
-        detail: String,
-    },
-    /// A value at a known place is not acceptable.
-    #[error("{problem} at {}:{line}:{column}; expected {expected}", file.display())]
-    Located {
-        /// The file that holds the value.
-        file: PathBuf,
-        /// Line (from 1; 0 when unknown).
-        line: usize,
-        /// Column (from 1; 0 when unknown).
-        column: usize,
-        /// Path of the value (`regressors[1].kernel`).
-        path: String,
-        /// What is wrong.
-        problem: String,
-        /// What would be accepted.
-        expected: String,
-    },
-    /// The file describes several runs where one experiment is needed.
-    #[error("{}: a sweep of {runs} runs; expected a single experiment here", path.display())]
-    NotSingle {
-        /// The file.
-        path: PathBuf,
-        /// How many runs it expands to.
-        runs: usize,
-    },
-}
+use super::{DatasetSpec, ExperimentConfig, MotionModelSpec};
 
 impl ExperimentConfig {
-    /// Reads and validates an experiment file that describes one run (a
-    /// file with `base:` is fine; one with `sweep:` or several `seeds:` is
-    /// not).
-    ///
-    /// # Errors
-    /// [`ConfigError`] naming the file, line and column.
-    pub fn from_path(path: &Path) -> Result<Self, ConfigError> {
-        let plan = crate::sweep::load_plan(path)?;
-        let runs = plan.runs.len();
-        match <[crate::sweep::RunSpec; 1]>::try_from(plan.runs) {
-            Ok([run]) => Ok(run.config),
-            Err(_) => Err(ConfigError::NotSingle {
-                path: path.to_path_buf(),
-                runs,
-            }),
-        }
-    }
-
     /// Checks values that the schema alone cannot.
     ///
     /// # Errors
@@ -382,11 +165,6 @@ impl std::fmt::Display for Issue {
 }
 
 impl ExperimentConfig {
-    /// The labels of the regressors, as reports print them.
-    pub fn regressor_labels(&self) -> Vec<String> {
-        self.regressors.iter().map(RegressorSpec::label).collect()
-    }
-
     fn validate_schemes(&self) -> Result<(), Issue> {
         if self.schemes.is_empty() {
             return Ok(());
@@ -451,6 +229,13 @@ impl ExperimentConfig {
                             Issue::new(&at("regressor"), problem, expected)
                         })?;
                 }
+            }
+            if scheme.selector.oracle().is_some() && scheme.online.is_some() {
+                return Err(Issue::new(
+                    &at("online"),
+                    "an oracle that learns online",
+                    "a trained `regressor` (the oracle plans with its predictions)",
+                ));
             }
             if let Some(oracle) = scheme.selector.oracle()
                 && let Some(other) = &oracle.same_as

@@ -1,183 +1,15 @@
-//! Writes an experiment's `report.md` (human-readable, the paper's Table I
-//! layout) and `metrics.json` (everything, machine-readable). Files are
-//! written to a temporary name and renamed, so a crash never leaves a
-//! half-written report.
+//! A single run's `report.md`: the runs, Table I, Table II per test run,
+//! learned hyperparameters, optimiser starts, dead reckoning and residual
+//! statistics.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
-use gpodo_frontends::prediction::ResidualPrediction;
-use gpodo_frontends::tum::{StampedPose, format_tum};
+use gpodo_frontends::scheme::SchemeResult;
 
-use crate::calibration::ResidualStatistics;
 use crate::config::DatasetSpec;
-use crate::pipeline::{ExperimentResults, RegressorResult};
-use crate::plots;
-
-/// Writes `contents` to `path` atomically (temporary file + rename).
-///
-/// # Errors
-/// The I/O error, with the path.
-pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
-    // The temporary name is unique per process, so shards writing the same
-    // file (the plan, the final report) never share one.
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, contents)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
-}
-
-/// Writes `report.md` and `metrics.json` into `dir` (created if needed),
-/// the residual rows, and with schemes the trajectories and (when `plots`)
-/// the figures; returns the report's and the metrics' paths.
-///
-/// # Errors
-/// Any I/O or serialisation error.
-pub fn write_report(
-    results: &ExperimentResults,
-    dir: &Path,
-    plots: bool,
-) -> anyhow::Result<(PathBuf, PathBuf)> {
-    std::fs::create_dir_all(dir)?;
-    let md = dir.join("report.md");
-    let json = dir.join("metrics.json");
-    write_atomically(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
-    write_atomically(&md, markdown(results).as_bytes())?;
-    for (name, rows) in [
-        ("residuals_train.csv", &results.train_rows),
-        ("residuals_test.csv", &results.test_rows),
-    ] {
-        if let Some(rows) = rows {
-            write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
-        }
-    }
-    write_table_two_files(results, dir, plots)?;
-    Ok((md, json))
-}
-
-/// A file-name-safe form of a label.
-pub fn slug(label: &str) -> String {
-    let mut out = String::new();
-    for c in label.chars() {
-        if c.is_ascii_alphanumeric() {
-            out.push(c.to_ascii_lowercase());
-        } else if !out.ends_with('-') {
-            out.push('-');
-        }
-    }
-    out.trim_matches('-').to_string()
-}
-
-/// Trajectories (TUM) and figures of Table II.
-fn write_table_two_files(
-    results: &ExperimentResults,
-    dir: &Path,
-    plots: bool,
-) -> anyhow::Result<()> {
-    if results.schemes.is_empty() {
-        return Ok(());
-    }
-    let (traj_dir, plot_dir) = (dir.join("trajectories"), dir.join("plots"));
-    std::fs::create_dir_all(&traj_dir)?;
-    std::fs::create_dir_all(&plot_dir)?;
-    for (t, traverse) in results.traverses.iter().enumerate() {
-        let stamped = |poses: &[nalgebra::Isometry3<f64>]| -> Vec<StampedPose> {
-            traverse
-                .times_secs()
-                .iter()
-                .zip(poses)
-                .map(|(&time_secs, &pose)| StampedPose { time_secs, pose })
-                .collect()
-        };
-        let name = slug(traverse.name());
-        write_atomically(
-            &traj_dir.join(format!("{name}.ground_truth.tum")),
-            format_tum(
-                &format!("ground truth of `{}` (world_from_body)", traverse.name()),
-                &stamped(traverse.ground_truth()),
-            )
-            .as_bytes(),
-        )?;
-        for scheme in results
-            .schemes
-            .iter()
-            .filter(|r| r.traverse == traverse.name())
-        {
-            let file = format!("{name}.{}", slug(&scheme.label));
-            let comment = format!(
-                "`{}` on `{}`: {} frames, {} keyframes (world_from_body)",
-                scheme.label,
-                traverse.name(),
-                scheme.run.frames,
-                scheme.run.keyframes
-            );
-            write_atomically(
-                &traj_dir.join(format!("{file}.tum")),
-                format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
-            )?;
-            if !plots {
-                continue;
-            }
-            let title = format!(
-                "{}: {} frames, {} keyframes, RMSE {:.3} m",
-                scheme.label, scheme.run.frames, scheme.run.keyframes, scheme.run.metrics.rmse_m
-            );
-            write_atomically(
-                &plot_dir.join(format!("fig5_{file}.svg")),
-                plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
-            )?;
-        }
-        if !plots {
-            continue;
-        }
-        if let Some((label, predictions)) = residual_map_source(results, t) {
-            write_atomically(
-                &plot_dir.join(format!("fig3_{name}.svg")),
-                plots::residual_map_svg(traverse, predictions, &label)?.as_bytes(),
-            )?;
-        }
-    }
-    Ok(())
-}
-
-/// The predictions Fig. 3 shows: those of the first scheme's regressor
-/// that gates on residuals, or else of the first regressor with any.
-fn residual_map_source(
-    results: &ExperimentResults,
-    t: usize,
-) -> Option<(String, &[ResidualPrediction])> {
-    let labels = results.config.regressor_labels();
-    let gating = results
-        .config
-        .schemes
-        .iter()
-        .filter(|s| s.online.is_none() && s.selector.reads_residuals())
-        .filter_map(|s| s.regressor_index(&labels).ok());
-    let any = 0..results.window_predictions.len();
-    gating.chain(any).find_map(|r| {
-        let p = results.window_predictions.get(r)?.as_ref()?.get(t)?;
-        Some((labels[r].clone(), p.as_slice()))
-    })
-}
-
-/// A residual dataset as CSV: input columns, then target columns, full
-/// precision (the format `kind: residual_table` reads back).
-pub fn residual_csv(data: &gpodo_traits::ResidualDataset) -> String {
-    let mut s = data.input_names.join(",");
-    for t in &data.target_names {
-        s.push(',');
-        s.push_str(t);
-    }
-    s.push('\n');
-    for (x, y) in data.inputs.rows().zip(data.targets.rows()) {
-        let cells: Vec<String> = x.iter().chain(y).map(|v| v.to_string()).collect();
-        s.push_str(&cells.join(","));
-        s.push('\n');
-    }
-    s
-}
+use crate::execute::calibration::ResidualStatistics;
+use crate::execute::results::{ExperimentResults, RegressorResult};
+use crate::report::table::{Align, Table};
 
 fn mm(v: f64) -> String {
     format!("{:.2}", v * 1e3)
@@ -248,37 +80,47 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
         (_, Some(w)) => format!("m/s ({w}-s mean body-velocity residuals)"),
         (_, None) => "m/s (per-step body-velocity residuals)".to_string(),
     };
-    let _ = writeln!(
-        s,
-        "## Table I — residual prediction on the test rows\n\nRMSE and MAE pooled over the outputs ({targets}), in the paper's layout; {units}.\n\n| Regressor | RMSE | MAE |\n|---|---:|---:|"
-    );
+    let mut pooled = Table::new(&["Regressor", "RMSE", "MAE"]);
+    let mut detail = Table::new(&[
+        "Regressor",
+        "RMSE per output",
+        "MAE per output",
+        "NLPD",
+        "95% coverage",
+        "fit [s]",
+        "LML",
+        "evaluations",
+        "jitter",
+    ])
+    .align(&[1, 2], Align::Left);
     for reg in &r.regressors {
         let e = &reg.evaluation.pooled;
-        let _ = writeln!(s, "| {} | {:.6} | {:.6} |", reg.label, e.rmse, e.mae);
-    }
-    let _ = writeln!(
-        s,
-        "\nPer output (× 1000), predictive quality and fit (log marginal likelihood on the standardised training rows; evaluations of the objective and its gradient):\n\n| Regressor | RMSE per output | MAE per output | NLPD | 95% coverage | fit [s] | LML | evaluations | jitter |\n|---|---|---|---:|---:|---:|---:|---:|---:|"
-    );
-    for reg in &r.regressors {
+        pooled.push(vec![
+            reg.label.clone(),
+            format!("{:.6}", e.rmse),
+            format!("{:.6}", e.mae),
+        ]);
         let per = &reg.evaluation.per_output;
         let rmse: Vec<String> = per.iter().map(|p| mm(p.rmse)).collect();
         let mae: Vec<String> = per.iter().map(|p| mm(p.mae)).collect();
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {} |",
-            reg.label,
+        detail.push(vec![
+            reg.label.clone(),
             rmse.join(" / "),
             mae.join(" / "),
-            reg.evaluation.pooled.nlpd,
-            reg.evaluation.pooled.coverage95,
-            reg.fit.duration_secs,
+            format!("{:.3}", e.nlpd),
+            format!("{:.3}", e.coverage95),
+            format!("{:.3}", reg.fit.duration_secs),
             opt(reg.fit.objective, 1.0, 2),
             reg.fit.evaluations.map_or("–".into(), |e| e.to_string()),
             reg.fit.jitter.map_or("–".into(), |j| format!("{j:.1e}")),
-        );
+        ]);
     }
-    s.push('\n');
+    let _ = write!(
+        s,
+        "## Table I — residual prediction on the test rows\n\nRMSE and MAE pooled over the outputs ({targets}), in the paper's layout; {units}.\n\n{}\nPer output (× 1000), predictive quality and fit (log marginal likelihood on the standardised training rows; evaluations of the objective and its gradient):\n\n{}\n",
+        pooled.markdown(),
+        detail.markdown()
+    );
 }
 
 fn table_two(s: &mut String, r: &ExperimentResults) {
@@ -298,40 +140,61 @@ fn table_two(s: &mut String, r: &ExperimentResults) {
         let Some(first) = rows.first() else {
             continue;
         };
-        let _ = writeln!(
-            s,
-            "Run `{}` ({:.2} m):\n\n| Scheme | #Frames | #Keyframes | RMSE [m] | Max E. [m] | Final E. [m] | Travel Distance E. [%] | frames / first | RMSE / first | compute [s] | VO losses | lost [s] | loop closures | residuals |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
-            traverse.name(),
-            traverse.path_length_m()
-        );
+        let mut table = Table::new(&[
+            "Scheme",
+            "#Frames",
+            "#Keyframes",
+            "RMSE [m]",
+            "Max E. [m]",
+            "Final E. [m]",
+            "Travel Distance E. [%]",
+            "frames / first",
+            "RMSE / first",
+            "compute [s]",
+            "VO losses",
+            "lost [s]",
+            "loop closures",
+            "residuals",
+        ])
+        .align(&[13], Align::Left);
         for x in &rows {
             let m = &x.run.metrics;
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.1} | {} | {:.0} | {} | {} |",
-                x.label,
-                x.run.frames,
-                x.run.keyframes,
-                m.rmse_m,
-                m.max_error_m,
-                m.final_error_m,
-                m.travel_distance_error_percent,
-                x.run.frames as f64 / first.run.frames.max(1) as f64,
-                m.rmse_m / first.run.metrics.rmse_m.max(f64::MIN_POSITIVE),
-                x.run.compute_ms / 1e3,
-                x.run.tracking_losses,
-                x.run.lost_secs,
-                x.run.loop_closures,
-                x.residuals,
-            );
+            table.push(vec![
+                x.label.clone(),
+                x.run.frames.to_string(),
+                x.run.keyframes.to_string(),
+                format!("{:.3}", m.rmse_m),
+                format!("{:.3}", m.max_error_m),
+                format!("{:.3}", m.final_error_m),
+                format!("{:.2}", m.travel_distance_error_percent),
+                format!(
+                    "{:.2}",
+                    x.run.frames as f64 / first.run.frames.max(1) as f64
+                ),
+                format!(
+                    "{:.2}",
+                    m.rmse_m / first.run.metrics.rmse_m.max(f64::MIN_POSITIVE)
+                ),
+                format!("{:.1}", x.run.compute_ms / 1e3),
+                x.run.tracking_losses.to_string(),
+                format!("{:.0}", x.run.lost_secs),
+                x.run.loop_closures.to_string(),
+                x.residuals.clone(),
+            ]);
         }
-        s.push('\n');
+        let _ = writeln!(
+            s,
+            "Run `{}` ({:.2} m):\n\n{}",
+            traverse.name(),
+            traverse.path_length_m(),
+            table.markdown()
+        );
         learning_curves(s, &rows);
     }
 }
 
 /// Frames per metre over time for schemes that learn online.
-fn learning_curves(s: &mut String, rows: &[&crate::table_two::SchemeResult]) {
+fn learning_curves(s: &mut String, rows: &[&SchemeResult]) {
     let online: Vec<_> = rows.iter().filter(|x| x.run.online_targets > 0).collect();
     if online.is_empty() {
         return;

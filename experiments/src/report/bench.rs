@@ -4,8 +4,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::bench::{BenchResults, BenchRow};
-use crate::report::write_atomically;
+use crate::execute::bench::{BenchResults, BenchRow};
+use crate::output::write_atomically;
+use crate::report::table::{Align, Table};
 
 /// Writes `bench.md` and `bench.json` into `dir` and returns their paths.
 ///
@@ -60,67 +61,87 @@ pub fn bench_markdown(r: &BenchResults) -> String {
     let b_fit = base.map(|b| b.fit.duration_secs);
     let b_pred = base.map(|b| b.predict_latency.median_us);
     let b_rmse = base.map(|b| b.evaluation.pooled.rmse);
-    let _ = writeln!(
-        s,
-        "## Batch fit and prediction\n\nFit on all training rows; scores on the test rows (pooled over the outputs). Speed-up = baseline time / this time; RMSE ratio = this / baseline.\n\n| Regressor | fit [s] | fit speed-up | predict [µs/query] (median) | predict speed-up | batch predict [s] | RMSE | RMSE ratio | MAE | NLPD | 95% coverage |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    let mut batch = Table::new(&[
+        "Regressor",
+        "fit [s]",
+        "fit speed-up",
+        "predict [µs/query] (median)",
+        "predict speed-up",
+        "batch predict [s]",
+        "RMSE",
+        "RMSE ratio",
+        "MAE",
+        "NLPD",
+        "95% coverage",
+    ]);
     for row in &r.rows {
         let e = &row.evaluation.pooled;
-        let _ = writeln!(
-            s,
-            "| {} | {:.3} | {} | {:.1} | {} | {:.4} | {:.6} | {} | {:.6} | {:.3} | {:.3} |",
-            row.label,
-            row.fit.duration_secs,
+        batch.push(vec![
+            row.label.clone(),
+            format!("{:.3}", row.fit.duration_secs),
             speedup(row.fit.duration_secs, b_fit),
-            row.predict_latency.median_us,
+            format!("{:.1}", row.predict_latency.median_us),
             speedup(row.predict_latency.median_us, b_pred),
-            row.batch_predict_secs,
-            e.rmse,
+            format!("{:.4}", row.batch_predict_secs),
+            format!("{:.6}", e.rmse),
             ratio(e.rmse, b_rmse),
-            e.mae,
-            e.nlpd,
-            e.coverage95,
-        );
+            format!("{:.6}", e.mae),
+            format!("{:.3}", e.nlpd),
+            format!("{:.3}", e.coverage95),
+        ]);
     }
-    s.push('\n');
+    let _ = writeln!(
+        s,
+        "## Batch fit and prediction\n\nFit on all training rows; scores on the test rows (pooled over the outputs). Speed-up = baseline time / this time; RMSE ratio = this / baseline.\n\n{}",
+        batch.markdown()
+    );
     let online: Vec<&BenchRow> = r.rows.iter().filter(|row| row.online.is_some()).collect();
     if online.is_empty() {
         return s;
     }
-    let _ = writeln!(
-        s,
-        "## Online learning\n\nOne prequential pass over the training rows in time order, from an empty model: each sample is predicted, then learned. Latencies per sample (µs); scores on the test rows after the pass.\n\n| Regressor | predict + update median | p95 | update median | RMSE after one pass | RMSE ratio | MAE | NLPD | 95% coverage |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    let mut passes = Table::new(&[
+        "Regressor",
+        "predict + update median",
+        "p95",
+        "update median",
+        "RMSE after one pass",
+        "RMSE ratio",
+        "MAE",
+        "NLPD",
+        "95% coverage",
+    ]);
     for row in &online {
         let Some(o) = &row.online else { continue };
         let e = &o.evaluation.pooled;
-        let _ = writeln!(
-            s,
-            "| {} | {:.1} | {:.1} | {:.1} | {:.6} | {} | {:.6} | {:.3} | {:.3} |",
-            row.label,
-            o.step_latency.median_us,
-            o.step_latency.p95_us,
-            o.update_latency.median_us,
-            e.rmse,
+        passes.push(vec![
+            row.label.clone(),
+            format!("{:.1}", o.step_latency.median_us),
+            format!("{:.1}", o.step_latency.p95_us),
+            format!("{:.1}", o.update_latency.median_us),
+            format!("{:.6}", e.rmse),
             ratio(e.rmse, b_rmse),
-            e.mae,
-            e.nlpd,
-            e.coverage95
-        );
+            format!("{:.6}", e.mae),
+            format!("{:.3}", e.nlpd),
+            format!("{:.3}", e.coverage95),
+        ]);
     }
+    let _ = write!(
+        s,
+        "## Online learning\n\nOne prequential pass over the training rows in time order, from an empty model: each sample is predicted, then learned. Latencies per sample (µs); scores on the test rows after the pass.\n\n{}",
+        passes.markdown()
+    );
     let _ = writeln!(
         s,
         "\n### Learning curve\n\nPooled test RMSE after every {} training samples{}.\n",
         c.bench.learning_curve_every,
         b_rmse.map_or(String::new(), |b| format!(" (baseline batch RMSE {b:.6})"))
     );
-    let mut header = "| samples |".to_string();
-    let mut rule = "|---:|".to_string();
-    for row in &online {
-        let _ = write!(header, " {} |", row.label);
-        rule.push_str("---:|");
-    }
-    let _ = writeln!(s, "{header}\n{rule}");
+    let mut curve = Table::new(
+        &std::iter::once("samples".to_string())
+            .chain(online.iter().map(|row| row.label.clone()))
+            .collect::<Vec<_>>(),
+    )
+    .align(&[0], Align::Right);
     let points = online
         .iter()
         .filter_map(|row| row.online.as_ref().map(|o| o.curve.len()))
@@ -132,16 +153,14 @@ pub fn bench_markdown(r: &BenchResults) -> String {
             .filter_map(|row| row.online.as_ref()?.curve.get(k).map(|p| p.samples))
             .next()
             .unwrap_or(0);
-        let mut line = format!("| {samples} |");
-        for row in &online {
-            let cell = row
-                .online
+        let cells = online.iter().map(|row| {
+            row.online
                 .as_ref()
                 .and_then(|o| o.curve.get(k))
-                .map_or("–".into(), |p| format!("{:.6}", p.rmse));
-            let _ = write!(line, " {cell} |");
-        }
-        let _ = writeln!(s, "{line}");
+                .map_or("–".into(), |p| format!("{:.6}", p.rmse))
+        });
+        curve.push(std::iter::once(samples.to_string()).chain(cells).collect());
     }
+    s.push_str(&curve.markdown());
     s
 }

@@ -15,9 +15,9 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::config::ExperimentConfig;
-use crate::pipeline::ExperimentResults;
-use crate::report::write_atomically;
-use crate::sweep::RunSpec;
+use crate::execute::results::ExperimentResults;
+use crate::output::write_atomically;
+use crate::plan::RunSpec;
 
 /// Table I figures of one regressor in one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

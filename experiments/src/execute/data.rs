@@ -1,8 +1,8 @@
-//! Runs one experiment: data → motion model → residual dataset →
-//! regressors → evaluation on the held-out runs.
+//! A dataset specification turned into residual rows: simulated or loaded
+//! runs, the motion model, dead reckoning on the test runs, the residual
+//! rows, and the rows standardised as the regressors see them.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
 use gpodo_datasets::residuals::residual_dataset;
@@ -10,146 +10,13 @@ use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::standardize::Standardizer;
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
-use gpodo_regressors::metrics::{Evaluation, evaluate};
-use gpodo_traits::{FitReport, MotionModel, ResidualDataset, ResidualRegressor};
-use serde::{Deserialize, Serialize};
+use gpodo_traits::{MotionModel, ResidualDataset};
 
-use crate::calibration::{ResidualStatistics, residual_statistics};
 use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};
-use crate::odometry::{DeadReckoning, dead_reckoning};
-use crate::shared::SharedWork;
-use crate::table_two::SchemeResult;
-use gpodo_frontends::prediction::ResidualPrediction;
-use gpodo_frontends::traverse::Traverse;
-
-/// A run's length and duration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunSummary {
-    /// Run name.
-    pub name: String,
-    /// Sensor samples.
-    pub samples: usize,
-    /// Duration (s).
-    pub duration_secs: f64,
-    /// Ground-truth path length (m).
-    pub path_length_m: f64,
-}
-
-/// What the data were.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DatasetSummary {
-    /// Human-readable source.
-    pub source: String,
-    /// Training runs (empty for residual tables).
-    pub train_runs: Vec<RunSummary>,
-    /// Test runs (empty for residual tables).
-    pub test_runs: Vec<RunSummary>,
-    /// Training rows.
-    pub n_train: usize,
-    /// Test rows.
-    pub n_test: usize,
-    /// Input column names.
-    pub input_names: Vec<String>,
-    /// Target column names.
-    pub target_names: Vec<String>,
-    /// Steepest slope of a simulated terrain (deg).
-    pub terrain_max_slope_deg: Option<f64>,
-}
-
-/// One regressor's outcome.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RegressorResult {
-    /// Label for tables.
-    pub label: String,
-    /// Its specification.
-    pub spec: gpodo_regressors::RegressorSpec,
-    /// What the fit did.
-    pub fit: FitReport,
-    /// Scores on the test rows.
-    pub evaluation: Evaluation,
-}
-
-/// Everything an experiment produced.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ExperimentResults {
-    /// The resolved configuration.
-    pub config: ExperimentConfig,
-    /// `git describe` of the code, or the crate version.
-    pub code_version: String,
-    /// The data.
-    pub dataset: DatasetSummary,
-    /// The motion model's name (none for residual tables).
-    pub motion_model: Option<String>,
-    /// Dead reckoning with the motion model on each test run.
-    pub dead_reckoning: Vec<(String, DeadReckoning)>,
-    /// Residual statistics of the training and test rows.
-    pub train_statistics: ResidualStatistics,
-    /// Residual statistics of the test rows.
-    pub test_statistics: ResidualStatistics,
-    /// The same statistics of a reference table, when one was given.
-    pub reference_statistics: Option<(String, ResidualStatistics)>,
-    /// One entry per regressor, in config order.
-    pub regressors: Vec<RegressorResult>,
-    /// Table II: every scheme on every test run.
-    #[serde(default)]
-    pub schemes: Vec<SchemeResult>,
-    /// Wall-clock duration of the whole experiment (s).
-    pub duration_secs: f64,
-    /// The training rows (physical units), written as a CSV beside the
-    /// report.
-    #[serde(skip)]
-    pub train_rows: Option<ResidualDataset>,
-    /// The test rows (physical units).
-    #[serde(skip)]
-    pub test_rows: Option<ResidualDataset>,
-    /// The test runs as the front end saw them (for trajectories and plots).
-    #[serde(skip)]
-    pub traverses: std::sync::Arc<Vec<Traverse>>,
-    /// Each regressor's window predictions on each traverse, where computed
-    /// (`[regressor][traverse]`).
-    #[serde(skip)]
-    pub window_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>>,
-}
-
-/// Why an experiment failed.
-#[derive(Debug, thiserror::Error)]
-pub enum PipelineError {
-    /// Reading or simulating data failed.
-    #[error(transparent)]
-    Dataset(#[from] gpodo_datasets::DatasetError),
-    /// The rover description or motion model is invalid.
-    #[error(transparent)]
-    Kinematics(#[from] gpodo_kinematics::KinematicsError),
-    /// A regressor failed.
-    #[error("regressor `{label}`: {source}")]
-    Regressor {
-        /// The regressor.
-        label: String,
-        /// What failed.
-        source: gpodo_traits::Error,
-    },
-    /// Building or scoring a regressor failed.
-    #[error(transparent)]
-    Spec(#[from] gpodo_regressors::RegressorError),
-    /// A model failed on a sample.
-    #[error(transparent)]
-    Model(#[from] gpodo_traits::Error),
-    /// Training and test rows do not have the same columns, or a scheme
-    /// refers to something that is not there.
-    #[error("inconsistent experiment: {0}")]
-    Inconsistent(String),
-    /// The visual front end failed.
-    #[error(transparent)]
-    Frontend(#[from] gpodo_frontends::FrontendError),
-    /// A scheme of Table II failed.
-    #[error("scheme `{label}`: {source}")]
-    Scheme {
-        /// The scheme.
-        label: String,
-        /// What failed.
-        source: Box<PipelineError>,
-    },
-}
+use crate::error::PipelineError;
+use crate::execute::calibration::{ResidualStatistics, residual_statistics};
+use crate::execute::odometry::{DeadReckoning, dead_reckoning};
+use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
 
 fn resolve(base: &Path, p: &Path) -> PathBuf {
     if p.is_absolute() {
@@ -166,18 +33,6 @@ fn summarize(log: &RoverLog) -> RunSummary {
         duration_secs: log.duration_secs(),
         path_length_m: log.path_length_m(),
     }
-}
-
-/// The code version: `git describe --always --dirty` when available.
-pub fn code_version() -> String {
-    std::process::Command::new("git")
-        .args(["describe", "--always", "--dirty"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .and_then(|o| String::from_utf8(o.stdout).ok())
-        .map(|s| s.trim().to_string())
-        .unwrap_or_else(|| env!("CARGO_PKG_VERSION").to_string())
 }
 
 /// The motion model of `spec` and the rover it describes.
@@ -368,16 +223,6 @@ pub(crate) fn reference_statistics(
     }
 }
 
-/// The rows the regressors see: inputs standardised with the training
-/// statistics, targets in physical units.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModelRows {
-    /// Training rows.
-    pub train: ResidualDataset,
-    /// Test rows.
-    pub test: ResidualDataset,
-}
-
 pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer), PipelineError> {
     if data.train.input_names != data.test.input_names
         || data.train.target_names != data.test.target_names
@@ -409,50 +254,4 @@ pub fn prepare_model_rows(
 ) -> Result<(ModelRows, DatasetSummary), PipelineError> {
     let data = prepare(config, base)?;
     Ok((model_rows(&data)?.0, data.summary))
-}
-
-/// Fits one regressor on the training rows and scores it on the test rows.
-pub(crate) fn fit_and_score(
-    spec: &gpodo_regressors::RegressorSpec,
-    train: &ResidualDataset,
-    test: &ResidualDataset,
-    progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
-) -> Result<(RegressorResult, Box<dyn ResidualRegressor>), PipelineError> {
-    let label = spec.label();
-    tracing::info!(regressor = %label, n = train.len(), "fitting");
-    let mut model = spec.build()?;
-    model.set_progress(progress);
-    let wrap = |source| PipelineError::Regressor {
-        label: label.clone(),
-        source,
-    };
-    let fit = model.fit(train).map_err(wrap)?;
-    let predictions = model.predict(&test.inputs).map_err(wrap)?;
-    let evaluation = evaluate(&predictions, &test.targets)?;
-    tracing::info!(regressor = %label, secs = fit.duration_secs, "fitted");
-    Ok((
-        RegressorResult {
-            label,
-            spec: spec.clone(),
-            fit,
-            evaluation,
-        },
-        model,
-    ))
-}
-
-/// Runs `config`; relative paths are resolved against `base` (the
-/// experiment file's folder).
-///
-/// # Errors
-/// [`PipelineError`] saying which stage failed.
-pub fn run_experiment(
-    config: &ExperimentConfig,
-    base: &Path,
-) -> Result<ExperimentResults, PipelineError> {
-    let start = Instant::now();
-    let shared = SharedWork::build(&[(config, base)], None)?;
-    let mut results = shared.results(config, base)?;
-    results.duration_secs = start.elapsed().as_secs_f64();
-    Ok(results)
 }

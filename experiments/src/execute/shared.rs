@@ -18,13 +18,15 @@ use gpodo_frontends::traverse::Traverse;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::calibration::residual_statistics;
 use crate::config::ExperimentConfig;
-use crate::pipeline::{
-    ExperimentResults, ModelRows, PipelineError, PreparedData, RegressorResult, code_version,
-    fit_and_score, model_rows, prepare, reference_statistics,
-};
-use crate::table_two::{SchemeInputs, build_traverse, run_schemes, window_predictions};
+use crate::error::PipelineError;
+use crate::execute::calibration::{ResidualStatistics, residual_statistics};
+use crate::execute::code_version;
+use crate::execute::data::{PreparedData, model_rows, prepare, reference_statistics};
+use crate::execute::fit::fit_and_score;
+use crate::execute::results::{ExperimentResults, ModelRows, RegressorResult};
+use crate::execute::schemes::{SchemeInputs, run_schemes};
+use crate::execute::traverses::{build_traverse, window_predictions};
 
 /// A dataset, ready for every run that uses it.
 pub struct Prepared {
@@ -51,11 +53,16 @@ pub struct SharedCounts {
     pub fits: usize,
 }
 
+/// A reference table's statistics (`compare_with`), by table.
+type References = BTreeMap<String, Option<(String, ResidualStatistics)>>;
+
 /// The shared work of a set of runs.
 #[derive(Default)]
 pub struct SharedWork {
     prepared: BTreeMap<String, Arc<Prepared>>,
     fitted: BTreeMap<String, Arc<Fitted>>,
+    references: References,
+    code_version: String,
     counts: SharedCounts,
 }
 
@@ -73,6 +80,11 @@ pub fn dataset_key(config: &ExperimentConfig, base: &Path) -> String {
         json(&config.motion_model),
         json(&config.residuals)
     )
+}
+
+/// The identity of a run's reference table.
+fn reference_key(config: &ExperimentConfig, base: &Path) -> String {
+    format!("{}|{}", base.display(), json(&config.compare_with))
 }
 
 fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec) -> String {
@@ -169,9 +181,17 @@ impl SharedWork {
             datasets: prepared.len(),
             fits: fitted.len(),
         };
+        let mut references = References::new();
+        for (config, base) in runs {
+            references
+                .entry(reference_key(config, base))
+                .or_insert_with(|| reference_statistics(config, base));
+        }
         Ok(Self {
             prepared,
             fitted: fitted.into_iter().collect(),
+            references,
+            code_version: code_version(),
             counts,
         })
     }
@@ -224,10 +244,14 @@ impl SharedWork {
         let data = &p.data;
         Ok(ExperimentResults {
             config: config.clone(),
-            code_version: code_version(),
+            code_version: self.code_version.clone(),
             train_statistics: residual_statistics(&data.train),
             test_statistics: residual_statistics(&data.test),
-            reference_statistics: reference_statistics(config, base),
+            reference_statistics: self
+                .references
+                .get(&reference_key(config, base))
+                .cloned()
+                .flatten(),
             dataset: data.summary.clone(),
             motion_model: data.motion_model.clone(),
             dead_reckoning: data.dead_reckoning.clone(),

@@ -1,0 +1,78 @@
+#!/usr/bin/env python3
+"""Compare two results folders of `gpodo run`, file by file, ignoring only
+what is not meant to repeat: wall-clock times and the code version.
+
+    python3 experiments/scripts/compare_results.py results-before/paper results/paper
+
+Every file must exist on both sides. JSON and JSON-lines files are compared
+as values after dropping the keys `duration_secs`, `code_version` and
+`timing`; Markdown after blanking the code version, the wall time and the
+`fit [s]` column; every other file (CSV, TUM, SVG) byte for byte. Exits 1
+and names the first differences when the folders differ.
+"""
+
+import json
+import re
+import sys
+from pathlib import Path
+
+VOLATILE_KEYS = {"duration_secs", "code_version", "timing"}
+VOLATILE_COLUMNS = {"fit [s]"}
+
+
+def scrub(value):
+    if isinstance(value, dict):
+        return {k: scrub(v) for k, v in value.items() if k not in VOLATILE_KEYS}
+    if isinstance(value, list):
+        return [scrub(v) for v in value]
+    return value
+
+
+def markdown(text):
+    text = re.sub(r"Code: `[^`]*`", "Code: `…`", text)
+    text = re.sub(r"code `[^`]*`", "code `…`", text)
+    text = re.sub(r"Wall time: [0-9.]+ s", "Wall time: … s", text)
+    out, blank = [], set()
+    for line in text.splitlines():
+        if line.startswith("|"):
+            cells = line.strip("|").split("|")
+            names = [c.strip() for c in cells]
+            if VOLATILE_COLUMNS & set(names):
+                blank = {i for i, n in enumerate(names) if n in VOLATILE_COLUMNS}
+            elif blank and not set(line) <= set("|-: "):
+                cells = ["…" if i in blank else c for i, c in enumerate(cells)]
+                line = "|" + "|".join(cells) + "|"
+        else:
+            blank = set()
+        out.append(line)
+    return "\n".join(out)
+
+
+def normalised(path):
+    if path.suffix == ".json":
+        return scrub(json.loads(path.read_text()))
+    if path.suffix == ".jsonl":
+        return [scrub(json.loads(l)) for l in path.read_text().splitlines() if l]
+    if path.suffix == ".md":
+        return markdown(path.read_text())
+    return path.read_bytes()
+
+
+def main(before, after):
+    a = {p.relative_to(before) for p in before.rglob("*") if p.is_file()}
+    b = {p.relative_to(after) for p in after.rglob("*") if p.is_file()}
+    problems = [f"only in {before}: {p}" for p in sorted(a - b)]
+    problems += [f"only in {after}: {p}" for p in sorted(b - a)]
+    for rel in sorted(a & b):
+        if normalised(before / rel) != normalised(after / rel):
+            problems.append(f"differs: {rel}")
+    for p in problems[:40]:
+        print(p)
+    print(f"{len(a & b)} files compared, {len(problems)} difference(s)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    sys.exit(main(Path(sys.argv[1]), Path(sys.argv[2])))

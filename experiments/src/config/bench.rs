@@ -1,0 +1,52 @@
+//! The `bench:` section of an experiment file: settings of `gpodo bench`.
+
+use serde::{Deserialize, Serialize};
+
+/// The `bench:` section of an experiment file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BenchSettings {
+    /// Test rows predicted one at a time to time a single query (default
+    /// 300; all test rows when there are fewer).
+    pub predict_queries: usize,
+    /// Learning-curve step of online learners, in training samples
+    /// (default 100).
+    pub learning_curve_every: usize,
+    /// Index (in `regressors`) of the baseline row; omitted, the first
+    /// `exact_gp`.
+    pub baseline: Option<usize>,
+}
+
+impl Default for BenchSettings {
+    fn default() -> Self {
+        Self {
+            predict_queries: 300,
+            learning_curve_every: 100,
+            baseline: None,
+        }
+    }
+}
+
+impl BenchSettings {
+    /// Checks the fields against the experiment's regressors.
+    ///
+    /// # Errors
+    /// The offending field (under `bench.`) and what it expects.
+    pub fn validate(&self, regressors: usize) -> Result<(), (String, String)> {
+        if self.predict_queries == 0 {
+            return Err(("predict_queries".into(), "at least 1".into()));
+        }
+        if self.learning_curve_every == 0 {
+            return Err(("learning_curve_every".into(), "at least 1".into()));
+        }
+        if let Some(b) = self.baseline
+            && b >= regressors
+        {
+            return Err((
+                "baseline".into(),
+                format!("an index into `regressors` (0..{regressors}), found {b}"),
+            ));
+        }
+        Ok(())
+    }
+}

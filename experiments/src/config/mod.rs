@@ -1,0 +1,181 @@
+//! The experiment file: what data, which motion model, how residuals are
+//! formed, which regressors, which SLAM schemes. Unknown fields are errors,
+//! and every error names the file, line and column (the loader in
+//! [`crate::plan`] turns an [`Issue`]'s path into a position).
+//!
+//! ```yaml
+//! name: paper
+//! dataset: { kind: simulated, preset: exoter-prl, seed: 7 }
+//! motion_model: { kind: weighted_jacobian }
+//! residuals: { window_secs: 1.0 }
+//! regressors:
+//!   - kind: zero
+//! ```
+//!
+//! This is the first stage of the crate: it imports no other module of it
+//! but the error types.
+
+pub mod bench;
+pub mod schemes;
+mod validate;
+
+use std::path::PathBuf;
+
+use gpodo_datasets::residuals::ResidualConfig;
+use gpodo_datasets::sim::preset::Preset;
+use gpodo_frontends::FrontendParams;
+use gpodo_frontends::params::VoSpec;
+use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
+use gpodo_regressors::RegressorSpec;
+use serde::{Deserialize, Serialize};
+
+pub use bench::BenchSettings;
+pub use schemes::SchemeSpec;
+pub use validate::Issue;
+
+/// A whole experiment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentConfig {
+    /// Name; results go to `results/<name>/` unless told otherwise.
+    pub name: String,
+    /// Free text shown at the top of the report.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Where the data come from.
+    pub dataset: DatasetSpec,
+    /// The parametric motion model (ignored for residual tables).
+    #[serde(default)]
+    pub motion_model: MotionModelSpec,
+    /// How log steps become residual rows (ignored for residual tables).
+    #[serde(default)]
+    pub residuals: ResidualConfig,
+    /// Regressors to train and evaluate, in report order.
+    pub regressors: Vec<RegressorSpec>,
+    /// A residual table (e.g. the authors' real ExoTeR data) whose
+    /// statistics the report shows beside this experiment's, to judge how
+    /// close a simulated testbed is to the real rover. Skipped with a warning
+    /// when the file is missing.
+    #[serde(default)]
+    pub compare_with: Option<ReferenceTable>,
+    /// Settings of `gpodo bench` (ignored by `gpodo run`).
+    #[serde(default)]
+    pub bench: BenchSettings,
+    /// The visual front end of Table II (visual odometry, keyframes, back
+    /// end); every field has a default.
+    #[serde(default)]
+    pub frontend: FrontendParams,
+    /// The SLAM schemes of Table II, run on every test run (needs rover
+    /// logs: `simulated` or `logs` data).
+    #[serde(default)]
+    pub schemes: Vec<SchemeSpec>,
+}
+
+/// A reference residual table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceTable {
+    /// CSV file (relative to the experiment file).
+    pub path: PathBuf,
+    /// Its target columns.
+    pub targets: Vec<String>,
+}
+
+/// Where the data come from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum DatasetSpec {
+    /// The built-in simulated testbed.
+    Simulated {
+        /// Preset (`exoter-prl`).
+        preset: Preset,
+        /// Seed of every random draw.
+        seed: u64,
+        /// Override of the preset's number of training runs.
+        #[serde(default)]
+        training_runs: Option<usize>,
+        /// Override of the preset's training run duration (s).
+        #[serde(default)]
+        training_run_secs: Option<f64>,
+        /// Override of the longest the test traverse may take (s); a shorter
+        /// value cuts the traverse (quick runs, tests).
+        #[serde(default)]
+        test_max_secs: Option<f64>,
+    },
+    /// Rover logs in gpodo's trajectory CSV format (paths relative to the
+    /// experiment file).
+    Logs {
+        /// Training runs.
+        train: Vec<PathBuf>,
+        /// Test runs.
+        test: Vec<PathBuf>,
+    },
+    /// A residual table (features and targets already computed), split in
+    /// time order.
+    ResidualTable {
+        /// CSV file (relative to the experiment file).
+        path: PathBuf,
+        /// Input columns; omitted, every column that is not a target.
+        #[serde(default)]
+        inputs: Option<Vec<String>>,
+        /// Target columns.
+        targets: Vec<String>,
+        /// Fraction of rows (the first ones) used for training.
+        train_fraction: f64,
+    },
+}
+
+/// The parametric motion model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MotionModelSpec {
+    /// The weighted Jacobian model of §III.
+    WeightedJacobian {
+        /// Rover description YAML (relative to the experiment file);
+        /// omitted, the built-in ExoTeR-like rover.
+        #[serde(default)]
+        rover: Option<PathBuf>,
+        /// Model settings.
+        #[serde(default)]
+        config: WeightedJacobianConfig,
+    },
+    /// The ideal skid-steer model.
+    SkidSteer {
+        /// Rover description YAML; omitted, the ExoTeR-like rover.
+        #[serde(default)]
+        rover: Option<PathBuf>,
+        /// Angular rate source.
+        #[serde(default)]
+        yaw: YawSource,
+    },
+}
+
+impl Default for MotionModelSpec {
+    fn default() -> Self {
+        Self::WeightedJacobian {
+            rover: None,
+            config: WeightedJacobianConfig::default(),
+        }
+    }
+}
+
+impl ExperimentConfig {
+    /// The same experiment with a replicate's seed given to every random
+    /// draw it configures: the simulated testbed and the simulated visual
+    /// odometry (data read from files keep theirs).
+    #[must_use]
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        if let DatasetSpec::Simulated { seed: s, .. } = &mut self.dataset {
+            *s = seed;
+        }
+        if let VoSpec::Simulated(p) = &mut self.frontend.vo {
+            p.seed = seed;
+        }
+        self
+    }
+
+    /// The labels of the regressors, as reports print them.
+    pub fn regressor_labels(&self) -> Vec<String> {
+        self.regressors.iter().map(RegressorSpec::label).collect()
+    }
+}

@@ -1,0 +1,112 @@
+//! What a run produced: the data summary, each regressor's scores, each
+//! scheme's row, and the rows and traverses the reports draw.
+
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::scheme::SchemeResult;
+use gpodo_frontends::traverse::Traverse;
+use gpodo_regressors::metrics::Evaluation;
+use gpodo_traits::{FitReport, ResidualDataset};
+use serde::{Deserialize, Serialize};
+
+use crate::config::ExperimentConfig;
+use crate::execute::calibration::ResidualStatistics;
+use crate::execute::odometry::DeadReckoning;
+
+/// A run's length and duration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Run name.
+    pub name: String,
+    /// Sensor samples.
+    pub samples: usize,
+    /// Duration (s).
+    pub duration_secs: f64,
+    /// Ground-truth path length (m).
+    pub path_length_m: f64,
+}
+
+/// What the data were.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DatasetSummary {
+    /// Human-readable source.
+    pub source: String,
+    /// Training runs (empty for residual tables).
+    pub train_runs: Vec<RunSummary>,
+    /// Test runs (empty for residual tables).
+    pub test_runs: Vec<RunSummary>,
+    /// Training rows.
+    pub n_train: usize,
+    /// Test rows.
+    pub n_test: usize,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Target column names.
+    pub target_names: Vec<String>,
+    /// Steepest slope of a simulated terrain (deg).
+    pub terrain_max_slope_deg: Option<f64>,
+}
+
+/// One regressor's outcome.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RegressorResult {
+    /// Label for tables.
+    pub label: String,
+    /// Its specification.
+    pub spec: gpodo_regressors::RegressorSpec,
+    /// What the fit did.
+    pub fit: FitReport,
+    /// Scores on the test rows.
+    pub evaluation: Evaluation,
+}
+
+/// Everything an experiment produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExperimentResults {
+    /// The resolved configuration.
+    pub config: ExperimentConfig,
+    /// `git describe` of the code, or the crate version.
+    pub code_version: String,
+    /// The data.
+    pub dataset: DatasetSummary,
+    /// The motion model's name (none for residual tables).
+    pub motion_model: Option<String>,
+    /// Dead reckoning with the motion model on each test run.
+    pub dead_reckoning: Vec<(String, DeadReckoning)>,
+    /// Residual statistics of the training and test rows.
+    pub train_statistics: ResidualStatistics,
+    /// Residual statistics of the test rows.
+    pub test_statistics: ResidualStatistics,
+    /// The same statistics of a reference table, when one was given.
+    pub reference_statistics: Option<(String, ResidualStatistics)>,
+    /// One entry per regressor, in config order.
+    pub regressors: Vec<RegressorResult>,
+    /// Table II: every scheme on every test run.
+    #[serde(default)]
+    pub schemes: Vec<SchemeResult>,
+    /// Wall-clock duration of the whole experiment (s).
+    pub duration_secs: f64,
+    /// The training rows (physical units), written as a CSV beside the
+    /// report.
+    #[serde(skip)]
+    pub train_rows: Option<ResidualDataset>,
+    /// The test rows (physical units).
+    #[serde(skip)]
+    pub test_rows: Option<ResidualDataset>,
+    /// The test runs as the front end saw them (for trajectories and plots).
+    #[serde(skip)]
+    pub traverses: std::sync::Arc<Vec<Traverse>>,
+    /// Each regressor's window predictions on each traverse, where computed
+    /// (`[regressor][traverse]`).
+    #[serde(skip)]
+    pub window_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>>,
+}
+
+/// The rows the regressors see: inputs standardised with the training
+/// statistics, targets in physical units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelRows {
+    /// Training rows.
+    pub train: ResidualDataset,
+    /// Test rows.
+    pub test: ResidualDataset,
+}

@@ -1,0 +1,144 @@
+//! Table II: every SLAM scheme of the experiment run on every test run,
+//! one [`run_scheme`] call each. Causal schemes run in parallel (rayon),
+//! then the oracles, each planned for the frames of the scheme it is
+//! matched to; every scheme is deterministic, so the table does not depend
+//! on the number of threads.
+
+use std::path::Path;
+
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::scheme::{
+    SchemeContext, SchemeResiduals, SchemeResult, SchemeSpecRef, run_scheme,
+};
+use gpodo_frontends::traverse::Traverse;
+use rayon::prelude::*;
+
+use crate::config::{ExperimentConfig, SchemeSpec};
+use crate::error::PipelineError;
+
+/// Everything a scheme needs that is shared between schemes.
+pub struct SchemeInputs<'a> {
+    /// The experiment.
+    pub config: &'a ExperimentConfig,
+    /// Its folder (relative paths).
+    pub base: &'a Path,
+    /// The test runs.
+    pub traverses: &'a [Traverse],
+    /// Each trained regressor's predictions on each traverse
+    /// (`[regressor][traverse]`), for the regressors schemes use.
+    pub predictions: &'a [Option<Vec<Vec<ResidualPrediction>>>],
+    /// The trained regressors' labels.
+    pub regressor_labels: &'a [String],
+}
+
+impl SchemeInputs<'_> {
+    /// The residual source of `scheme` on traverse `t`: a fresh regressor
+    /// learning online, or the trained regressor's window predictions.
+    fn residuals(&self, scheme: &SchemeSpec, t: usize) -> Result<SchemeResiduals, PipelineError> {
+        if let Some(online) = &scheme.online {
+            return Ok(SchemeResiduals::Online {
+                label: online.regressor.label(),
+                regressor: online.regressor.build()?,
+                mode: online.mode(),
+            });
+        }
+        let r = scheme
+            .regressor_index(self.regressor_labels)
+            .map_err(|(problem, expected)| {
+                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
+            })?;
+        let predictions = self.predictions[r]
+            .as_ref()
+            .and_then(|p| p.get(t))
+            .cloned()
+            .ok_or_else(|| {
+                PipelineError::Inconsistent(format!("no predictions of regressor {r}"))
+            })?;
+        Ok(SchemeResiduals::Trained {
+            label: self.regressor_labels[r].clone(),
+            predictions,
+        })
+    }
+
+    /// Runs `scheme` on traverse `t`; `done` holds the finished causal
+    /// schemes an oracle may be matched to.
+    fn run(
+        &self,
+        scheme: &SchemeSpec,
+        t: usize,
+        done: &[SchemeResult],
+    ) -> Result<SchemeResult, PipelineError> {
+        let traverse = &self.traverses[t];
+        let matched_frames = scheme
+            .selector
+            .oracle()
+            .and_then(|o| o.same_as.as_ref())
+            .and_then(|other| {
+                done.iter()
+                    .find(|r| &r.label == other && r.traverse == traverse.name())
+            })
+            .map(|r| r.run.frames);
+        let ctx = SchemeContext {
+            params: &self.config.frontend,
+            base: self.base,
+            matched_frames,
+        };
+        let spec = SchemeSpecRef {
+            label: &scheme.label,
+            selector: &scheme.selector,
+            motion_prior: scheme.motion_prior,
+        };
+        Ok(run_scheme(
+            &spec,
+            traverse,
+            self.residuals(scheme, t)?,
+            &ctx,
+        )?)
+    }
+}
+
+/// Runs every scheme on every traverse: causal schemes in parallel, then
+/// the oracles. Results are in (traverse, scheme) order.
+///
+/// # Errors
+/// The first failure, with the scheme it came from.
+pub fn run_schemes(inputs: &SchemeInputs<'_>) -> Result<Vec<SchemeResult>, PipelineError> {
+    let schemes = &inputs.config.schemes;
+    let jobs: Vec<(usize, usize)> = (0..inputs.traverses.len())
+        .flat_map(|t| (0..schemes.len()).map(move |s| (t, s)))
+        .collect();
+    let is_oracle = |s: usize| schemes[s].selector.oracle().is_some();
+    let label = |s: usize, e: PipelineError| PipelineError::Scheme {
+        label: schemes[s].label.clone(),
+        source: Box::new(e),
+    };
+    let run_all = |stage: Vec<(usize, usize)>, done: &[SchemeResult]| {
+        stage
+            .par_iter()
+            .map(|&(t, s)| {
+                inputs
+                    .run(&schemes[s], t, done)
+                    .map(|r| ((t, s), r))
+                    .map_err(|e| label(s, e))
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let causal = run_all(
+        jobs.iter()
+            .copied()
+            .filter(|&(_, s)| !is_oracle(s))
+            .collect(),
+        &[],
+    )?;
+    let finished: Vec<SchemeResult> = causal.iter().map(|(_, r)| r.clone()).collect();
+    let oracles = run_all(
+        jobs.iter()
+            .copied()
+            .filter(|&(_, s)| is_oracle(s))
+            .collect(),
+        &finished,
+    )?;
+    let mut all: Vec<((usize, usize), SchemeResult)> = causal.into_iter().chain(oracles).collect();
+    all.sort_by_key(|(key, _)| *key);
+    Ok(all.into_iter().map(|(_, r)| r).collect())
+}

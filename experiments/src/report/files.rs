@@ -1,0 +1,151 @@
+//! The files of a single run: `report.md`, `metrics.json`, the residual
+//! rows as CSV, the trajectories of Table II (TUM) and its figures. Files
+//! are written to a temporary name and renamed, so a crash never leaves a
+//! half-written report.
+
+use std::path::{Path, PathBuf};
+
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::tum::{StampedPose, format_tum};
+
+use crate::execute::results::ExperimentResults;
+use crate::output::{slug, write_atomically};
+use crate::report::plots;
+use crate::report::run::markdown;
+
+/// Writes `report.md` and `metrics.json` into `dir` (created if needed),
+/// the residual rows, and with schemes the trajectories and (when `plots`)
+/// the figures; returns the report's and the metrics' paths.
+///
+/// # Errors
+/// Any I/O or serialisation error.
+pub fn write_report(
+    results: &ExperimentResults,
+    dir: &Path,
+    plots: bool,
+) -> anyhow::Result<(PathBuf, PathBuf)> {
+    std::fs::create_dir_all(dir)?;
+    let md = dir.join("report.md");
+    let json = dir.join("metrics.json");
+    write_atomically(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
+    write_atomically(&md, markdown(results).as_bytes())?;
+    for (name, rows) in [
+        ("residuals_train.csv", &results.train_rows),
+        ("residuals_test.csv", &results.test_rows),
+    ] {
+        if let Some(rows) = rows {
+            write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
+        }
+    }
+    write_table_two_files(results, dir, plots)?;
+    Ok((md, json))
+}
+
+/// Trajectories (TUM) and figures of Table II.
+fn write_table_two_files(
+    results: &ExperimentResults,
+    dir: &Path,
+    plots: bool,
+) -> anyhow::Result<()> {
+    if results.schemes.is_empty() {
+        return Ok(());
+    }
+    let (traj_dir, plot_dir) = (dir.join("trajectories"), dir.join("plots"));
+    std::fs::create_dir_all(&traj_dir)?;
+    std::fs::create_dir_all(&plot_dir)?;
+    for (t, traverse) in results.traverses.iter().enumerate() {
+        let stamped = |poses: &[nalgebra::Isometry3<f64>]| -> Vec<StampedPose> {
+            traverse
+                .times_secs()
+                .iter()
+                .zip(poses)
+                .map(|(&time_secs, &pose)| StampedPose { time_secs, pose })
+                .collect()
+        };
+        let name = slug(traverse.name());
+        write_atomically(
+            &traj_dir.join(format!("{name}.ground_truth.tum")),
+            format_tum(
+                &format!("ground truth of `{}` (world_from_body)", traverse.name()),
+                &stamped(traverse.ground_truth()),
+            )
+            .as_bytes(),
+        )?;
+        for scheme in results
+            .schemes
+            .iter()
+            .filter(|r| r.traverse == traverse.name())
+        {
+            let file = format!("{name}.{}", slug(&scheme.label));
+            let comment = format!(
+                "`{}` on `{}`: {} frames, {} keyframes (world_from_body)",
+                scheme.label,
+                traverse.name(),
+                scheme.run.frames,
+                scheme.run.keyframes
+            );
+            write_atomically(
+                &traj_dir.join(format!("{file}.tum")),
+                format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
+            )?;
+            if !plots {
+                continue;
+            }
+            let title = format!(
+                "{}: {} frames, {} keyframes, RMSE {:.3} m",
+                scheme.label, scheme.run.frames, scheme.run.keyframes, scheme.run.metrics.rmse_m
+            );
+            write_atomically(
+                &plot_dir.join(format!("fig5_{file}.svg")),
+                plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
+            )?;
+        }
+        if !plots {
+            continue;
+        }
+        if let Some((label, predictions)) = residual_map_source(results, t) {
+            write_atomically(
+                &plot_dir.join(format!("fig3_{name}.svg")),
+                plots::residual_map_svg(traverse, predictions, &label)?.as_bytes(),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// The predictions Fig. 3 shows: those of the first scheme's regressor
+/// that gates on residuals, or else of the first regressor with any.
+fn residual_map_source(
+    results: &ExperimentResults,
+    t: usize,
+) -> Option<(String, &[ResidualPrediction])> {
+    let labels = results.config.regressor_labels();
+    let gating = results
+        .config
+        .schemes
+        .iter()
+        .filter(|s| s.online.is_none() && s.selector.reads_residuals())
+        .filter_map(|s| s.regressor_index(&labels).ok());
+    let any = 0..results.window_predictions.len();
+    gating.chain(any).find_map(|r| {
+        let p = results.window_predictions.get(r)?.as_ref()?.get(t)?;
+        Some((labels[r].clone(), p.as_slice()))
+    })
+}
+
+/// A residual dataset as CSV: input columns, then target columns, full
+/// precision (the format `kind: residual_table` reads back).
+pub fn residual_csv(data: &gpodo_traits::ResidualDataset) -> String {
+    let mut s = data.input_names.join(",");
+    for t in &data.target_names {
+        s.push(',');
+        s.push_str(t);
+    }
+    s.push('\n');
+    for (x, y) in data.inputs.rows().zip(data.targets.rows()) {
+        let cells: Vec<String> = x.iter().chain(y).map(|v| v.to_string()).collect();
+        s.push_str(&cells.join(","));
+        s.push('\n');
+    }
+    s
+}

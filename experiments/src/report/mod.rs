@@ -1,0 +1,15 @@
+//! The fourth stage: what the results say, as files. [`files`] writes a
+//! single run's folder (`report.md` from [`run`], `metrics.json`, residual
+//! rows, trajectories, figures from [`plots`]); [`sweep`] merges the
+//! records of a results folder into `summary.md` and its CSV tables;
+//! [`bench`](mod@bench) writes `bench.md`. Every Table I and Table II is a
+//! [`table::Table`].
+
+pub mod bench;
+pub mod files;
+pub mod plots;
+pub mod run;
+pub mod sweep;
+pub mod table;
+
+pub use files::write_report;

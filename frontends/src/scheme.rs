@@ -1,0 +1,250 @@
+//! One SLAM scheme of Table II on one traverse, from its specification to
+//! its row: the selector built (or, for the oracle, planned here with
+//! hindsight), the visual odometry built from [`VoSpec`], the residual
+//! source (a trained regressor's predictions or a regressor learning online
+//! from VO), and [`run_frontend`] over the traverse. [`run_scheme`] is the
+//! one call an experiment runner makes per scheme and traverse.
+
+use std::path::Path;
+use std::time::Instant;
+
+use gpodo_traits::{FrameSelector, ResidualRegressor};
+use serde::{Deserialize, Serialize};
+
+use crate::gating::Planned;
+use crate::online::{OnlineLearner, OnlineMode};
+use crate::oracle::plan_frames;
+use crate::params::{FrontendParams, MotionPrior, VoSpec};
+use crate::prediction::{Precomputed, ResidualPrediction, ResidualSource};
+use crate::traverse::Traverse;
+use crate::tum::parse_tum;
+use crate::vo::{ReplayVo, SimulatedVo, VisualOdometry};
+use crate::{FrontendError, FrontendRun, SelectorSpec, run_frontend};
+
+/// One scheme on one test run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SchemeResult {
+    /// The scheme's label.
+    pub label: String,
+    /// The test run.
+    pub traverse: String,
+    /// The selector, as the reports describe it.
+    pub selector: String,
+    /// Where the residual predictions came from.
+    pub residuals: String,
+    /// The oracle's plan, for oracle schemes.
+    pub oracle: Option<OraclePlanSummary>,
+    /// What the front end did and how well.
+    pub run: FrontendRun,
+    /// Wall-clock time of the run (s).
+    pub duration_secs: f64,
+}
+
+/// An oracle plan without its frame list.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OraclePlanSummary {
+    /// Frame budget.
+    pub budget: usize,
+    /// Frames planned.
+    pub planned: usize,
+    /// The minimised surrogate cost.
+    pub cost: f64,
+    /// Candidate frames considered.
+    pub candidates: usize,
+}
+
+/// Where a scheme's residual predictions come from on one traverse.
+pub enum SchemeResiduals {
+    /// A regressor trained offline: its predictions on every window.
+    Trained {
+        /// The regressor's label (reports).
+        label: String,
+        /// One prediction per window of the traverse.
+        predictions: Vec<ResidualPrediction>,
+    },
+    /// A fresh regressor that learns online from VO targets (§VI).
+    Online {
+        /// The regressor's label (reports prefix it with `online: `).
+        label: String,
+        /// The regressor, untrained.
+        regressor: Box<dyn ResidualRegressor>,
+        /// One update per target, or periodic refits.
+        mode: OnlineMode,
+    },
+}
+
+/// One scheme as the runner hands it over.
+pub struct SchemeSpecRef<'a> {
+    /// The row label.
+    pub label: &'a str,
+    /// Which frames are processed (an oracle is planned here).
+    pub selector: &'a SelectorSpec,
+    /// The scheme's tracking prior; `None`, the front end's.
+    pub motion_prior: Option<MotionPrior>,
+}
+
+/// What every scheme on a traverse shares.
+#[derive(Clone, Copy)]
+pub struct SchemeContext<'a> {
+    /// The front end's settings.
+    pub params: &'a FrontendParams,
+    /// The folder relative VO-log paths start from.
+    pub base: &'a Path,
+    /// For an oracle matched to another scheme (`same_as`): that scheme's
+    /// frames on this traverse.
+    pub matched_frames: Option<usize>,
+}
+
+impl VoSpec {
+    /// The visual odometry this specification describes over `traverse`;
+    /// a replayed log's relative path starts at `base`.
+    ///
+    /// # Errors
+    /// [`FrontendError::Parse`] naming a VO log that cannot be read or
+    /// parsed; what the VO's constructor reports.
+    pub fn build(
+        &self,
+        traverse: &Traverse,
+        base: &Path,
+    ) -> Result<Box<dyn VisualOdometry>, FrontendError> {
+        Ok(match self {
+            Self::Simulated(p) => Box::new(SimulatedVo::new(*p, traverse)?),
+            Self::Replay(p) => {
+                let path = if p.path.is_absolute() {
+                    p.path.clone()
+                } else {
+                    base.join(&p.path)
+                };
+                let text = std::fs::read_to_string(&path).map_err(|e| FrontendError::Parse {
+                    path: path.display().to_string(),
+                    line: 0,
+                    detail: format!("cannot read the VO log: {e}"),
+                })?;
+                let log = parse_tum(&text, &path.display().to_string())?;
+                Box::new(ReplayVo::new(p.clone(), traverse, &log)?)
+            }
+        })
+    }
+}
+
+impl SchemeResiduals {
+    /// The source the front end reads, and the label reports show.
+    fn into_source(
+        self,
+        params: &FrontendParams,
+    ) -> Result<(Box<dyn ResidualSource>, String), FrontendError> {
+        Ok(match self {
+            Self::Trained { label, predictions } => (
+                Box::new(Precomputed::new(label.clone(), predictions)),
+                label,
+            ),
+            Self::Online {
+                label,
+                regressor,
+                mode,
+            } => {
+                let label = format!("online: {label}");
+                let learner = OnlineLearner::new(
+                    label.clone(),
+                    regressor,
+                    mode,
+                    params.initial_residual_variance,
+                )?;
+                (Box::new(learner), label)
+            }
+        })
+    }
+}
+
+/// Runs one scheme over one traverse: builds its selector (planning the
+/// oracle from the trained predictions and ground truth), its VO and its
+/// residual source, and runs the front end.
+///
+/// # Errors
+/// [`FrontendError::InvalidSpec`] for an oracle without trained
+/// predictions or without the frames it is matched to; what building the
+/// VO, the selector or the online learner, or the run itself, reports.
+pub fn run_scheme(
+    scheme: &SchemeSpecRef<'_>,
+    traverse: &Traverse,
+    residuals: SchemeResiduals,
+    ctx: &SchemeContext<'_>,
+) -> Result<SchemeResult, FrontendError> {
+    let start = Instant::now();
+    let motion_prior = scheme.motion_prior.unwrap_or(ctx.params.motion_prior);
+    let (mut selector, oracle): (Box<dyn FrameSelector>, _) = match scheme.selector.oracle() {
+        None => (scheme.selector.build()?, None),
+        Some(params) => {
+            let budget = match (&params.frames, &params.same_as) {
+                (Some(n), _) => *n,
+                (None, Some(other)) => ctx.matched_frames.ok_or_else(|| {
+                    oracle_error(format!(
+                        "the frames of `{other}` on `{}` (run that scheme first)",
+                        traverse.name()
+                    ))
+                })?,
+                (None, None) => 0,
+            };
+            let SchemeResiduals::Trained { predictions, .. } = &residuals else {
+                return Err(oracle_error(
+                    "a trained regressor's predictions (an oracle cannot learn online)".into(),
+                ));
+            };
+            let vo = ctx.params.vo.build(traverse, ctx.base)?;
+            let plan = plan_frames(
+                traverse,
+                predictions,
+                vo.as_ref(),
+                motion_prior,
+                params,
+                budget,
+            )?;
+            let summary = OraclePlanSummary {
+                budget,
+                planned: plan.frames.len(),
+                cost: plan.cost,
+                candidates: plan.candidates,
+            };
+            (
+                Box::new(Planned::new("oracle", plan.times_secs)),
+                Some(summary),
+            )
+        }
+    };
+    let (mut source, residuals) = residuals.into_source(ctx.params)?;
+    let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
+    let mut frontend = ctx.params.clone();
+    frontend.motion_prior = motion_prior;
+    let run = run_frontend(
+        traverse,
+        &frontend,
+        selector.as_mut(),
+        source.as_mut(),
+        vo.as_mut(),
+    )?;
+    tracing::info!(
+        scheme = %scheme.label,
+        traverse = traverse.name(),
+        frames = run.frames,
+        keyframes = run.keyframes,
+        rmse_m = run.metrics.rmse_m,
+        "scheme done"
+    );
+    Ok(SchemeResult {
+        label: scheme.label.to_string(),
+        traverse: traverse.name().to_string(),
+        selector: scheme.selector.label(),
+        residuals,
+        oracle,
+        run,
+        duration_secs: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn oracle_error(expected: String) -> FrontendError {
+    FrontendError::InvalidSpec {
+        selector: "oracle".into(),
+        field: "same_as".into(),
+        expected,
+    }
+}
