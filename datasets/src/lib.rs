@@ -7,7 +7,6 @@ mod error;
 pub mod log;
 pub mod residuals;
 pub mod sim;
-pub mod standardize;
 pub mod table;
 
 pub use error::DatasetError;

@@ -51,7 +51,7 @@ pub enum RegressorError {
     },
     /// Standardising the data failed.
     #[error(transparent)]
-    Dataset(#[from] gpodo_datasets::DatasetError),
+    Standardize(#[from] gpodo_traits::Error),
 }
 
 impl From<RegressorError> for gpodo_traits::Error {

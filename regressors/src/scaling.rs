@@ -4,7 +4,7 @@
 //! variance × std²).
 
 use faer::{Mat, MatRef};
-use gpodo_datasets::standardize::Standardizer;
+use gpodo_traits::Standardizer;
 use gpodo_traits::{Error, ResidualDataset, SampleMatrix};
 
 use crate::RegressorError;
@@ -83,10 +83,6 @@ impl ScaledTraining {
     }
 }
 
-fn backend(e: RegressorError) -> Error {
-    e.into()
-}
-
 /// Checks query inputs (width `d`, finite) and scales them like the
 /// training inputs.
 ///
@@ -107,7 +103,7 @@ pub fn scale_queries(
     }
     check_finite("prediction inputs", inputs).map_err(|e| Error::InvalidInput(e.to_string()))?;
     Ok(match scaler {
-        Some(s) => to_faer(&s.transform(inputs).map_err(|e| backend(e.into()))?),
+        Some(s) => to_faer(&s.transform(inputs)?),
         None => to_faer(inputs),
     })
 }
@@ -115,7 +111,8 @@ pub fn scale_queries(
 /// Maps scaled predictive moments back to target units.
 ///
 /// # Errors
-/// A standardisation error (shape mismatch), as a backend error.
+/// [`Error::DimensionMismatch`] when the moments do not have the scaler's
+/// width.
 pub fn unscale_predictions(
     mean: MatRef<'_, f64>,
     latent: MatRef<'_, f64>,
@@ -123,13 +120,11 @@ pub fn unscale_predictions(
     scaler: Option<&Standardizer>,
 ) -> Result<GpPredictions, Error> {
     let (mean, latent, noisy) = (from_faer(mean), from_faer(latent), from_faer(noisy));
-    let back =
-        |r: Result<SampleMatrix, gpodo_datasets::DatasetError>| r.map_err(|e| backend(e.into()));
     Ok(match scaler {
         Some(s) => GpPredictions {
-            mean: back(s.inverse_transform_mean(&mean))?,
-            latent_variance: back(s.inverse_transform_variance(&latent))?,
-            variance: back(s.inverse_transform_variance(&noisy))?,
+            mean: s.inverse_transform_mean(&mean)?,
+            latent_variance: s.inverse_transform_variance(&latent)?,
+            variance: s.inverse_transform_variance(&noisy)?,
         },
         None => GpPredictions {
             mean,
@@ -138,3 +133,44 @@ pub fn unscale_predictions(
         },
     })
 }
+
+/// The [`ResidualRegressor`](gpodo_traits::ResidualRegressor) impl the
+/// Gaussian processes share: `fit` through the model's `fit_impl`
+/// (a [`RegressorError`] becomes a backend error), `predict` through its
+/// `predict_full` (dropping the latent variance), and the optimiser's
+/// progress sink in its `progress` field.
+macro_rules! gp_residual_regressor {
+    ($model:ty, $name:literal) => {
+        impl gpodo_traits::ResidualRegressor for $model {
+            fn name(&self) -> &str {
+                $name
+            }
+
+            fn fit(
+                &mut self,
+                data: &gpodo_traits::ResidualDataset,
+            ) -> Result<gpodo_traits::FitReport, gpodo_traits::Error> {
+                self.fit_impl(data).map_err(gpodo_traits::Error::from)
+            }
+
+            fn set_progress(
+                &mut self,
+                progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
+            ) {
+                self.progress = $crate::hyperopt::ProgressSink(progress);
+            }
+
+            fn predict(
+                &self,
+                inputs: &gpodo_traits::SampleMatrix,
+            ) -> Result<gpodo_traits::Predictions, gpodo_traits::Error> {
+                let full = self.predict_full(inputs)?;
+                Ok(gpodo_traits::Predictions {
+                    mean: full.mean,
+                    variance: full.variance,
+                })
+            }
+        }
+    };
+}
+pub(crate) use gp_residual_regressor;

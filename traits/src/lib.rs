@@ -13,6 +13,10 @@
 //! All three are object safe, so an experiment configuration chooses the
 //! implementations at run time (`Box<dyn MotionModel>` and so on). This crate
 //! depends on nothing else of gpodo's.
+//!
+//! Beside the traits: [`SampleMatrix`] (rows of samples), [`ResidualDataset`]
+//! and [`Standardizer`], the one z-scoring of inputs and targets every crate
+//! uses.
 
 mod error;
 mod matrix;
@@ -20,6 +24,7 @@ mod motion;
 mod regressor;
 mod sample;
 mod selector;
+mod standardize;
 
 pub use error::Error;
 pub use matrix::SampleMatrix;
@@ -29,3 +34,4 @@ pub use regressor::{
 };
 pub use sample::{ImuSample, JointState, ProprioceptiveSample};
 pub use selector::{FrameContext, FrameDecision, FrameSelector};
+pub use standardize::{MIN_STD, Standardizer};

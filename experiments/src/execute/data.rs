@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use gpodo_datasets::log::{RoverLog, read_log_csv};
 use gpodo_datasets::residuals::residual_dataset;
 use gpodo_datasets::sim::preset::SimulatorConfig;
-use gpodo_datasets::standardize::Standardizer;
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
+use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualDataset};
 
 use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};

@@ -12,9 +12,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use gpodo_datasets::standardize::Standardizer;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::Traverse;
+use gpodo_traits::Standardizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 

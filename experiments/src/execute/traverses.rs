@@ -3,9 +3,9 @@
 
 use gpodo_datasets::log::RoverLog;
 use gpodo_datasets::residuals::{log_steps, window_rows};
-use gpodo_datasets::standardize::Standardizer;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::{Traverse, TraverseWindow};
+use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualRegressor, SampleMatrix};
 use nalgebra::Vector3;
 

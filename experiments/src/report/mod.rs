@@ -5,6 +5,7 @@
 //! [`bench`](mod@bench) writes `bench.md`. Every Table I and Table II is a
 //! [`table::Table`].
 
+mod aggregate;
 pub mod bench;
 pub mod files;
 pub mod plots;

@@ -8,10 +8,8 @@
 use std::time::Instant;
 
 use faer::Mat;
-use gpodo_datasets::standardize::Standardizer;
-use gpodo_traits::{
-    Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
-};
+use gpodo_traits::Standardizer;
+use gpodo_traits::{Error, FitReport, ResidualDataset, ResidualRegressor, SampleMatrix};
 use serde::{Deserialize, Serialize};
 
 use super::optimize::maximize_lml;
@@ -69,10 +67,6 @@ pub struct ExactGp {
     params: ExactGpParams,
     fitted: Option<Fitted>,
     progress: ProgressSink,
-}
-
-fn backend(e: RegressorError) -> Error {
-    e.into()
 }
 
 fn columns(m: &Mat<f64>, cols: &[usize]) -> Mat<f64> {
@@ -295,24 +289,4 @@ impl ExactGp {
     }
 }
 
-impl ResidualRegressor for ExactGp {
-    fn name(&self) -> &str {
-        "exact_gp"
-    }
-
-    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
-        self.fit_impl(data).map_err(backend)
-    }
-
-    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>) {
-        self.progress = ProgressSink(progress);
-    }
-
-    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
-        let full = self.predict_full(inputs)?;
-        Ok(Predictions {
-            mean: full.mean,
-            variance: full.variance,
-        })
-    }
-}
+crate::scaling::gp_residual_regressor!(ExactGp, "exact_gp");

@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use gpodo_datasets::standardize::MIN_STD;
+use gpodo_traits::MIN_STD;
 use gpodo_traits::{
     Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
 };

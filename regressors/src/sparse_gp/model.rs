@@ -7,10 +7,8 @@
 use std::time::Instant;
 
 use faer::{Mat, MatRef};
-use gpodo_datasets::standardize::Standardizer;
-use gpodo_traits::{
-    Error, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
-};
+use gpodo_traits::Standardizer;
+use gpodo_traits::{Error, FitReport, ResidualDataset, ResidualRegressor, SampleMatrix};
 use serde::{Deserialize, Serialize};
 
 use super::bound::sparse_objective;
@@ -109,10 +107,6 @@ impl Objective for SparseObjective<'_> {
         }
         Ok((eval.value, gradient))
     }
-}
-
-fn backend(e: RegressorError) -> Error {
-    e.into()
 }
 
 impl SparseGp {
@@ -325,24 +319,4 @@ impl SparseGp {
     }
 }
 
-impl ResidualRegressor for SparseGp {
-    fn name(&self) -> &str {
-        "sparse_gp"
-    }
-
-    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
-        self.fit_impl(data).map_err(backend)
-    }
-
-    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>) {
-        self.progress = ProgressSink(progress);
-    }
-
-    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
-        let full = self.predict_full(inputs)?;
-        Ok(Predictions {
-            mean: full.mean,
-            variance: full.variance,
-        })
-    }
-}
+crate::scaling::gp_residual_regressor!(SparseGp, "sparse_gp");

@@ -7,10 +7,9 @@
 //! [`Standardizer::inverse_transform_mean`] and
 //! [`Standardizer::inverse_transform_variance`].
 
-use gpodo_traits::SampleMatrix;
 use serde::{Deserialize, Serialize};
 
-use crate::DatasetError;
+use crate::{Error, SampleMatrix};
 
 /// Population standard deviations at or below this count as zero: such a
 /// column is constant up to rounding noise (the ExoTeR table holds columns of
@@ -34,12 +33,12 @@ impl Standardizer {
     /// each column of `data`.
     ///
     /// # Errors
-    /// [`DatasetError::NoSamples`] for a matrix without rows,
-    /// [`DatasetError::NonFiniteEntry`] for NaN or an infinity.
-    pub fn fit(data: &SampleMatrix) -> Result<Self, DatasetError> {
+    /// [`Error::InvalidInput`] for a matrix without rows, or naming the row
+    /// and column of a NaN or an infinity.
+    pub fn fit(data: &SampleMatrix) -> Result<Self, Error> {
         let what = "standardizer fit";
         if data.nrows() == 0 {
-            return Err(DatasetError::NoSamples { what: what.into() });
+            return Err(Error::InvalidInput(format!("{what}: no samples")));
         }
         check_finite(what, data)?;
         let n = data.nrows() as f64;
@@ -63,9 +62,9 @@ impl Standardizer {
     /// `(x − mean) / std` for each column.
     ///
     /// # Errors
-    /// [`DatasetError::DimensionMismatch`] when `data` has a different
+    /// [`Error::DimensionMismatch`] when `data` has a different
     /// number of columns from the training data.
-    pub fn transform(&self, data: &SampleMatrix) -> Result<SampleMatrix, DatasetError> {
+    pub fn transform(&self, data: &SampleMatrix) -> Result<SampleMatrix, Error> {
         self.map_columns("standardizer transform", data, |x, mean, std| {
             (x - mean) / std
         })
@@ -75,11 +74,8 @@ impl Standardizer {
     /// units: `z · std + mean`.
     ///
     /// # Errors
-    /// [`DatasetError::DimensionMismatch`] as for [`Self::transform`].
-    pub fn inverse_transform_mean(
-        &self,
-        data: &SampleMatrix,
-    ) -> Result<SampleMatrix, DatasetError> {
+    /// [`Error::DimensionMismatch`] as for [`Self::transform`].
+    pub fn inverse_transform_mean(&self, data: &SampleMatrix) -> Result<SampleMatrix, Error> {
         self.map_columns("standardizer inverse (mean)", data, |z, mean, std| {
             z * std + mean
         })
@@ -89,11 +85,11 @@ impl Standardizer {
     /// `var · std²` (the mean shift does not change a variance).
     ///
     /// # Errors
-    /// [`DatasetError::DimensionMismatch`] as for [`Self::transform`].
+    /// [`Error::DimensionMismatch`] as for [`Self::transform`].
     pub fn inverse_transform_variance(
         &self,
         variance: &SampleMatrix,
-    ) -> Result<SampleMatrix, DatasetError> {
+    ) -> Result<SampleMatrix, Error> {
         self.map_columns("standardizer inverse (variance)", variance, |v, _, std| {
             v * std * std
         })
@@ -105,9 +101,9 @@ impl Standardizer {
         what: &str,
         data: &SampleMatrix,
         f: impl Fn(f64, f64, f64) -> f64,
-    ) -> Result<SampleMatrix, DatasetError> {
+    ) -> Result<SampleMatrix, Error> {
         if data.ncols() != self.dim() {
-            return Err(DatasetError::DimensionMismatch {
+            return Err(Error::DimensionMismatch {
                 what: what.to_string(),
                 expected: self.dim(),
                 found: data.ncols(),
@@ -124,14 +120,12 @@ impl Standardizer {
 }
 
 /// Fails on the first entry of `data` that is NaN or infinite.
-fn check_finite(what: &str, data: &SampleMatrix) -> Result<(), DatasetError> {
+fn check_finite(what: &str, data: &SampleMatrix) -> Result<(), Error> {
     for (row, values) in data.rows().enumerate() {
         if let Some(column) = values.iter().position(|x| !x.is_finite()) {
-            return Err(DatasetError::NonFiniteEntry {
-                what: what.to_string(),
-                row,
-                column,
-            });
+            return Err(Error::InvalidInput(format!(
+                "{what}: row {row}, column {column} is not finite"
+            )));
         }
     }
     Ok(())
@@ -212,7 +206,7 @@ mod tests {
         let err = s.transform(&SampleMatrix::zeros(2, 4)).unwrap_err();
         assert!(matches!(
             err,
-            DatasetError::DimensionMismatch {
+            Error::DimensionMismatch {
                 expected: 3,
                 found: 4,
                 ..
@@ -227,16 +221,12 @@ mod tests {
     #[test]
     fn fit_rejects_empty_and_non_finite_data() {
         let empty = Standardizer::fit(&SampleMatrix::zeros(0, 2)).unwrap_err();
-        assert!(matches!(empty, DatasetError::NoSamples { .. }));
+        assert!(matches!(empty, Error::InvalidInput(_)), "{empty}");
         let nan = SampleMatrix::from_rows(2, &[[0.0, 1.0], [f64::NAN, 2.0]]).unwrap();
         let err = Standardizer::fit(&nan).unwrap_err();
-        assert!(matches!(
-            err,
-            DatasetError::NonFiniteEntry {
-                row: 1,
-                column: 0,
-                ..
-            }
-        ));
+        assert!(
+            matches!(&err, Error::InvalidInput(m) if m.contains("row 1, column 0")),
+            "{err}"
+        );
     }
 }
