@@ -15,7 +15,7 @@
 //! Steps can be averaged over windows (the authors used 1-s means; they
 //! also low-pass the motion-capture velocities, which the window does
 //! here). Inputs are left in physical units: normalisation uses training
-//! statistics only, see [`crate::standardize`].
+//! statistics only, see [`gpodo_traits::Standardizer`].
 
 use gpodo_traits::{MotionModel, ResidualDataset, SampleMatrix};
 use nalgebra::Vector3;

@@ -53,6 +53,8 @@ pub struct OnlineLearner {
     fitted: bool,
     /// `(time, targets so far)` after each target.
     history: Vec<(f64, usize)>,
+    /// Whether the window inputs are z-scored already.
+    inputs_standardized: bool,
 }
 
 impl OnlineLearner {
@@ -98,7 +100,17 @@ impl OnlineLearner {
             since_refit: 0,
             fitted: false,
             history: Vec::new(),
+            inputs_standardized: false,
         })
+    }
+
+    /// Tells the learner that the window inputs it will see are z-scored
+    /// already ([`Traverse::inputs_standardized`](crate::traverse::Traverse::inputs_standardized)),
+    /// so that the rows it refits on say so.
+    #[must_use]
+    pub fn with_standardized_inputs(mut self, standardized: bool) -> Self {
+        self.inputs_standardized = standardized;
+        self
     }
 
     /// Targets learned so far.
@@ -118,7 +130,8 @@ impl OnlineLearner {
             SampleMatrix::from_row_major(n, 3, self.targets.clone())?,
             (0..d).map(|i| format!("x{i}")).collect(),
             ["res_vx", "res_vy", "res_vz"].map(String::from).to_vec(),
-        )?;
+        )?
+        .with_standardized_inputs(self.inputs_standardized);
         self.model.fit(&data)?;
         self.fitted = true;
         self.since_refit = 0;

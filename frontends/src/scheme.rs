@@ -32,6 +32,10 @@ pub struct SchemeResult {
     pub selector: String,
     /// Where the residual predictions came from.
     pub residuals: String,
+    /// The tracking prior the scheme ran with (with `residuals`, its back
+    /// end: what fixed-rate and zero-residual controls must share).
+    #[serde(default)]
+    pub motion_prior: MotionPrior,
     /// The oracle's plan, for oracle schemes.
     pub oracle: Option<OraclePlanSummary>,
     /// What the front end did and how well.
@@ -132,6 +136,7 @@ impl SchemeResiduals {
     fn into_source(
         self,
         params: &FrontendParams,
+        traverse: &Traverse,
     ) -> Result<(Box<dyn ResidualSource>, String), FrontendError> {
         Ok(match self {
             Self::Trained { label, predictions } => (
@@ -149,7 +154,8 @@ impl SchemeResiduals {
                     regressor,
                     mode,
                     params.initial_residual_variance,
-                )?;
+                )?
+                .with_standardized_inputs(traverse.inputs_standardized());
                 (Box::new(learner), label)
             }
         })
@@ -211,7 +217,7 @@ pub fn run_scheme(
             )
         }
     };
-    let (mut source, residuals) = residuals.into_source(ctx.params)?;
+    let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
     let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
     let mut frontend = ctx.params.clone();
     frontend.motion_prior = motion_prior;
@@ -235,6 +241,7 @@ pub fn run_scheme(
         traverse: traverse.name().to_string(),
         selector: scheme.selector.label(),
         residuals,
+        motion_prior,
         oracle,
         run,
         duration_secs: start.elapsed().as_secs_f64(),

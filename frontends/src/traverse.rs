@@ -40,6 +40,9 @@ pub struct Traverse {
     camera_times_secs: Vec<f64>,
     /// Cumulative ground-truth path length at each sample (m).
     cumulative_m: Vec<f64>,
+    /// Whether the windows' inputs are z-scored (see
+    /// [`Traverse::with_standardized_inputs`]).
+    inputs_standardized: bool,
 }
 
 /// Stride over which the path length is measured (s): summing sample-to-
@@ -150,7 +153,22 @@ impl Traverse {
             windows,
             camera_times_secs,
             cumulative_m,
+            inputs_standardized: false,
         })
+    }
+
+    /// The same traverse, its window inputs marked as z-scored with the
+    /// training rows' statistics: an online learner then hands its
+    /// regressor rows whose inputs are not z-scored again.
+    #[must_use]
+    pub fn with_standardized_inputs(mut self, standardized: bool) -> Self {
+        self.inputs_standardized = standardized;
+        self
+    }
+
+    /// Whether the window inputs are z-scored.
+    pub fn inputs_standardized(&self) -> bool {
+        self.inputs_standardized
     }
 
     /// The traverse's name.

@@ -49,7 +49,9 @@ pub struct ScaledTraining {
 }
 
 impl ScaledTraining {
-    /// Checks `data` (non-empty, finite) and z-scores it when `standardize`.
+    /// Checks `data` (non-empty, finite) and z-scores it when `standardize`
+    /// (the targets, and the inputs unless
+    /// [`ResidualDataset::inputs_standardized`]).
     ///
     /// # Errors
     /// [`RegressorError::InvalidData`] or a standardisation error.
@@ -72,12 +74,20 @@ impl ScaledTraining {
                 y: data.targets.clone(),
             });
         }
-        let si = Standardizer::fit(&data.inputs)?;
+        // Inputs an experiment z-scored already are not z-scored again.
+        let si = if data.inputs_standardized {
+            None
+        } else {
+            Some(Standardizer::fit(&data.inputs)?)
+        };
         let so = Standardizer::fit(&data.targets)?;
         Ok(Self {
-            x: si.transform(&data.inputs)?,
+            x: match &si {
+                Some(si) => si.transform(&data.inputs)?,
+                None => data.inputs.clone(),
+            },
             y: so.transform(&data.targets)?,
-            input_scaler: Some(si),
+            input_scaler: si,
             output_scaler: Some(so),
         })
     }
@@ -174,3 +184,26 @@ macro_rules! gp_residual_regressor {
     };
 }
 pub(crate) use gp_residual_regressor;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inputs_an_experiment_standardised_are_not_scaled_again() -> Result<(), RegressorError> {
+        let x =
+            SampleMatrix::from_row_major(4, 2, vec![1.0, 10.0, 2.0, 30.0, 4.0, 20.0, 5.0, 0.0])?;
+        let y = SampleMatrix::from_row_major(4, 1, vec![0.1, 0.3, 0.2, 0.6])?;
+        let names = |p: &str, n: usize| (0..n).map(|i| format!("{p}{i}")).collect();
+        let data = ResidualDataset::new(x.clone(), y, names("x", 2), names("y", 1))?;
+        let raw = ScaledTraining::new(&data, true)?;
+        assert!(raw.input_scaler.is_some());
+        assert!(raw.x.column(0).iter().sum::<f64>().abs() < 1e-12);
+        let marked = ScaledTraining::new(&data.with_standardized_inputs(true), true)?;
+        assert!(marked.input_scaler.is_none());
+        assert_eq!(marked.x, x);
+        assert_eq!(marked.y, raw.y);
+        assert!(marked.output_scaler.is_some());
+        Ok(())
+    }
+}

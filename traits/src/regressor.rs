@@ -17,6 +17,12 @@ pub struct ResidualDataset {
     pub input_names: Vec<String>,
     /// Names of the `o` target columns.
     pub target_names: Vec<String>,
+    /// Whether `inputs` are already z-scored (an experiment z-scores every
+    /// regressor's inputs once, with a [`Standardizer`](crate::Standardizer)
+    /// fitted on its training rows): a regressor that z-scores its inputs
+    /// leaves these as they are, so the standardisation is done once.
+    #[serde(default)]
+    pub inputs_standardized: bool,
 }
 
 impl ResidualDataset {
@@ -49,7 +55,16 @@ impl ResidualDataset {
             targets,
             input_names,
             target_names,
+            inputs_standardized: false,
         })
+    }
+
+    /// The same rows, marked as having z-scored inputs
+    /// ([`ResidualDataset::inputs_standardized`]).
+    #[must_use]
+    pub fn with_standardized_inputs(mut self, standardized: bool) -> Self {
+        self.inputs_standardized = standardized;
+        self
     }
 
     /// Number of samples.
@@ -69,6 +84,7 @@ impl ResidualDataset {
             targets: self.targets.select_rows(indices),
             input_names: self.input_names.clone(),
             target_names: self.target_names.clone(),
+            inputs_standardized: self.inputs_standardized,
         }
     }
 }

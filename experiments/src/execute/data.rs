@@ -236,9 +236,9 @@ pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer
         )));
     }
     let scaler = Standardizer::fit(&data.train.inputs)?;
-    let mut train = data.train.clone();
+    let mut train = data.train.clone().with_standardized_inputs(true);
     train.inputs = scaler.transform(&data.train.inputs)?;
-    let mut test = data.test.clone();
+    let mut test = data.test.clone().with_standardized_inputs(true);
     test.inputs = scaler.transform(&data.test.inputs)?;
     Ok((ModelRows { train, test }, scaler))
 }

@@ -101,8 +101,9 @@ pub struct ExperimentResults {
     pub window_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>>,
 }
 
-/// The rows the regressors see: inputs standardised with the training
-/// statistics, targets in physical units.
+/// The rows the regressors see: inputs standardised once, here, with the
+/// training statistics (and marked so, so no regressor z-scores them
+/// again), targets in physical units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelRows {
     /// Training rows.

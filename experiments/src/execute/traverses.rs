@@ -55,7 +55,8 @@ pub fn build_traverse(
         steps.iter().map(|s| s.twist).collect(),
         windows,
         log.camera_times_secs.clone(),
-    )?)
+    )?
+    .with_standardized_inputs(true))
 }
 
 /// A trained regressor's predictions on every window of a traverse.

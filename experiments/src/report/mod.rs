@@ -7,6 +7,7 @@
 
 mod aggregate;
 pub mod bench;
+pub mod controls;
 pub mod files;
 pub mod plots;
 pub mod run;

@@ -9,6 +9,7 @@ use gpodo_frontends::scheme::SchemeResult;
 use crate::config::DatasetSpec;
 use crate::execute::calibration::ResidualStatistics;
 use crate::execute::results::{ExperimentResults, RegressorResult};
+use crate::report::controls::controls_section;
 use crate::report::table::{Align, Table};
 
 fn mm(v: f64) -> String {
@@ -40,6 +41,7 @@ pub fn markdown(r: &ExperimentResults) -> String {
     runs_section(&mut s, r);
     table_one(&mut s, r);
     table_two(&mut s, r);
+    controls_section(&mut s, r);
     hyperparameter_section(&mut s, r);
     start_section(&mut s, r);
     dead_reckoning_section(&mut s, r);
