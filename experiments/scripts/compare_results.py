@@ -52,7 +52,10 @@ def normalised(path):
     if path.suffix == ".json":
         return scrub(json.loads(path.read_text()))
     if path.suffix == ".jsonl":
-        return [scrub(json.loads(l)) for l in path.read_text().splitlines() if l]
+        # Parallel runs append their records in the order they finish:
+        # compare them by key.
+        records = [scrub(json.loads(l)) for l in path.read_text().splitlines() if l]
+        return sorted(records, key=lambda r: json.dumps(r.get("key"), sort_keys=True))
     if path.suffix == ".md":
         return markdown(path.read_text())
     return path.read_bytes()

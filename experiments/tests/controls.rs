@@ -19,7 +19,7 @@ fn paper() -> ExperimentConfig {
 
 /// A scheme's back end: its resolved tracking prior and its residual
 /// source (the trained regressor's spec, or the online learner's).
-fn back_end(config: &ExperimentConfig, s: &SchemeSpec) -> (MotionPrior, String) {
+fn back_end_of(config: &ExperimentConfig, s: &SchemeSpec) -> (MotionPrior, String) {
     let prior = s.motion_prior.unwrap_or(config.frontend.motion_prior);
     let source = match &s.online {
         Some(online) => format!(
@@ -62,7 +62,7 @@ fn every_gated_scheme_has_fixed_rate_and_zero_residual_controls() {
         let rates: Vec<f64> = config
             .schemes
             .iter()
-            .filter(|f| back_end(&config, f) == back_end(&config, s))
+            .filter(|f| back_end_of(&config, f) == back_end_of(&config, s))
             .filter_map(fps)
             .collect();
         for want in [2.5, 1.0, 0.5] {
@@ -75,14 +75,86 @@ fn every_gated_scheme_has_fixed_rate_and_zero_residual_controls() {
         if uses_zero(&config, s) {
             continue;
         }
-        let prior = back_end(&config, s).0;
+        let prior = back_end_of(&config, s).0;
         let control = config.schemes.iter().find(|c| {
-            uses_zero(&config, c) && c.selector == s.selector && back_end(&config, c).0 == prior
+            uses_zero(&config, c) && c.selector == s.selector && back_end_of(&config, c).0 == prior
         });
         assert!(
             control.is_some(),
             "`{}`: no row with its selector and prior on zero residuals",
             s.label
         );
+    }
+}
+
+/// The curves of `table2-curves.yaml`: every curve is one back end with
+/// one knob varied, every gated curve has a fixed-rate curve of its back
+/// end reaching 2.5 fps (the reference of table (a)), every gated policy on
+/// the GP has the same policies on zero residuals, and all runs share one
+/// configuration but the seed.
+#[test]
+fn the_curves_file_pairs_each_policy_with_its_controls() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("table2-curves.yaml");
+    let plan = match gpodo_experiments::plan::load_plan(&path) {
+        Ok(p) => p,
+        Err(e) => panic!("{e}"),
+    };
+    assert!(plan.runs.len() >= 20, "{} seeds", plan.runs.len());
+    let config = &plan.runs[0].config;
+    for run in &plan.runs {
+        let reseeded = run.config.clone().with_seed(0);
+        assert_eq!(reseeded, config.clone().with_seed(0), "{}", run.key);
+    }
+    let labels = config.regressor_labels();
+    let prior = config.frontend.motion_prior;
+    let mut curves: Vec<(&str, Vec<&SchemeSpec>)> = Vec::new();
+    for s in &config.schemes {
+        let name = s
+            .curve
+            .as_deref()
+            .unwrap_or_else(|| panic!("`{}` is on no curve", s.label));
+        match curves.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, v)) => v.push(s),
+            None => curves.push((name, vec![s])),
+        }
+    }
+    assert!(curves.len() >= 8, "{} curves", curves.len());
+    for (name, schemes) in &curves {
+        assert!(schemes.len() >= 4, "`{name}`: {} points", schemes.len());
+        let back_end = schemes[0].back_end(prior, &labels);
+        for s in schemes {
+            assert_eq!(s.back_end(prior, &labels), back_end, "`{}`", s.label);
+            assert_eq!(back_end_of(config, s), back_end_of(config, schemes[0]));
+        }
+        let fixed: Vec<f64> = config
+            .schemes
+            .iter()
+            .filter(|f| f.back_end(prior, &labels) == back_end)
+            .filter_map(fps)
+            .collect();
+        assert!(
+            fixed.contains(&2.5),
+            "`{name}`: no 2.5 fps with its back end"
+        );
+        let all_fixed = schemes.iter().all(|s| fps(s).is_some());
+        if all_fixed {
+            continue;
+        }
+        assert!(
+            fixed.len() >= 5 && fixed.iter().any(|f| *f <= 0.2),
+            "`{name}`: its back end's fixed rates {fixed:?} do not span 0.2–2.5 fps"
+        );
+        let on_gp = schemes
+            .iter()
+            .all(|s| s.online.is_none() && !uses_zero(config, s));
+        if on_gp {
+            for s in schemes {
+                let control = config
+                    .schemes
+                    .iter()
+                    .find(|c| uses_zero(config, c) && c.selector == s.selector);
+                assert!(control.is_some(), "`{}`: no zero-residual twin", s.label);
+            }
+        }
     }
 }

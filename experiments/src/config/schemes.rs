@@ -87,9 +87,37 @@ pub struct SchemeSpec {
     /// GP scheme gives the tracker the wheel odometry (§V-B).
     #[serde(default)]
     pub motion_prior: Option<MotionPrior>,
+    /// The frames-versus-error curve this scheme is a point of (the same
+    /// name on several schemes, each with another value of the policy's
+    /// knob); the sweep report draws and tabulates each curve over seeds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<String>,
 }
 
 impl SchemeSpec {
+    /// The scheme's back end, as the reports compare it: its tracking
+    /// prior (`default_prior` when the scheme sets none) and where its
+    /// residuals come from (a trained regressor's label from
+    /// `regressor_labels`, or the online regressor). Fixed-rate controls
+    /// and a gated scheme are comparable when their back ends are equal.
+    pub fn back_end(&self, default_prior: MotionPrior, regressor_labels: &[String]) -> String {
+        let prior = self.motion_prior.unwrap_or(default_prior);
+        let residuals = match &self.online {
+            Some(online) => format!("online {}", online.regressor.label()),
+            None => self
+                .regressor_index(regressor_labels)
+                .ok()
+                .and_then(|i| regressor_labels.get(i).cloned())
+                .unwrap_or_else(|| "unknown regressor".into()),
+        };
+        let prior = match prior {
+            MotionPrior::Odometry => "odometry",
+            MotionPrior::ConstantVelocity => "constant-velocity",
+            MotionPrior::None => "no",
+        };
+        format!("{residuals}, {prior} prior")
+    }
+
     /// The index of the scheme's trained regressor among `labels`.
     ///
     /// # Errors

@@ -7,7 +7,11 @@
 
 mod aggregate;
 pub mod bench;
+pub mod bootstrap;
 pub mod controls;
+pub mod curve_plot;
+pub mod curves;
+pub mod curves_section;
 pub mod files;
 pub mod plots;
 pub mod run;

@@ -14,6 +14,7 @@ use crate::execute::records::{RecordError, RunRecord, read_records, record_files
 use crate::output::write_atomically;
 use crate::plan::PlanFile;
 use crate::report::aggregate::{ablations, table_one, table_two, tradeoff_svg};
+use crate::report::curves_section::curves_section;
 use crate::report::table::Table;
 
 pub use crate::report::aggregate::Stat;
@@ -263,6 +264,19 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
                 s,
                 "Frames processed against trajectory RMSE: `plots/tradeoff.svg`.\n"
             );
+        }
+    }
+    let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
+    if let Some(section) = curves_section(records, bootstrap_seed) {
+        s.push_str(&section.markdown);
+        for (file, table) in &section.tables {
+            write_table(file, table)?;
+        }
+        let plots = dir.join("plots");
+        std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
+        for (file, svg) in &section.figures {
+            let path = plots.join(file);
+            write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
         }
     }
     for (i, (dim, table)) in ablations(records, merged.plan.as_ref())

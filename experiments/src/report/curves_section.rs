@@ -1,0 +1,426 @@
+//! The "Frames-versus-error curves" section of a sweep report: the points
+//! of every curve over seeds, table (a) (frames to come within 10 % of the
+//! same back end's 2.5 fps RMSE), table (b) (RMSE at the paper's budgets,
+//! paired with fixed rate at equal frames), the per-seed pairs as CSV, and
+//! the figure.
+
+use std::fmt::Write as _;
+
+use crate::execute::records::RunRecord;
+use crate::report::bootstrap::{Interval, RESAMPLES};
+use crate::report::curve_plot::curves_svg;
+use crate::report::curves::{
+    BUDGETS, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting, frames_to_reach,
+    summarise,
+};
+use crate::report::table::{Align, Table};
+
+/// What the section adds to a sweep report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurvesSection {
+    /// The Markdown.
+    pub markdown: String,
+    /// Tables to write under `tables/` (file name, table with CSV twin).
+    pub tables: Vec<(String, Table)>,
+    /// Figures to write under `plots/` (file name, SVG).
+    pub figures: Vec<(String, String)>,
+}
+
+fn interval(i: &Interval, digits: usize) -> String {
+    if i.low.is_finite() && i.high.is_finite() {
+        format!(
+            "{:.*} [{:.*}, {:.*}]",
+            digits, i.estimate, digits, i.low, digits, i.high
+        )
+    } else {
+        format!("{:.*}", digits, i.estimate)
+    }
+}
+
+/// Fewest seeds for a verdict on a paired difference.
+const MIN_SEEDS_FOR_VERDICT: usize = 5;
+
+fn verdict(d: &Interval, seeds: usize) -> &'static str {
+    if seeds < MIN_SEEDS_FOR_VERDICT {
+        "too few seeds"
+    } else if d.high < 0.0 {
+        "lower, 95 %"
+    } else if d.low > 0.0 {
+        "higher, 95 %"
+    } else {
+        "not resolved"
+    }
+}
+
+/// The Markdown cell and CSV cells of a table (a) outcome.
+fn reach_cells(found: FramesToReach) -> (String, Vec<String>) {
+    match found {
+        FramesToReach::Crosses(i) => (
+            if i.defined < 1.0 {
+                format!(
+                    "{} (reached in {:.0} % of resamples)",
+                    interval(&i, 0),
+                    100.0 * i.defined
+                )
+            } else {
+                interval(&i, 0)
+            },
+            vec![
+                "crosses".to_string(),
+                i.estimate.to_string(),
+                i.low.to_string(),
+                i.high.to_string(),
+                i.defined.to_string(),
+            ],
+        ),
+        FramesToReach::AtMost(f) => (
+            format!("≤ {f:.0} (its fewest)"),
+            vec![
+                "at_most".into(),
+                f.to_string(),
+                String::new(),
+                String::new(),
+                String::new(),
+            ],
+        ),
+        FramesToReach::Never { best_ratio, frames } => (
+            format!("never (best {best_ratio:.2}× at {frames:.0} frames)"),
+            vec![
+                "never".into(),
+                frames.to_string(),
+                String::new(),
+                String::new(),
+                best_ratio.to_string(),
+            ],
+        ),
+    }
+}
+
+/// The section over `records`, `None` when no scheme names a curve.
+/// `seed` seeds every bootstrap.
+pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection> {
+    let groups = by_setting(records);
+    let many = groups.len() > 1;
+    let mut out = CurvesSection {
+        markdown: String::new(),
+        tables: Vec::new(),
+        figures: Vec::new(),
+    };
+    for (g, (setting, runs)) in groups.iter().enumerate() {
+        let Some(curves) = Curves::of(runs) else {
+            continue;
+        };
+        let suffix = if many { format!("_{g}") } else { String::new() };
+        let s = &mut out.markdown;
+        let _ = writeln!(
+            s,
+            "## Frames-versus-error curves{}\n\nEach curve is one policy with one knob varied; every point is a scheme run on all {} seeds ({:?}), all schemes sharing each seed's data and tracker streams. Mean over seeds with a 95 % percentile-bootstrap interval ({RESAMPLES} resamples of seeds). Figure: `plots/curves{suffix}.svg` (RMSE against frames and against compute).\n",
+            if many {
+                format!(" (`{setting}`)")
+            } else {
+                String::new()
+            },
+            curves.seeds.len(),
+            curves.seeds
+        );
+        let mut points = Table::new(&[
+            "curve",
+            "scheme",
+            "frames",
+            "compute [s]",
+            "RMSE [m] (95 % CI)",
+        ])
+        .align(&[1], Align::Left)
+        .with_csv(&[
+            "curve",
+            "back_end",
+            "scheme",
+            "frames_mean",
+            "compute_mean_s",
+            "rmse_mean_m",
+            "rmse_low_m",
+            "rmse_high_m",
+        ]);
+        let summaries: Vec<Vec<PointSummary>> =
+            curves.curves.iter().map(|c| summarise(c, seed)).collect();
+        for (c, summary) in curves.curves.iter().zip(&summaries) {
+            for p in summary {
+                points.push(vec![
+                    c.name.clone(),
+                    p.label.clone(),
+                    format!("{:.0}", p.frames),
+                    format!("{:.1}", p.compute),
+                    interval(&p.rmse, 3),
+                ]);
+                points.push_csv(vec![
+                    c.name.clone(),
+                    c.back_end.clone(),
+                    p.label.clone(),
+                    p.frames.to_string(),
+                    p.compute.to_string(),
+                    p.rmse.estimate.to_string(),
+                    p.rmse.low.to_string(),
+                    p.rmse.high.to_string(),
+                ]);
+            }
+        }
+        let baseline = curves.baseline.as_ref();
+        let baseline_name =
+            baseline.map_or("the first scheme".to_string(), |(l, _)| format!("`{l}`"));
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let mut reach = Table::new(&[
+            "curve".to_string(),
+            "back end".to_string(),
+            "2.5 fps RMSE of the back end [m]".to_string(),
+            "frames to within 10 % of it (95 % CI)".to_string(),
+            format!(
+                "frames to within 10 % of {baseline_name} ({:.3} m)",
+                baseline.map_or(f64::NAN, |(_, r)| mean(r))
+            ),
+        ])
+        .align(&[1], Align::Left)
+        .with_csv(&[
+            "curve",
+            "back_end",
+            "reference",
+            "reference_rmse_m",
+            "outcome",
+            "frames",
+            "frames_low",
+            "frames_high",
+            "share_of_resamples_reaching_or_best_ratio",
+        ]);
+        for c in &curves.curves {
+            let own = c
+                .reference
+                .as_ref()
+                .map(|r| (r, reach_cells(frames_to_reach(c, r, seed))));
+            let paper = baseline.map(|(_, r)| reach_cells(frames_to_reach(c, r, seed)));
+            reach.push(vec![
+                c.name.clone(),
+                c.back_end.clone(),
+                own.as_ref()
+                    .map_or("–".into(), |(r, _)| format!("{:.3}", mean(r))),
+                own.as_ref()
+                    .map_or("–".into(), |(_, (cell, _))| cell.clone()),
+                paper.as_ref().map_or("–".into(), |(cell, _)| cell.clone()),
+            ]);
+            let mut rows = Vec::new();
+            if let Some((r, (_, csv))) = &own {
+                rows.push(("back end 2.5 fps".to_string(), mean(r), csv.clone()));
+            }
+            if let (Some((label, r)), Some((_, csv))) = (baseline, &paper) {
+                rows.push((label.clone(), mean(r), csv.clone()));
+            }
+            for (reference, rmse, csv) in rows {
+                let mut row = vec![
+                    c.name.clone(),
+                    c.back_end.clone(),
+                    reference,
+                    rmse.to_string(),
+                ];
+                row.extend(csv);
+                reach.push_csv(row);
+            }
+        }
+        let mut budget = Table::new(&[
+            "curve",
+            "frames",
+            "seeds in range",
+            "RMSE [m] (95 % CI)",
+            "fixed rate, same back end [m]",
+            "Δ RMSE [m] (95 % CI)",
+            "gating vs fixed rate",
+        ])
+        .align(&[6], Align::Left)
+        .with_csv(&[
+            "curve",
+            "budget_frames",
+            "seeds",
+            "rmse_mean_m",
+            "rmse_low_m",
+            "rmse_high_m",
+            "fixed_mean_m",
+            "difference_mean_m",
+            "difference_low_m",
+            "difference_high_m",
+        ]);
+        let mut paired = Table::new(&["curve"]).with_csv(&[
+            "curve",
+            "against",
+            "budget_frames",
+            "seed",
+            "rmse_m",
+            "against_rmse_m",
+            "difference_m",
+        ]);
+        for c in &curves.curves {
+            let fixed = if c.fixed_rate {
+                None
+            } else {
+                curves.fixed_rate_of(&c.back_end)
+            };
+            if !c.fixed_rate && fixed.is_none() {
+                continue;
+            }
+            for b in BUDGETS {
+                let r = at_budget(c, fixed, &curves.seeds, b, seed);
+                let Some(mean) = r.rmse_mean else { continue };
+                let fixed_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
+                budget.push(vec![
+                    c.name.clone(),
+                    format!("{b:.0}"),
+                    format!("{}/{}", r.seeds.len(), curves.seeds.len()),
+                    interval(&mean, 3),
+                    format!("{fixed_mean:.3}"),
+                    r.difference
+                        .as_ref()
+                        .map_or("– (is the fixed rate)".into(), |d| {
+                            format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
+                        }),
+                    r.difference
+                        .as_ref()
+                        .map_or("–", |d| verdict(d, r.seeds.len()))
+                        .to_string(),
+                ]);
+                let d = r.difference.unwrap_or(Interval {
+                    estimate: 0.0,
+                    low: 0.0,
+                    high: 0.0,
+                    defined: 1.0,
+                });
+                budget.push_csv(vec![
+                    c.name.clone(),
+                    b.to_string(),
+                    r.seeds.len().to_string(),
+                    mean.estimate.to_string(),
+                    mean.low.to_string(),
+                    mean.high.to_string(),
+                    fixed_mean.to_string(),
+                    d.estimate.to_string(),
+                    d.low.to_string(),
+                    d.high.to_string(),
+                ]);
+                for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
+                    paired.push_csv(vec![
+                        c.name.clone(),
+                        fixed.map_or(String::new(), |f| f.name.clone()),
+                        b.to_string(),
+                        s.to_string(),
+                        rm.to_string(),
+                        f.to_string(),
+                        (rm - f).to_string(),
+                    ]);
+                }
+            }
+        }
+        let mut twin = Table::new(&[
+            "curve",
+            "zero-residual twin",
+            "frames",
+            "seeds in range",
+            "RMSE [m]",
+            "twin RMSE [m]",
+            "Δ RMSE [m] (95 % CI)",
+            "regressor vs zero residuals",
+        ])
+        .align(&[1, 7], Align::Left)
+        .with_csv(&[
+            "curve",
+            "twin",
+            "budget_frames",
+            "seeds",
+            "rmse_mean_m",
+            "twin_mean_m",
+            "difference_mean_m",
+            "difference_low_m",
+            "difference_high_m",
+        ]);
+        for c in &curves.curves {
+            let Some(z) = curves.zero_twin_of(c) else {
+                continue;
+            };
+            for b in BUDGETS {
+                let r = at_budget(c, Some(z), &curves.seeds, b, seed);
+                let (Some(m), Some(d)) = (r.rmse_mean, r.difference) else {
+                    continue;
+                };
+                let twin_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
+                twin.push(vec![
+                    c.name.clone(),
+                    z.name.clone(),
+                    format!("{b:.0}"),
+                    format!("{}/{}", r.seeds.len(), curves.seeds.len()),
+                    format!("{:.3}", m.estimate),
+                    format!("{twin_mean:.3}"),
+                    format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high),
+                    verdict(&d, r.seeds.len()).to_string(),
+                ]);
+                twin.push_csv(vec![
+                    c.name.clone(),
+                    z.name.clone(),
+                    b.to_string(),
+                    r.seeds.len().to_string(),
+                    m.estimate.to_string(),
+                    twin_mean.to_string(),
+                    d.estimate.to_string(),
+                    d.low.to_string(),
+                    d.high.to_string(),
+                ]);
+                for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
+                    paired.push_csv(vec![
+                        c.name.clone(),
+                        z.name.clone(),
+                        b.to_string(),
+                        s.to_string(),
+                        rm.to_string(),
+                        f.to_string(),
+                        (rm - f).to_string(),
+                    ]);
+                }
+            }
+        }
+        let _ = writeln!(s, "Points of every curve:\n\n{}", points.markdown());
+        let _ = writeln!(
+            s,
+            "(a) Frames each curve needs to come within {:.0} % of the 2.5 fps RMSE of its own back end, and of the experiment's first scheme (the paper's baseline): the mean over seeds of the per-seed RMSE ratio, its first crossing, linear in log frames between knob values; \"never\" gives the best mean ratio reached:\n\n{}",
+            100.0 * (WITHIN - 1.0),
+            reach.markdown()
+        );
+        let _ = writeln!(
+            s,
+            "(b) RMSE at the paper's budgets (each seed's curve interpolated in log frames, never extrapolated), paired per seed with the fixed-rate curve of the same back end at the same frames (Δ < 0: the policy is better than fixed rate at equal frames). Per-seed pairs: `tables/curves_paired{suffix}.csv`.\n\n{}",
+            budget.markdown()
+        );
+        if !twin.is_empty() {
+            let _ = writeln!(
+                s,
+                "(c) What the regressor contributes: each curve against the same policy with the same knob values on zero residuals (the parametric model alone) and the same prior, paired per seed at the same frames (Δ < 0: the regressor helps).\n\n{}",
+                twin.markdown()
+            );
+        }
+        out.tables
+            .push((format!("curves_points{suffix}.csv"), points));
+        out.tables
+            .push((format!("curves_regressor_effect{suffix}.csv"), twin));
+        out.tables
+            .push((format!("curves_frames_to_reach{suffix}.csv"), reach));
+        out.tables
+            .push((format!("curves_at_budget{suffix}.csv"), budget));
+        out.tables
+            .push((format!("curves_paired{suffix}.csv"), paired));
+        let drawn: Vec<(&str, &[PointSummary])> = curves
+            .curves
+            .iter()
+            .zip(&summaries)
+            .map(|(c, s)| (c.name.as_str(), s.as_slice()))
+            .collect();
+        match curves_svg(&drawn) {
+            Ok(svg) => out.figures.push((format!("curves{suffix}.svg"), svg)),
+            Err(e) => {
+                let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");
+            }
+        }
+    }
+    (!out.markdown.is_empty()).then_some(out)
+}
