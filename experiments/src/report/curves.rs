@@ -32,7 +32,7 @@ pub const BUDGETS: [f64; 2] = [500.0, 1000.0];
 pub struct KnobPoint {
     /// The scheme's label.
     pub label: String,
-    /// Frames per seed (in [`Curve::seeds`] order).
+    /// Frames per seed (in [`Curves::seeds`] order).
     pub frames: Vec<f64>,
     /// RMSE per seed (m).
     pub rmse: Vec<f64>,
