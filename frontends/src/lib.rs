@@ -20,6 +20,7 @@ pub mod backend;
 mod error;
 pub mod fixed_rate;
 pub mod gating;
+pub mod hindsight;
 pub mod metrics;
 pub mod odometry;
 pub mod online;

@@ -32,12 +32,15 @@
 //! (visual odometry, keyframes, back end) with [`crate::gating::Planned`].
 //! The model assumes a processed frame is localised exactly, so the oracle
 //! is the best plan for a surrogate of the trajectory error, not a proof
-//! that no policy can do better in the full pipeline.
+//! that no policy can do better in the full pipeline. With `search:` the
+//! plan is refined over the real tracker by [`crate::hindsight`], which is
+//! never worse than the scheme it is matched to.
 
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
 use crate::FrontendError;
+use crate::hindsight::HindsightSearchParams;
 use crate::params::MotionPrior;
 use crate::prediction::ResidualPrediction;
 use crate::traverse::Traverse;
@@ -67,6 +70,11 @@ pub struct OracleParams {
     /// Longest true path between consecutive processed frames (m; default
     /// 0.3, as the turn guard; null: none).
     pub max_distance_m: Option<f64>,
+    /// Refine the plan by a hindsight search over the real tracker
+    /// ([`crate::hindsight`]), starting from the better of the surrogate
+    /// plan and the matched scheme's frames; omitted, the surrogate plan is
+    /// run as it is.
+    pub search: Option<HindsightSearchParams>,
 }
 
 impl Default for OracleParams {
@@ -79,6 +87,7 @@ impl Default for OracleParams {
             min_track_probability: 0.99,
             max_rotation_rad: Some(0.15),
             max_distance_m: Some(0.3),
+            search: None,
         }
     }
 }

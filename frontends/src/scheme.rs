@@ -8,10 +8,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use gpodo_traits::{FrameSelector, ResidualRegressor};
+use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
 use crate::gating::Planned;
+use crate::hindsight::{SearchSummary, search_frames};
 use crate::online::{OnlineLearner, OnlineMode};
 use crate::oracle::plan_frames;
 use crate::params::{FrontendParams, MotionPrior, VoSpec};
@@ -55,6 +56,9 @@ pub struct OraclePlanSummary {
     pub cost: f64,
     /// Candidate frames considered.
     pub candidates: usize,
+    /// The hindsight search over the real tracker, when configured.
+    #[serde(default)]
+    pub search: Option<SearchSummary>,
 }
 
 /// Where a scheme's residual predictions come from on one traverse.
@@ -97,6 +101,9 @@ pub struct SchemeContext<'a> {
     /// For an oracle matched to another scheme (`same_as`): that scheme's
     /// frames on this traverse.
     pub matched_frames: Option<usize>,
+    /// And the times of those frames (s), where the hindsight search
+    /// starts.
+    pub matched_times: Option<&'a [f64]>,
 }
 
 impl VoSpec {
@@ -178,8 +185,22 @@ pub fn run_scheme(
 ) -> Result<SchemeResult, FrontendError> {
     let start = Instant::now();
     let motion_prior = scheme.motion_prior.unwrap_or(ctx.params.motion_prior);
-    let (mut selector, oracle): (Box<dyn FrameSelector>, _) = match scheme.selector.oracle() {
-        None => (scheme.selector.build()?, None),
+    let mut frontend = ctx.params.clone();
+    frontend.motion_prior = motion_prior;
+    let (run, residuals, oracle) = match scheme.selector.oracle() {
+        None => {
+            let mut selector = scheme.selector.build()?;
+            let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
+            let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
+            let run = run_frontend(
+                traverse,
+                &frontend,
+                selector.as_mut(),
+                source.as_mut(),
+                vo.as_mut(),
+            )?;
+            (run, residuals, None)
+        }
         Some(params) => {
             let budget = match (&params.frames, &params.same_as) {
                 (Some(n), _) => *n,
@@ -191,7 +212,7 @@ pub fn run_scheme(
                 })?,
                 (None, None) => 0,
             };
-            let SchemeResiduals::Trained { predictions, .. } = &residuals else {
+            let SchemeResiduals::Trained { label, predictions } = residuals else {
                 return Err(oracle_error(
                     "a trained regressor's predictions (an oracle cannot learn online)".into(),
                 ));
@@ -199,35 +220,41 @@ pub fn run_scheme(
             let vo = ctx.params.vo.build(traverse, ctx.base)?;
             let plan = plan_frames(
                 traverse,
-                predictions,
+                &predictions,
                 vo.as_ref(),
                 motion_prior,
                 params,
                 budget,
             )?;
-            let summary = OraclePlanSummary {
+            let evaluate = |times: &[f64]| {
+                let mut selector = Planned::new("oracle", times.to_vec());
+                let mut source = Precomputed::new(label.clone(), predictions.clone());
+                let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
+                run_frontend(traverse, &frontend, &mut selector, &mut source, vo.as_mut())
+            };
+            let mut summary = OraclePlanSummary {
                 budget,
                 planned: plan.frames.len(),
                 cost: plan.cost,
                 candidates: plan.candidates,
+                search: None,
             };
-            (
-                Box::new(Planned::new("oracle", plan.times_secs)),
-                Some(summary),
-            )
+            let run = match &params.search {
+                None => evaluate(&plan.times_secs)?,
+                Some(search) => {
+                    let mut starts = Vec::new();
+                    if let Some(times) = ctx.matched_times {
+                        starts.push(("matched scheme".to_string(), times.to_vec()));
+                    }
+                    starts.push(("surrogate plan".to_string(), plan.times_secs.clone()));
+                    let found = search_frames(traverse, starts, search, evaluate)?;
+                    summary.search = Some(found.summary);
+                    found.run
+                }
+            };
+            (run, label, Some(summary))
         }
     };
-    let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
-    let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
-    let mut frontend = ctx.params.clone();
-    frontend.motion_prior = motion_prior;
-    let run = run_frontend(
-        traverse,
-        &frontend,
-        selector.as_mut(),
-        source.as_mut(),
-        vo.as_mut(),
-    )?;
     tracing::info!(
         scheme = %scheme.label,
         traverse = traverse.name(),

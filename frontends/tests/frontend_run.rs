@@ -346,3 +346,86 @@ fn a_replayed_vo_log_drives_the_front_end_and_its_gaps_are_losses() {
     // wheels (0.004 m/s × 60 s = 0.24 m).
     assert!(run.metrics.final_error_m < 0.05, "{:?}", run.metrics);
 }
+
+#[test]
+fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
+    use gpodo_frontends::SelectorSpec;
+    use gpodo_frontends::hindsight::HindsightSearchParams;
+    use gpodo_frontends::scheme::{SchemeContext, SchemeResiduals, SchemeSpecRef, run_scheme};
+
+    let t = traverse(200.0, s_curve, Vector3::new(0.006, 0.0, 0.0), &[0.0]);
+    let predictions = vec![ResidualPrediction::uninformed(1e-4); t.windows().len()];
+    let residuals = || SchemeResiduals::Trained {
+        label: "zero".into(),
+        predictions: predictions.clone(),
+    };
+    let mut improved = 0;
+    for seed in [1, 2, 3] {
+        let p = params(SimulatedVoParams {
+            seed,
+            ..SimulatedVoParams::default()
+        });
+        let ctx = SchemeContext {
+            params: &p,
+            base: std::path::Path::new("."),
+            matched_frames: None,
+            matched_times: None,
+        };
+        for budget_m2 in [2e-5, 1e-4] {
+            let causal_spec = SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
+                budget_m2,
+                ..UncertaintyBudgetParams::default()
+            });
+            let causal = run_scheme(
+                &SchemeSpecRef {
+                    label: "causal",
+                    selector: &causal_spec,
+                    motion_prior: None,
+                },
+                &t,
+                residuals(),
+                &ctx,
+            )
+            .unwrap();
+            let times: Vec<f64> = causal.run.processed.iter().map(|f| f.time_secs).collect();
+            let oracle_spec = SelectorSpec::Oracle(OracleParams {
+                same_as: Some("causal".into()),
+                search: Some(HindsightSearchParams {
+                    evaluations: 12,
+                    seed: 0,
+                }),
+                ..OracleParams::default()
+            });
+            let oracle = run_scheme(
+                &SchemeSpecRef {
+                    label: "hindsight",
+                    selector: &oracle_spec,
+                    motion_prior: None,
+                },
+                &t,
+                residuals(),
+                &SchemeContext {
+                    matched_frames: Some(causal.run.frames),
+                    matched_times: Some(&times),
+                    ..ctx
+                },
+            )
+            .unwrap();
+            let search = oracle.oracle.and_then(|o| o.search).unwrap();
+            // Replaying the policy's frames reproduces its run exactly (same
+            // tracker streams), so the search starts no worse than it.
+            assert_eq!(search.start_rmse_m[0], causal.run.metrics.rmse_m);
+            assert_eq!(oracle.run.frames, causal.run.frames, "seed {seed}");
+            assert!(
+                oracle.run.metrics.rmse_m <= causal.run.metrics.rmse_m,
+                "seed {seed}, budget {budget_m2}: {} > {}",
+                oracle.run.metrics.rmse_m,
+                causal.run.metrics.rmse_m
+            );
+            assert_eq!(search.rmse_m, oracle.run.metrics.rmse_m);
+            improved += usize::from(oracle.run.metrics.rmse_m < causal.run.metrics.rmse_m);
+        }
+    }
+    // The search does find better schedules, not only keep the start.
+    assert!(improved >= 3, "improved on {improved} of 6");
+}

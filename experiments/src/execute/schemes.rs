@@ -69,19 +69,21 @@ impl SchemeInputs<'_> {
         done: &[SchemeResult],
     ) -> Result<SchemeResult, PipelineError> {
         let traverse = &self.traverses[t];
-        let matched_frames = scheme
+        let matched = scheme
             .selector
             .oracle()
             .and_then(|o| o.same_as.as_ref())
             .and_then(|other| {
                 done.iter()
                     .find(|r| &r.label == other && r.traverse == traverse.name())
-            })
-            .map(|r| r.run.frames);
+            });
+        let matched_times: Option<Vec<f64>> =
+            matched.map(|r| r.run.processed.iter().map(|p| p.time_secs).collect());
         let ctx = SchemeContext {
             params: &self.config.frontend,
             base: self.base,
-            matched_frames,
+            matched_frames: matched.map(|r| r.run.frames),
+            matched_times: matched_times.as_deref(),
         };
         let spec = SchemeSpecRef {
             label: &scheme.label,

@@ -9,7 +9,7 @@ use gpodo_frontends::scheme::SchemeResult;
 use crate::config::DatasetSpec;
 use crate::execute::calibration::ResidualStatistics;
 use crate::execute::results::{ExperimentResults, RegressorResult};
-use crate::report::controls::controls_section;
+use crate::report::controls::{controls_section, hindsight_section};
 use crate::report::table::{Align, Table};
 
 fn mm(v: f64) -> String {
@@ -42,6 +42,7 @@ pub fn markdown(r: &ExperimentResults) -> String {
     table_one(&mut s, r);
     table_two(&mut s, r);
     controls_section(&mut s, r);
+    hindsight_section(&mut s, r);
     hyperparameter_section(&mut s, r);
     start_section(&mut s, r);
     dead_reckoning_section(&mut s, r);
