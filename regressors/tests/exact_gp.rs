@@ -240,6 +240,8 @@ fn saved_state_reloads_to_identical_predictions() {
     gp.fit(&dataset(&x, &y)).unwrap();
     let json = serde_json::to_string(gp.state().unwrap()).unwrap();
     let state: ExactGpState = serde_json::from_str(&json).unwrap();
+    // Bit-exact: serde_json parses with correct rounding (float_roundtrip).
+    assert_eq!(&state, gp.state().unwrap());
     let reloaded = ExactGp::from_state(state).unwrap();
     let xs = sample_matrix(&inputs(&mut rng, 5, 3));
     let (a, b) = (

@@ -156,6 +156,76 @@ where
     }
 }
 
+impl ProjectedLbfgs {
+    /// A backtracking (Armijo) search from `x` along the L-BFGS direction,
+    /// or steepest descent on the free variables when that is not downhill
+    /// or there is no curvature yet: the accepted point, its cost and the
+    /// step, or `None` when no projected step lowers the objective.
+    fn line_search<O>(
+        &mut self,
+        problem: &mut Problem<O>,
+        x: &[f64],
+        f: f64,
+        g: &[f64],
+        free: &[bool],
+    ) -> Result<Option<(Vec<f64>, f64, Vec<f64>)>, ArgminError>
+    where
+        O: CostFunction<Param = Vec<f64>, Output = f64>,
+    {
+        let mut d = self.direction(g, free);
+        let mut slope: f64 = g.iter().zip(&d).map(|(g, d)| g * d).sum();
+        if slope.is_nan() || slope >= 0.0 {
+            // Not a descent direction: forget the curvature, go downhill.
+            self.pairs.clear();
+            d = g
+                .iter()
+                .zip(free)
+                .map(|(g, f)| if *f { -g } else { 0.0 })
+                .collect();
+            slope = g.iter().zip(&d).map(|(g, d)| g * d).sum();
+        }
+        // The first step (no curvature yet) is at most one unit long, as
+        // L-BFGS-B's.
+        let d_norm = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut alpha = if self.pairs.is_empty() && d_norm > 1.0 {
+            1.0 / d_norm
+        } else {
+            1.0
+        };
+        for _ in 0..MAX_BACKTRACKS {
+            let trial: Vec<f64> = self.project(
+                &x.iter()
+                    .zip(&d)
+                    .map(|(x, d)| x + alpha * d)
+                    .collect::<Vec<_>>(),
+            );
+            let step: Vec<f64> = trial.iter().zip(x).map(|(t, x)| t - x).collect();
+            let predicted: f64 = g.iter().zip(&step).map(|(g, s)| g * s).sum();
+            if step.iter().all(|s| *s == 0.0) || predicted.is_nan() || predicted >= 0.0 {
+                return Ok(None);
+            }
+            let f_trial = cost_or_infinity(problem, &trial)?;
+            if f_trial <= f + ARMIJO * predicted {
+                return Ok(Some((trial, f_trial, step)));
+            }
+            // Minimiser of the quadratic through f, the slope and f_trial,
+            // kept within [0.1, 0.5] of the current step.
+            let next = if f_trial.is_finite() {
+                let denominator = 2.0 * (f_trial - f - slope * alpha);
+                if denominator > 0.0 {
+                    -slope * alpha * alpha / denominator
+                } else {
+                    0.5 * alpha
+                }
+            } else {
+                0.1 * alpha
+            };
+            alpha = next.clamp(0.1 * alpha, 0.5 * alpha);
+        }
+        Ok(None)
+    }
+}
+
 impl<O> Solver<O, BoxState> for ProjectedLbfgs
 where
     O: CostFunction<Param = Vec<f64>, Output = f64>
@@ -192,57 +262,22 @@ where
             .ok_or_else(|| ArgminError::msg("projected L-BFGS lost its gradient"))?;
         let f = state.get_cost();
         let free = self.free(&x, &g);
-        let mut d = self.direction(&g, &free);
-        let mut slope: f64 = g.iter().zip(&d).map(|(g, d)| g * d).sum();
-        if slope.is_nan() || slope >= 0.0 {
-            // Not a descent direction: forget the curvature, go downhill.
-            self.pairs.clear();
-            d = g
-                .iter()
-                .zip(&free)
-                .map(|(g, f)| if *f { -g } else { 0.0 })
-                .collect();
-            slope = g.iter().zip(&d).map(|(g, d)| g * d).sum();
-        }
-        // The first step (no curvature yet) is at most one unit long, as
-        // L-BFGS-B's.
-        let d_norm = d.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let mut alpha = if self.pairs.is_empty() && d_norm > 1.0 {
-            1.0 / d_norm
-        } else {
-            1.0
-        };
+        // As L-BFGS-B: when no step along the quasi-Newton direction lowers
+        // the objective (its projection onto the box can turn it uphill),
+        // forget the curvature pairs and retry once along steepest descent.
         let mut accepted = None;
-        for _ in 0..MAX_BACKTRACKS {
-            let trial: Vec<f64> = self.project(
-                &x.iter()
-                    .zip(&d)
-                    .map(|(x, d)| x + alpha * d)
-                    .collect::<Vec<_>>(),
-            );
-            let step: Vec<f64> = trial.iter().zip(&x).map(|(t, x)| t - x).collect();
-            let predicted: f64 = g.iter().zip(&step).map(|(g, s)| g * s).sum();
-            if step.iter().all(|s| *s == 0.0) || predicted.is_nan() || predicted >= 0.0 {
-                break;
-            }
-            let f_trial = cost_or_infinity(problem, &trial)?;
-            if f_trial <= f + ARMIJO * predicted {
-                accepted = Some((trial, f_trial, step));
-                break;
-            }
-            // Minimiser of the quadratic through f, the slope and f_trial,
-            // kept within [0.1, 0.5] of the current step.
-            let next = if f_trial.is_finite() {
-                let denominator = 2.0 * (f_trial - f - slope * alpha);
-                if denominator > 0.0 {
-                    -slope * alpha * alpha / denominator
-                } else {
-                    0.5 * alpha
+        for attempt in 0..2 {
+            if attempt == 1 {
+                if self.pairs.is_empty() {
+                    break;
                 }
-            } else {
-                0.1 * alpha
-            };
-            alpha = next.clamp(0.1 * alpha, 0.5 * alpha);
+                tracing::debug!("line search failed; clearing the L-BFGS memory");
+                self.pairs.clear();
+            }
+            accepted = self.line_search(problem, &x, f, &g, &free)?;
+            if accepted.is_some() {
+                break;
+            }
         }
         let Some((x_new, f_new, s)) = accepted else {
             self.stopped = Some(TerminationReason::SolverExit(

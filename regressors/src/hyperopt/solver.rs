@@ -121,7 +121,14 @@ pub(super) fn run(
             if let Some(r) = reporter {
                 executor = executor.add_observer(r, ObserverMode::Always);
             }
-            executor.run().map(|r| r.state().get_iter())
+            executor.run().map(|r| {
+                tracing::debug!(
+                    iterations = r.state().get_iter(),
+                    reason = ?r.state().get_termination_reason(),
+                    "optimiser start finished"
+                );
+                r.state().get_iter()
+            })
         }
         Optimizer::ConjugateGradient => {
             let line_search = MoreThuenteLineSearch::new().with_c(1e-4, 0.1)?;
