@@ -156,6 +156,9 @@ where
     }
 }
 
+/// An accepted line-search step: the new point, its cost and the step.
+type AcceptedStep = (Vec<f64>, f64, Vec<f64>);
+
 impl ProjectedLbfgs {
     /// A backtracking (Armijo) search from `x` along the L-BFGS direction,
     /// or steepest descent on the free variables when that is not downhill
@@ -168,7 +171,7 @@ impl ProjectedLbfgs {
         f: f64,
         g: &[f64],
         free: &[bool],
-    ) -> Result<Option<(Vec<f64>, f64, Vec<f64>)>, ArgminError>
+    ) -> Result<Option<AcceptedStep>, ArgminError>
     where
         O: CostFunction<Param = Vec<f64>, Output = f64>,
     {
