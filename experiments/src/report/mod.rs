@@ -13,6 +13,7 @@ pub mod curve_plot;
 pub mod curves;
 pub mod curves_section;
 pub mod files;
+pub mod hindsight;
 pub mod plots;
 pub mod run;
 pub mod sweep;

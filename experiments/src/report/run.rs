@@ -9,7 +9,8 @@ use gpodo_frontends::scheme::SchemeResult;
 use crate::config::DatasetSpec;
 use crate::execute::calibration::ResidualStatistics;
 use crate::execute::results::{ExperimentResults, RegressorResult};
-use crate::report::controls::{controls_section, hindsight_section};
+use crate::report::controls::controls_section;
+use crate::report::hindsight::hindsight_section;
 use crate::report::table::{Align, Table};
 
 fn mm(v: f64) -> String {
