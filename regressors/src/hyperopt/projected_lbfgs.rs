@@ -508,4 +508,51 @@ mod tests {
         let (x, cost, _) = solve(Guarded, solver, vec![0.9, 0.0, 0.3, 0.7]);
         assert!(cost < 1e-12 && x.iter().all(|v| (v - 1.0).abs() < 1e-6));
     }
+
+    /// `x0 + x1`: a constant gradient (1, 1).
+    struct Plane;
+
+    impl CostFunction for Plane {
+        type Param = Vec<f64>;
+        type Output = f64;
+        fn cost(&self, x: &Vec<f64>) -> Result<f64, ArgminError> {
+            Ok(x[0] + x[1])
+        }
+    }
+
+    impl Gradient for Plane {
+        type Param = Vec<f64>;
+        type Gradient = Vec<f64>;
+        fn gradient(&self, _: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
+            Ok(vec![1.0, 1.0])
+        }
+    }
+
+    #[test]
+    fn an_uphill_projected_step_clears_the_memory_instead_of_stopping() {
+        // With the pair s = (−1, 1), y = (2, 3) the L-BFGS direction at
+        // g = (1, 1) is (−6/13, 4/13): downhill, but x0 sits 1e-9 above its
+        // bound, so the projected step is (−1e-9, 4/13), uphill at every
+        // step length the search tries. L-BFGS-B then forgets the pairs and
+        // steps along −g.
+        let mut solver = ProjectedLbfgs::new(vec![0.0, -10.0], vec![10.0, 10.0], 10, 1e-12, NEVER);
+        solver.pairs.push_back((vec![-1.0, 1.0], vec![2.0, 3.0]));
+        let d = solver.direction(&[1.0, 1.0], &[true, true]);
+        assert!(
+            (d[0] + 6.0 / 13.0).abs() < 1e-12 && (d[1] - 4.0 / 13.0).abs() < 1e-12,
+            "{d:?}"
+        );
+        let result = Executor::new(Plane, solver)
+            .configure(|s| s.param(vec![1e-9, 0.0]).max_iters(1))
+            .run()
+            .unwrap();
+        let state = result.state();
+        assert_eq!(
+            state.get_termination_reason(),
+            Some(&TerminationReason::MaxItersReached)
+        );
+        let x = state.get_best_param().unwrap();
+        assert_eq!(x[0], 0.0);
+        assert!(state.get_best_cost() < -0.7, "{}", state.get_best_cost());
+    }
 }
