@@ -49,9 +49,38 @@ pub enum RegressorError {
         /// What went wrong.
         detail: String,
     },
+    /// An external regressor's plugin failed: it crashed, hung, replied
+    /// with something that is not the protocol, or refused the request.
+    #[error(
+        "external regressor `{regressor}`, request `{request}`: {detail}{}",
+        stderr_block(stderr)
+    )]
+    Plugin {
+        /// The regressor's label.
+        regressor: String,
+        /// The request that failed (`hello`, `fit`, `predict`, `update`).
+        request: String,
+        /// What went wrong.
+        detail: String,
+        /// The plugin's last stderr lines.
+        stderr: Vec<String>,
+    },
     /// Standardising the data failed.
     #[error(transparent)]
     Standardize(#[from] gpodo_traits::Error),
+}
+
+/// The plugin's last stderr lines, indented under the message.
+fn stderr_block(lines: &[String]) -> String {
+    if lines.is_empty() {
+        return "; the plugin wrote nothing to stderr".into();
+    }
+    let mut out = String::from("; the plugin's last stderr lines:");
+    for line in lines {
+        out.push_str("\n  | ");
+        out.push_str(line);
+    }
+    out
 }
 
 impl From<RegressorError> for gpodo_traits::Error {

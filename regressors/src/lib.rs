@@ -12,6 +12,9 @@
 //!   learned inducing inputs);
 //! * [`ilgr::Ilgr`]: incremental local Gaussian regression (§VI; Meier,
 //!   Hennig & Schaal 2014), learning online one sample at a time;
+//! * [`external::ExternalRegressor`]: any model in any language, run as a
+//!   child process speaking a line-delimited JSON protocol
+//!   (`plugins/PROTOCOL.md`; a NumPy reference client in `plugins/python/`);
 //! * [`knn::Knn`]: k-nearest-neighbour regression, the worked example of
 //!   adding a regressor (`experiments/README.md`);
 //! * [`hyperopt`]: the optimiser both GPs learn their hyperparameters with
@@ -24,6 +27,7 @@
 pub mod dense;
 mod error;
 pub mod exact_gp;
+pub mod external;
 pub mod hyperopt;
 pub mod ilgr;
 pub mod kernels;
@@ -36,6 +40,7 @@ pub mod zero;
 
 pub use error::RegressorError;
 pub use exact_gp::{ExactGp, ExactGpParams};
+pub use external::{ExternalParams, ExternalRegressor};
 pub use ilgr::{Ilgr, IlgrParams};
 pub use kernels::{Kernel, KernelExpr};
 pub use knn::{Knn, KnnParams};

@@ -6,6 +6,7 @@ use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
 use crate::exact_gp::{ExactGp, ExactGpParams, OutputSharing};
+use crate::external::{ExternalParams, ExternalRegressor};
 use crate::ilgr::{Ilgr, IlgrParams};
 use crate::knn::{Knn, KnnParams};
 use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
@@ -31,6 +32,10 @@ pub enum RegressorSpec {
     /// k-nearest-neighbour regression (the worked example of adding a
     /// regressor).
     Knn(KnnParams),
+    /// A model in another language, run as a child process speaking the
+    /// protocol of `plugins/PROTOCOL.md`; its extra fields are the
+    /// plugin's `options`.
+    External(ExternalParams),
 }
 
 impl RegressorSpec {
@@ -80,6 +85,12 @@ impl RegressorSpec {
                 to_json(p),
                 to_json(&KnnParams::default()),
             ),
+            Self::External(p) => (
+                p.base_label(),
+                &["command", "label"][..],
+                to_json(p),
+                to_json(&ExternalParams::new(p.command.clone())),
+            ),
         };
         let mut changed = Vec::new();
         non_default_settings("", &params, &defaults, &mut changed);
@@ -113,6 +124,7 @@ impl RegressorSpec {
             Self::SparseGp(p) => p.check(),
             Self::Ilgr(p) => p.check(),
             Self::Knn(p) => p.check(),
+            Self::External(p) => p.check(),
         }
     }
 
@@ -128,6 +140,7 @@ impl RegressorSpec {
             Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
             Self::Ilgr(p) => Box::new(Ilgr::new(p.clone())?),
             Self::Knn(p) => Box::new(Knn::new(p.clone())?),
+            Self::External(p) => Box::new(ExternalRegressor::new(p.clone())?),
         })
     }
 }

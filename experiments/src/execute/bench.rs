@@ -18,6 +18,7 @@ use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::code_version;
 use crate::execute::data::prepare_model_rows;
+use crate::execute::fit::build_regressor;
 use crate::execute::results::{DatasetSummary, ModelRows};
 
 /// Latency statistics (µs).
@@ -160,10 +161,11 @@ fn curve_point(
 /// One prequential pass of a fresh learner over the training rows in order.
 fn online_pass(
     spec: &RegressorSpec,
+    base: &Path,
     rows: &ModelRows,
     every: usize,
 ) -> Result<OnlinePass, PipelineError> {
-    let mut model = spec.build()?;
+    let mut model = build_regressor(spec, base)?;
     let (mut steps, mut updates, mut curve) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..rows.train.len() {
         let x = rows.train.inputs.row(i);
@@ -224,7 +226,7 @@ pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults,
             source,
         };
         tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
-        let mut model = spec.build()?;
+        let mut model = build_regressor(spec, base)?;
         let fit = model.fit(&rows.train).map_err(wrap)?;
         let t = Instant::now();
         let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
@@ -233,7 +235,12 @@ pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults,
         let predict_latency =
             predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
         let online = if model.supports_online_update() {
-            Some(online_pass(spec, &rows, settings.learning_curve_every)?)
+            Some(online_pass(
+                spec,
+                base,
+                &rows,
+                settings.learning_curve_every,
+            )?)
         } else {
             None
         };

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use crate::config::{ExperimentConfig, SchemeSpec};
 use crate::error::PipelineError;
+use crate::execute::fit::build_regressor;
 
 /// Everything a scheme needs that is shared between schemes.
 pub struct SchemeInputs<'a> {
@@ -38,7 +39,7 @@ impl SchemeInputs<'_> {
         if let Some(online) = &scheme.online {
             return Ok(SchemeResiduals::Online {
                 label: online.regressor.label(),
-                regressor: online.regressor.build()?,
+                regressor: build_regressor(&online.regressor, self.base)?,
                 mode: online.mode(),
             });
         }

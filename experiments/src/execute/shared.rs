@@ -135,7 +135,7 @@ impl SharedWork {
             .collect::<Result<_, PipelineError>>()?;
         let prepared: BTreeMap<String, Arc<Prepared>> = prepared.into_iter().collect();
         // Distinct fits.
-        let mut fits: BTreeMap<String, (&gpodo_regressors::RegressorSpec, Arc<Prepared>)> =
+        let mut fits: BTreeMap<String, (&gpodo_regressors::RegressorSpec, Arc<Prepared>, &Path)> =
             BTreeMap::new();
         for (config, base) in runs {
             let key = dataset_key(config, base);
@@ -144,17 +144,17 @@ impl SharedWork {
             };
             for spec in &config.regressors {
                 fits.entry(fit_key(&key, spec))
-                    .or_insert((spec, Arc::clone(p)));
+                    .or_insert((spec, Arc::clone(p), base));
             }
         }
         let fitted: Vec<(String, Arc<Fitted>)> = fits
             .into_par_iter()
-            .map(|(key, (spec, p))| {
+            .map(|(key, (spec, p, base))| {
                 let spinner = progress.map(|m| FitSpinner::new(m, &spec.label()));
                 let sink = spinner
                     .as_ref()
                     .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
-                let (result, model) = fit_and_score(spec, &p.rows.train, &p.rows.test, sink)?;
+                let (result, model) = fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?;
                 if let Some(s) = spinner {
                     s.bar.finish_and_clear();
                 }
