@@ -74,6 +74,15 @@ pub enum PipelineError {
         /// What failed.
         source: gpodo_traits::Error,
     },
+    /// A regressor's fit failed (in the work shared by the runs that use
+    /// it); the runs that need it fail with this, the others go on.
+    #[error("regressor `{label}` could not be fitted: {reason}")]
+    FitFailed {
+        /// The regressor.
+        label: String,
+        /// The fit's error.
+        reason: String,
+    },
     /// Building or scoring a regressor failed.
     #[error(transparent)]
     Spec(#[from] gpodo_regressors::RegressorError),

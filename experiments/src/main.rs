@@ -127,15 +127,37 @@ fn run(
     );
     let dir = outcome.dir;
     if plan.runs.len() == 1 {
+        if let Some((_, reason)) = outcome.failed.first() {
+            anyhow::bail!("{reason} (recorded as failed in {})", dir.display());
+        }
         println!("wrote {}", dir.join("report.md").display());
         write_sweep_report(&dir, "summary.md")?;
     } else if outcome.complete {
         let report = write_sweep_report(&dir, "report.md")?;
         println!("wrote {} ({} runs)", report.markdown.display(), report.runs);
-    } else {
+    } else if outcome.failed.is_empty() {
         println!(
             "the sweep is not complete yet (other shards?); `gpodo report {}` merges what is there",
             dir.display()
+        );
+    } else {
+        for (key, reason) in &outcome.failed {
+            eprintln!("run `{key}` failed: {reason}");
+        }
+        if let Ok(report) = write_sweep_report(&dir, "report.md") {
+            println!(
+                "wrote {} ({} runs, {} failed)",
+                report.markdown.display(),
+                report.runs,
+                report.failed
+            );
+        }
+        anyhow::bail!(
+            "{} of {} run(s) failed and are recorded as failed; the others are recorded. \
+             Fix the cause and run `gpodo run {} --resume` to run only the failed ones again",
+            outcome.failed.len(),
+            outcome.ran,
+            file.display()
         );
     }
     Ok(())

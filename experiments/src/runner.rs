@@ -101,14 +101,6 @@ pub enum RunnerError {
     /// Writing or reading records failed.
     #[error(transparent)]
     Record(#[from] RecordError),
-    /// A run failed.
-    #[error("run `{key}`: {source}")]
-    Run {
-        /// The run's key.
-        key: String,
-        /// What failed.
-        source: Box<PipelineError>,
-    },
     /// The shared work failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
@@ -139,6 +131,9 @@ pub struct SweepOutcome {
     pub complete: bool,
     /// Wall-clock time (s).
     pub duration_secs: f64,
+    /// The runs of this invocation that failed, with their reasons (each
+    /// recorded as failed; `--resume` runs them again).
+    pub failed: Vec<(String, String)>,
 }
 
 /// The results folder of a plan.
@@ -149,7 +144,8 @@ pub fn results_dir(plan: &SweepPlan, options: &RunOptions) -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("results").join(&plan.name))
 }
 
-/// Keys recorded in any record file of `dir`.
+/// Keys recorded as successful runs in any record file of `dir` (a failed
+/// run's record does not count: `--resume` runs it again).
 ///
 /// # Errors
 /// [`RecordError`].
@@ -160,7 +156,12 @@ pub fn recorded_keys(dir: &Path) -> Result<BTreeSet<String>, RecordError> {
         source,
     })?;
     for file in files {
-        keys.extend(read_records(&file)?.into_iter().map(|r| r.key));
+        keys.extend(
+            read_records(&file)?
+                .into_iter()
+                .filter(|r| r.failure.is_none())
+                .map(|r| r.key),
+        );
     }
     Ok(keys)
 }
@@ -230,14 +231,25 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         }
         bar
     };
+    // A run that fails is recorded with its reason and the others go on;
+    // the failures are returned in the outcome.
+    let failed = std::sync::Mutex::new(Vec::new());
     todo.par_iter()
         .progress_with(bar.clone())
         .try_for_each(|run| -> Result<(), RunnerError> {
-            let wrap = |e| RunnerError::Run {
-                key: run.key.clone(),
-                source: Box::new(e),
+            let mut results = match shared.results(&run.config, base) {
+                Ok(r) => r,
+                Err(e) => {
+                    let reason = e.to_string();
+                    tracing::warn!(run = %run.key, error = %reason, "run failed; recorded as failed");
+                    writer.append(&RunRecord::failed(run, shared.code_version(), reason.clone()))?;
+                    failed
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner)
+                        .push((run.key.clone(), reason));
+                    return Ok(());
+                }
             };
-            let mut results = shared.results(&run.config, base).map_err(wrap)?;
             // A run's wall time: since the sweep started (shared work included).
             results.duration_secs = start.elapsed().as_secs_f64();
             writer.append(&RunRecord::new(run, &results))?;
@@ -262,6 +274,9 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         other_shards: plan.runs.len() - mine.len(),
         counts: shared.counts(),
         complete,
+        failed: failed
+            .into_inner()
+            .unwrap_or_else(std::sync::PoisonError::into_inner),
         duration_secs: start.elapsed().as_secs_f64(),
     })
 }

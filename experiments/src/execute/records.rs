@@ -110,6 +110,11 @@ pub struct RunRecord {
     pub metrics: RunMetrics,
     /// How long it took.
     pub timing: RunTiming,
+    /// Why the run failed (its metrics are then empty); `gpodo run
+    /// --resume` runs it again, and a later successful record of the same
+    /// key supersedes this one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 impl RunRecord {
@@ -168,6 +173,23 @@ impl RunRecord {
                     .collect(),
                 scheme_secs: results.schemes.iter().map(|s| s.duration_secs).collect(),
             },
+            failure: None,
+        }
+    }
+
+    /// The record of `run` that failed with `reason`.
+    pub fn failed(run: &RunSpec, code_version: &str, reason: String) -> Self {
+        Self {
+            key: run.key.clone(),
+            index: run.index,
+            assignment: run.assignment.clone(),
+            replicate: run.replicate,
+            seed: run.seed,
+            code_version: code_version.to_string(),
+            config: run.config.clone(),
+            metrics: RunMetrics::default(),
+            timing: RunTiming::default(),
+            failure: Some(reason),
         }
     }
 }

@@ -56,11 +56,15 @@ pub struct SharedCounts {
 /// A reference table's statistics (`compare_with`), by table.
 type References = BTreeMap<String, Option<(String, ResidualStatistics)>>;
 
+/// A distinct fit, or why it failed: the regressor's label and the error.
+type FitOutcome = Result<Arc<Fitted>, (String, String)>;
+
 /// The shared work of a set of runs.
 #[derive(Default)]
 pub struct SharedWork {
     prepared: BTreeMap<String, Arc<Prepared>>,
-    fitted: BTreeMap<String, Arc<Fitted>>,
+    /// Each distinct fit, or why it failed (by label and error).
+    fitted: BTreeMap<String, FitOutcome>,
     references: References,
     code_version: String,
     counts: SharedCounts,
@@ -89,6 +93,37 @@ fn reference_key(config: &ExperimentConfig, base: &Path) -> String {
 
 fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec) -> String {
     format!("{dataset}|{}", json(spec))
+}
+
+/// Fits one distinct regressor and predicts its windows on the traverses.
+fn fit_shared(
+    spec: &gpodo_regressors::RegressorSpec,
+    base: &Path,
+    p: &Prepared,
+    progress: Option<&MultiProgress>,
+) -> Result<Arc<Fitted>, PipelineError> {
+    let spinner = progress.map(|m| FitSpinner::new(m, &spec.label()));
+    let sink = spinner
+        .as_ref()
+        .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
+    let (result, model) = fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?;
+    if let Some(s) = spinner {
+        s.bar.finish_and_clear();
+    }
+    let predictions = if p.traverses.is_empty() {
+        None
+    } else {
+        Some(
+            p.traverses
+                .iter()
+                .map(|t| window_predictions(model.as_ref(), t))
+                .collect::<Result<Vec<_>, _>>()?,
+        )
+    };
+    Ok(Arc::new(Fitted {
+        result,
+        predictions,
+    }))
 }
 
 impl SharedWork {
@@ -147,36 +182,18 @@ impl SharedWork {
                     .or_insert((spec, Arc::clone(p), base));
             }
         }
-        let fitted: Vec<(String, Arc<Fitted>)> = fits
+        // A fit that fails fails only the runs that use it (an external
+        // plugin's crash is the plugin's, not the sweep's).
+        let fitted: Vec<(String, FitOutcome)> = fits
             .into_par_iter()
             .map(|(key, (spec, p, base))| {
-                let spinner = progress.map(|m| FitSpinner::new(m, &spec.label()));
-                let sink = spinner
-                    .as_ref()
-                    .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
-                let (result, model) = fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?;
-                if let Some(s) = spinner {
-                    s.bar.finish_and_clear();
-                }
-                let predictions = if p.traverses.is_empty() {
-                    None
-                } else {
-                    Some(
-                        p.traverses
-                            .iter()
-                            .map(|t| window_predictions(model.as_ref(), t))
-                            .collect::<Result<Vec<_>, _>>()?,
-                    )
-                };
-                Ok((
-                    key,
-                    Arc::new(Fitted {
-                        result,
-                        predictions,
-                    }),
-                ))
+                let fitted = fit_shared(spec, base, &p, progress).map_err(|e| {
+                    tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
+                    (spec.label(), e.to_string())
+                });
+                (key, fitted)
             })
-            .collect::<Result<_, PipelineError>>()?;
+            .collect();
         let counts = SharedCounts {
             datasets: prepared.len(),
             fits: fitted.len(),
@@ -194,6 +211,11 @@ impl SharedWork {
             code_version: code_version(),
             counts,
         })
+    }
+
+    /// `git describe` of the code that did the work.
+    pub fn code_version(&self) -> &str {
+        &self.code_version
     }
 
     /// What was computed once.
@@ -220,7 +242,14 @@ impl SharedWork {
         let fitted: Vec<&Arc<Fitted>> = config
             .regressors
             .iter()
-            .map(|spec| self.fitted.get(&fit_key(&key, spec)).ok_or_else(missing))
+            .map(|spec| match self.fitted.get(&fit_key(&key, spec)) {
+                None => Err(missing()),
+                Some(Ok(f)) => Ok(f),
+                Some(Err((label, reason))) => Err(PipelineError::FitFailed {
+                    label: label.clone(),
+                    reason: reason.clone(),
+                }),
+            })
             .collect::<Result<_, _>>()?;
         let labels = config.regressor_labels();
         let predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>> =

@@ -30,6 +30,8 @@ pub struct MergedRecords {
     pub duplicates: Vec<(String, Vec<PathBuf>)>,
     /// Planned keys with no record.
     pub missing: Vec<String>,
+    /// Keys whose every record is a failure, with the last reason.
+    pub failed: Vec<(String, String)>,
     /// The record files read.
     pub files: Vec<PathBuf>,
 }
@@ -74,8 +76,15 @@ pub fn merge_records(dir: &Path) -> Result<MergedRecords, ReportError> {
         Err(_) => None,
     };
     let mut by_key: BTreeMap<String, (RunRecord, Vec<PathBuf>)> = BTreeMap::new();
+    // Failed runs are kept apart; a successful record of the same key
+    // (from `--resume`) supersedes them.
+    let mut failures: BTreeMap<String, String> = BTreeMap::new();
     for file in &files {
         for record in read_records(file)? {
+            if let Some(reason) = &record.failure {
+                failures.insert(record.key.clone(), reason.clone());
+                continue;
+            }
             by_key
                 .entry(record.key.clone())
                 .or_insert_with(|| (record, Vec::new()))
@@ -83,6 +92,10 @@ pub fn merge_records(dir: &Path) -> Result<MergedRecords, ReportError> {
                 .push(file.clone());
         }
     }
+    let failed: Vec<(String, String)> = failures
+        .into_iter()
+        .filter(|(k, _)| !by_key.contains_key(k))
+        .collect();
     let duplicates = by_key
         .iter()
         .filter(|(_, (_, files))| files.len() > 1)
@@ -93,7 +106,7 @@ pub fn merge_records(dir: &Path) -> Result<MergedRecords, ReportError> {
         .map(|p| {
             p.keys
                 .iter()
-                .filter(|k| !by_key.contains_key(*k))
+                .filter(|k| !by_key.contains_key(*k) && !failed.iter().any(|(f, _)| f == *k))
                 .cloned()
                 .collect()
         })
@@ -120,6 +133,7 @@ pub fn merge_records(dir: &Path) -> Result<MergedRecords, ReportError> {
         records,
         duplicates,
         missing,
+        failed,
         files,
     })
 }
@@ -133,6 +147,8 @@ pub struct SweepReport {
     pub runs: usize,
     /// Planned runs without a record.
     pub missing: usize,
+    /// Runs recorded only as failed.
+    pub failed: usize,
     /// Keys recorded more than once.
     pub duplicates: usize,
 }
@@ -214,6 +230,17 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
                 .collect::<Vec<_>>()
                 .join(", ")
         );
+    }
+    if !merged.failed.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n**{} run(s) failed** (`gpodo run --resume` runs them again):",
+            merged.failed.len()
+        );
+        for (key, reason) in &merged.failed {
+            let first_line = reason.lines().next().unwrap_or_default();
+            let _ = writeln!(s, "- `{key}`: {first_line}");
+        }
     }
     if !merged.duplicates.is_empty() {
         let _ = writeln!(
@@ -297,5 +324,6 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
         runs: records.len(),
         missing: merged.missing.len(),
         duplicates: merged.duplicates.len(),
+        failed: merged.failed.len(),
     })
 }

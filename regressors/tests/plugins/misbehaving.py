@@ -2,7 +2,8 @@
 """A gpodo plugin that fails on purpose, for the tests of `kind: external`.
 
 The first argument names the failure: crash_on_fit, hang_on_predict,
-garbage_on_fit, wrong_shape, nan_variance, refuse_fit, no_update, old_protocol.
+garbage_on_fit, wrong_shape, nan_variance, refuse_fit, no_update, old_protocol,
+fail_if_marker (fit fails while the file named by the `marker` option exists).
 It behaves as a mean-only regressor otherwise.
 """
 
@@ -39,6 +40,8 @@ class Misbehaving(Regressor):
             sys.stdout.write("this is not json\n")
             sys.stdout.flush()
             time.sleep(30)
+        if MODE == "fail_if_marker" and Path(self.options["marker"]).exists():
+            raise RuntimeError(f"marker {self.options['marker']} exists")
         if MODE == "refuse_fit":
             raise ValueError("cannot fit: refused on purpose")
         self.mean = targets.mean(axis=0)

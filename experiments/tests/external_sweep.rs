@@ -1,0 +1,130 @@
+//! A sweep with an external regressor that fails in one run: that run is
+//! recorded as failed with the plugin's reason, the other is recorded, the
+//! command exits non-zero naming the failure, and `--resume` runs only the
+//! failed run again. Needs a `python3` with NumPy (`GPODO_PYTHON`); skipped
+//! with a message without one, unless `GPODO_REQUIRE_PYTHON` is set (CI).
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::Command;
+
+const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+
+fn python() -> Option<String> {
+    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
+    let ok = Command::new(&python)
+        .args(["-c", "import numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ok {
+        return Some(python);
+    }
+    assert!(
+        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
+        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import numpy"
+    );
+    eprintln!("SKIPPED: no `{python}` with NumPy (set GPODO_PYTHON to one)");
+    None
+}
+
+fn records(dir: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join("runs.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn a_failed_external_run_is_recorded_the_others_go_on_and_resume_reruns_only_it() {
+    let Some(python) = python() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let plugin = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../regressors/tests/plugins/misbehaving.py")
+        .canonicalize()
+        .unwrap();
+    let (good, bad) = (tmp.path().join("absent"), tmp.path().join("present"));
+    std::fs::write(&bad, "").unwrap();
+    let yaml = format!(
+        "name: flaky
+dataset: {{ kind: simulated, preset: exoter-prl, seed: 1, training_runs: 1, training_run_secs: 60, test_max_secs: 90 }}
+regressors:
+  - kind: zero
+  - kind: external
+    command: [{python}, {plugin}, fail_if_marker]
+    label: flaky plugin
+    marker: {good}
+sweep:
+  regressors[1].marker: [{good}, {bad}]
+",
+        plugin = plugin.display(),
+        good = good.display(),
+        bad = bad.display()
+    );
+    let file = tmp.path().join("flaky.yaml");
+    std::fs::write(&file, yaml).unwrap();
+    let out_dir = tmp.path().join("out");
+    let run = |extra: &[&str]| {
+        let mut cmd = Command::new(GPODO);
+        cmd.arg("--quiet")
+            .arg("run")
+            .arg(&file)
+            .arg("--out")
+            .arg(&out_dir)
+            .args(extra);
+        cmd.output().unwrap()
+    };
+
+    let first = run(&[]);
+    let stderr = String::from_utf8_lossy(&first.stderr);
+    assert!(
+        !first.status.success(),
+        "a failed run must fail the command"
+    );
+    assert!(stderr.contains("1 of 2 run(s) failed"), "{stderr}");
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let recs = records(&out_dir);
+    assert_eq!(recs.len(), 2, "{recs:?}");
+    let failed: Vec<&serde_json::Value> =
+        recs.iter().filter(|r| r["failure"].is_string()).collect();
+    assert_eq!(failed.len(), 1);
+    let reason = failed[0]["failure"].as_str().unwrap();
+    assert!(
+        reason.contains("flaky plugin") && reason.contains("request `fit`"),
+        "{reason}"
+    );
+    assert!(
+        reason.contains("exists"),
+        "the plugin's own message: {reason}"
+    );
+    let failed_key = failed[0]["key"].as_str().unwrap().to_string();
+    let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(report.contains("1 run(s) failed"), "{report}");
+
+    // Fixed: only the failed run runs again.
+    std::fs::remove_file(&bad).unwrap();
+    let second = run(&["--resume"]);
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&second.stdout);
+    assert!(
+        stdout.contains("1 run(s) done") && stdout.contains("1 skipped"),
+        "{stdout}"
+    );
+    let recs = records(&out_dir);
+    assert_eq!(recs.len(), 3);
+    let successes: Vec<&str> = recs
+        .iter()
+        .filter(|r| r["failure"].is_null())
+        .map(|r| r["key"].as_str().unwrap())
+        .collect();
+    assert_eq!(successes.len(), 2);
+    assert!(successes.contains(&failed_key.as_str()));
+    let report = std::fs::read_to_string(out_dir.join("report.md")).unwrap();
+    assert!(!report.contains("failed**"), "{report}");
+    assert!(!report.contains("more than once"), "{report}");
+}
