@@ -1,5 +1,6 @@
 //! `gpodo`: run experiments and sweeps, plan them, report them, benchmark
-//! regressors, simulate the testbed.
+//! regressors, save a trained model and predict with it, simulate the
+//! testbed.
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +10,7 @@ use gpodo_datasets::log::write_log_csv;
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_experiments::config::ExperimentConfig;
 use gpodo_experiments::execute::bench::run_bench;
+use gpodo_experiments::execute::models::{fit_model, predict_csv};
 use gpodo_experiments::plan::load_plan;
 use gpodo_experiments::report::bench::write_bench_report;
 use gpodo_experiments::report::sweep::write_sweep_report;
@@ -70,6 +72,33 @@ enum Command {
         /// Output folder (default: results/NAME).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Fit one regressor of an experiment on its training rows, as `gpodo
+    /// run` does, and save the trained model (with the experiment's input
+    /// z-scoring and column names) for `gpodo predict` or on-board use.
+    Fit {
+        /// The experiment YAML.
+        file: PathBuf,
+        /// The regressor's label, as in the report (e.g. "exact GP: rbf").
+        #[arg(long)]
+        regressor: String,
+        /// Where to write the model (e.g. model.gpodo).
+        #[arg(long)]
+        save: PathBuf,
+    },
+    /// Predict with a saved model: mean and variance per output for every
+    /// row of a CSV whose header names the model's input columns (any
+    /// order; other columns are ignored), e.g. results/NAME/residuals_test.csv.
+    Predict {
+        /// The model file.
+        #[arg(long)]
+        model: PathBuf,
+        /// The input rows (CSV with a header, raw units).
+        #[arg(long)]
+        input: PathBuf,
+        /// Where to write the predictions (CSV: mean_<target>..., var_<target>...).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Simulate the testbed and write every run as CSV (trajectory format).
     Simulate {
@@ -222,6 +251,24 @@ fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn fit(file: &Path, label: &str, save: &Path) -> anyhow::Result<()> {
+    let config = ExperimentConfig::from_path(file)?;
+    let base = file.parent().unwrap_or_else(|| Path::new("."));
+    let fitted =
+        fit_model(&config, base, label).with_context(|| format!("fit {}", file.display()))?;
+    fitted.file.save(save)?;
+    println!(
+        "wrote {} (`{}`, {} training rows; held-out RMSE {:.6}, MAE {:.6} over {} test rows)",
+        save.display(),
+        fitted.file.label,
+        fitted.file.provenance.training_rows,
+        fitted.evaluation.pooled.rmse,
+        fitted.evaluation.pooled.mae,
+        fitted.test_inputs.1.nrows()
+    );
+    Ok(())
+}
+
 fn simulate(
     preset: Preset,
     seed: u64,
@@ -272,6 +319,16 @@ fn main() -> anyhow::Result<()> {
         Command::Plan { file } => plan(&file),
         Command::Report { dir } => report(&dir),
         Command::Bench { file, out } => bench(&file, out),
+        Command::Fit {
+            file,
+            regressor,
+            save,
+        } => fit(&file, &regressor, &save),
+        Command::Predict { model, input, out } => {
+            let rows = predict_csv(&model, &input, &out)?;
+            println!("wrote {} ({rows} rows)", out.display());
+            Ok(())
+        }
         Command::Simulate {
             preset,
             seed,

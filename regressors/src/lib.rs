@@ -19,6 +19,8 @@
 //!   adding a regressor (`experiments/README.md`);
 //! * [`hyperopt`]: the optimiser both GPs learn their hyperparameters with
 //!   (argmin L-BFGS or nonlinear CG, bounds, seeded restarts);
+//! * [`model_file`]: trained models saved and loaded (versioned JSON with
+//!   the input columns and z-scoring), for `gpodo predict` and on-board use;
 //! * [`metrics`]: RMSE and MAE per output (Table I), negative log predictive
 //!   density and 95 % interval coverage;
 //! * [`spec::RegressorSpec`]: the closed set of regressor kinds a YAML
@@ -33,6 +35,7 @@ pub mod ilgr;
 pub mod kernels;
 pub mod knn;
 pub mod metrics;
+pub mod model_file;
 pub mod scaling;
 pub mod sparse_gp;
 pub mod spec;

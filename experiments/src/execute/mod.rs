@@ -6,12 +6,14 @@
 //! [`shared`] does each of these once per distinct input across a sweep and
 //! assembles every run's [`results::ExperimentResults`]; [`records`] is the
 //! line each run appends to `runs.jsonl`; [`bench`](mod@bench) times every
-//! regressor on the same rows for `gpodo bench`.
+//! regressor on the same rows for `gpodo bench`; [`models`] saves a
+//! trained model (`gpodo fit`) and predicts with one (`gpodo predict`).
 
 pub mod bench;
 pub mod calibration;
 pub mod data;
 pub mod fit;
+pub mod models;
 pub mod odometry;
 pub mod records;
 pub mod results;

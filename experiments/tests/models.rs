@@ -1,0 +1,224 @@
+//! Trained models out of an experiment: `gpodo fit --save` then `gpodo
+//! predict` (or `ModelFile::load` in library code) gives the in-process
+//! model's predictions to 1e-12 from raw input rows matched by column name;
+//! bad model files (truncated, another version, not a model) and input rows
+//! without the model's columns are refused with errors naming them.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::Command;
+
+use gpodo_experiments::config::ExperimentConfig;
+use gpodo_experiments::execute::models::{fit_model, read_rows};
+use gpodo_regressors::model_file::ModelFile;
+
+const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+
+const TINY: &str = "name: tiny-model
+dataset: { kind: simulated, preset: exoter-prl, seed: 3, training_runs: 1, training_run_secs: 90, test_max_secs: 60 }
+regressors:
+  - kind: zero
+  - kind: exact_gp
+    kernel: rbf
+    max_iters: 30
+  - kind: sparse_gp
+    kernel: rbf
+    inducing: { count: 20 }
+    max_iters: 20
+  - kind: ilgr
+  - kind: knn
+";
+
+fn write_config(dir: &Path) -> std::path::PathBuf {
+    let file = dir.join("tiny.yaml");
+    std::fs::write(&file, TINY).unwrap();
+    file
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0)
+}
+
+#[test]
+fn a_saved_model_predicts_what_the_in_process_model_predicted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = write_config(tmp.path());
+    let config = ExperimentConfig::from_path(&file).unwrap();
+    for label in [
+        "exact GP: rbf [max_iters=30]",
+        "ILGR",
+        "sparse GP (VFE, m=20): rbf [max_iters=20]",
+    ] {
+        let fitted = fit_model(&config, tmp.path(), label).unwrap();
+        let path = tmp.path().join("m.gpodo");
+        fitted.file.save(&path).unwrap();
+        let loaded = ModelFile::load(&path).unwrap();
+        let again = tmp.path().join("again.gpodo");
+        loaded.save(&again).unwrap();
+        assert!(
+            std::fs::read(&path).unwrap() == std::fs::read(&again).unwrap(),
+            "{label}: a loaded model saves to the same bytes"
+        );
+        // Raw rows, columns reversed: matched by name, z-scored by the file.
+        let (names, rows) = &fitted.test_inputs;
+        let reversed_names: Vec<String> = names.iter().rev().cloned().collect();
+        let reversed: Vec<Vec<f64>> = rows
+            .rows()
+            .map(|r| r.iter().rev().copied().collect())
+            .collect();
+        let reversed = gpodo_traits::SampleMatrix::from_rows(names.len(), &reversed).unwrap();
+        let p = loaded
+            .predictor()
+            .unwrap()
+            .predict(&reversed_names, &reversed)
+            .unwrap();
+        let q = &fitted.test_predictions;
+        assert_eq!(p.mean.nrows(), rows.nrows());
+        for (a, b) in p.mean.as_slice().iter().zip(q.mean.as_slice()) {
+            assert!(close(*a, *b), "{label}: mean {a} vs {b}");
+        }
+        for (a, b) in p.variance.as_slice().iter().zip(q.variance.as_slice()) {
+            assert!(close(*a, *b), "{label}: variance {a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = write_config(tmp.path());
+    let model = tmp.path().join("gp.gpodo");
+    let out = Command::new(GPODO)
+        .args(["--quiet", "fit"])
+        .arg(&file)
+        .args(["--regressor", "exact GP: rbf [max_iters=30]", "--save"])
+        .arg(&model)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("held-out RMSE"));
+    // The rows `gpodo run` writes (raw inputs and the residual targets).
+    let results = tmp.path().join("results");
+    let out = Command::new(GPODO)
+        .args(["--quiet", "run"])
+        .arg(&file)
+        .arg("--out")
+        .arg(&results)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let predictions = tmp.path().join("predictions.csv");
+    let out = Command::new(GPODO)
+        .args(["--quiet", "predict", "--model"])
+        .arg(&model)
+        .arg("--input")
+        .arg(results.join("residuals_test.csv"))
+        .arg("--out")
+        .arg(&predictions)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (header, values) = read_rows(&predictions).unwrap();
+    assert_eq!(
+        header,
+        [
+            "mean_res_vx",
+            "mean_res_vy",
+            "mean_res_vz",
+            "var_res_vx",
+            "var_res_vy",
+            "var_res_vz"
+        ]
+    );
+    let config = ExperimentConfig::from_path(&file).unwrap();
+    let fitted = fit_model(&config, tmp.path(), "exact GP: rbf [max_iters=30]").unwrap();
+    assert_eq!(values.nrows(), fitted.test_predictions.mean.nrows());
+    for i in 0..values.nrows() {
+        for j in 0..3 {
+            assert!(close(
+                values.get(i, j),
+                fitted.test_predictions.mean.get(i, j)
+            ));
+            assert!(close(
+                values.get(i, 3 + j),
+                fitted.test_predictions.variance.get(i, j)
+            ));
+        }
+    }
+}
+
+#[test]
+fn bad_model_files_and_rows_are_refused_with_their_reason() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = write_config(tmp.path());
+    let config = ExperimentConfig::from_path(&file).unwrap();
+    let fitted = fit_model(&config, tmp.path(), "ILGR").unwrap();
+    let path = tmp.path().join("m.gpodo");
+    fitted.file.save(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+
+    let truncated = tmp.path().join("truncated.gpodo");
+    std::fs::write(&truncated, &text[..text.len() / 2]).unwrap();
+    let e = ModelFile::load(&truncated).unwrap_err().to_string();
+    assert!(
+        e.contains("truncated.gpodo") && e.contains("truncated"),
+        "{e}"
+    );
+
+    let other_version = tmp.path().join("v99.gpodo");
+    std::fs::write(
+        &other_version,
+        text.replacen("\"version\":1", "\"version\":99", 1),
+    )
+    .unwrap();
+    let e = ModelFile::load(&other_version).unwrap_err().to_string();
+    assert!(
+        e.contains("version Some(99)") && e.contains("reads version 1"),
+        "{e}"
+    );
+
+    let not_a_model = tmp.path().join("x.gpodo");
+    std::fs::write(&not_a_model, "{\"name\": \"tiny\"}").unwrap();
+    let e = ModelFile::load(&not_a_model).unwrap_err().to_string();
+    assert!(e.contains("not a gpodo model file"), "{e}");
+
+    // Rows without one of the model's columns.
+    let loaded = ModelFile::load(&path).unwrap();
+    let (names, rows) = &fitted.test_inputs;
+    let mut renamed = names.clone();
+    renamed[1] = "something_else".into();
+    let e = loaded
+        .predictor()
+        .unwrap()
+        .predict(&renamed, rows)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains(&format!("no column `{}`", names[1])), "{e}");
+
+    // Kinds without a saved state, and unknown labels.
+    let e = fit_model(&config, tmp.path(), "k-NN (k=10)")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot be saved"), "{e}");
+    let e = fit_model(&config, tmp.path(), "exact GP")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no regressor labelled `exact GP`") && e.contains("ILGR"),
+        "{e}"
+    );
+}

@@ -1,0 +1,312 @@
+//! Trained models out of an experiment: a versioned JSON file holding the
+//! regressor's learned state, the names of the input and target columns
+//! and the experiment's input z-scoring, so that a rover (or `gpodo
+//! predict`) can load it and predict from raw input rows, matched by
+//! column name.
+//!
+//! ```no_run
+//! use gpodo_regressors::model_file::ModelFile;
+//! use gpodo_traits::SampleMatrix;
+//!
+//! let model = ModelFile::load("model.gpodo".as_ref())?;
+//! let columns = model.input_names.clone();           // or any superset, in any order
+//! let rows = SampleMatrix::zeros(1, columns.len());  // raw (unscaled) inputs
+//! let predicted = model.predictor()?.predict(&columns, &rows)?;
+//! println!("{:?} ± {:?}", predicted.mean.row(0), predicted.variance.row(0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use gpodo_traits::{Predictions, ResidualDataset, ResidualRegressor, SampleMatrix, Standardizer};
+use serde::{Deserialize, Serialize};
+
+use crate::exact_gp::{ExactGp, ExactGpState};
+use crate::ilgr::{Ilgr, IlgrState};
+use crate::sparse_gp::{SparseGp, SparseGpState};
+use crate::{RegressorError, RegressorSpec};
+
+/// What the first field of every model file says.
+pub const MODEL_FORMAT: &str = "gpodo-model";
+
+/// The model-file version this build writes and reads.
+pub const MODEL_VERSION: u32 = 1;
+
+/// A regressor's learned state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SavedState {
+    /// An exact GP.
+    ExactGp(ExactGpState),
+    /// A sparse GP.
+    SparseGp(SparseGpState),
+    /// An ILGR (which can go on learning online after loading).
+    Ilgr(IlgrState),
+}
+
+/// Where a saved model came from.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The experiment's name.
+    pub experiment: String,
+    /// `git describe` of the code that trained it.
+    pub code_version: String,
+    /// Training rows.
+    pub training_rows: usize,
+}
+
+/// A trained model as saved on disk.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Always [`MODEL_FORMAT`].
+    pub format: String,
+    /// [`MODEL_VERSION`] when written.
+    pub version: u32,
+    /// The regressor's label in the experiment.
+    pub label: String,
+    /// The input columns the model reads, in its order.
+    pub input_names: Vec<String>,
+    /// The outputs it predicts.
+    pub target_names: Vec<String>,
+    /// The experiment's z-scoring of the raw inputs (applied before the
+    /// model), when it z-scored them.
+    pub input_standardizer: Option<Standardizer>,
+    /// Where it came from.
+    pub provenance: Provenance,
+    /// The learned state.
+    pub state: SavedState,
+}
+
+/// Why a model file could not be written, read or used.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelFileError {
+    /// The file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is not a whole model file of this version.
+    #[error("{}: {detail}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        detail: String,
+    },
+    /// The rows to predict lack a column the model reads.
+    #[error("the input rows have no column `{column}` (the model reads {expected:?})")]
+    MissingColumn {
+        /// The missing column.
+        column: String,
+        /// Every column the model reads.
+        expected: Vec<String>,
+    },
+    /// This regressor kind cannot be saved.
+    #[error("regressor `{label}` cannot be saved: {why}")]
+    NotSavable {
+        /// Its label.
+        label: String,
+        /// Why.
+        why: String,
+    },
+    /// Fitting, rebuilding or predicting failed.
+    #[error(transparent)]
+    Regressor(#[from] RegressorError),
+    /// The model refused the rows.
+    #[error(transparent)]
+    Model(#[from] gpodo_traits::Error),
+}
+
+impl ModelFile {
+    /// Fits `spec` on `train` (inputs already z-scored with
+    /// `input_standardizer` when one is given) and returns its model file
+    /// and the fitted model itself.
+    ///
+    /// # Errors
+    /// [`ModelFileError::NotSavable`] for kinds without a saved state
+    /// (`zero`, `knn`, `external`: the plugin owns its state), or the fit's
+    /// error.
+    pub fn fit(
+        spec: &RegressorSpec,
+        train: &ResidualDataset,
+        input_standardizer: Option<Standardizer>,
+        provenance: Provenance,
+    ) -> Result<(Self, Box<dyn ResidualRegressor>), ModelFileError> {
+        let (state, model): (Option<SavedState>, Box<dyn ResidualRegressor>) = match spec {
+            RegressorSpec::ExactGp(p) => {
+                let mut m = ExactGp::new(p.clone())?;
+                m.fit(train)?;
+                (m.state().cloned().map(SavedState::ExactGp), Box::new(m))
+            }
+            RegressorSpec::SparseGp(p) => {
+                let mut m = SparseGp::new(p.clone())?;
+                m.fit(train)?;
+                (m.state().cloned().map(SavedState::SparseGp), Box::new(m))
+            }
+            RegressorSpec::Ilgr(p) => {
+                let mut m = Ilgr::new(p.clone())?;
+                m.fit(train)?;
+                (m.state().cloned().map(SavedState::Ilgr), Box::new(m))
+            }
+            _ => {
+                return Err(ModelFileError::NotSavable {
+                    label: spec.label(),
+                    why: "only exact_gp, sparse_gp and ilgr models can be saved".into(),
+                });
+            }
+        };
+        let state = state.ok_or_else(|| ModelFileError::NotSavable {
+            label: spec.label(),
+            why: "the fit left no state".into(),
+        })?;
+        let file = Self {
+            format: MODEL_FORMAT.into(),
+            version: MODEL_VERSION,
+            label: spec.label(),
+            input_names: train.input_names.clone(),
+            target_names: train.target_names.clone(),
+            input_standardizer,
+            provenance,
+            state,
+        };
+        Ok((file, model))
+    }
+
+    /// Writes the file (to a temporary name, then renamed, so that an
+    /// interrupted save never leaves a half-written model under `path`).
+    ///
+    /// # Errors
+    /// [`ModelFileError::Io`].
+    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
+        let io = |source| ModelFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let text = serde_json::to_string(self).map_err(|e| io(std::io::Error::other(e)))?;
+        let tmp = path.with_extension("gpodo.partial");
+        std::fs::write(&tmp, text.as_bytes()).map_err(io)?;
+        std::fs::rename(&tmp, path).map_err(io)
+    }
+
+    /// Reads a model file, refusing one of another format or version, a
+    /// truncated one, or one whose parts disagree.
+    ///
+    /// # Errors
+    /// [`ModelFileError::Io`] or [`ModelFileError::Invalid`] naming the file.
+    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
+        let invalid = |detail: String| ModelFileError::Invalid {
+            path: path.to_path_buf(),
+            detail,
+        };
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        // The header first, so that another version is named as such.
+        #[derive(Deserialize)]
+        struct Header {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let header: Header = serde_json::from_str(&text).map_err(|e| {
+            if e.is_eof() {
+                invalid(format!("truncated ({e}); save the model again"))
+            } else {
+                invalid(format!("not a gpodo model file ({e})"))
+            }
+        })?;
+        if header.format.as_deref() != Some(MODEL_FORMAT) {
+            return Err(invalid(format!(
+                "not a gpodo model file (`format` is {:?}, expected \"{MODEL_FORMAT}\")",
+                header.format
+            )));
+        }
+        if header.version != Some(MODEL_VERSION) {
+            return Err(invalid(format!(
+                "model file version {:?}; this gpodo reads version {MODEL_VERSION} (save the model again with this version)",
+                header.version
+            )));
+        }
+        let file: Self = serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+        let d = file.input_names.len();
+        if let Some(s) = &file.input_standardizer
+            && s.dim() != d
+        {
+            return Err(invalid(format!(
+                "the input standardizer has {} columns, the model reads {d}",
+                s.dim()
+            )));
+        }
+        Ok(file)
+    }
+
+    /// The model, rebuilt to predict (and, for ILGR, to go on learning).
+    ///
+    /// # Errors
+    /// [`ModelFileError::Regressor`] when the saved state is inconsistent.
+    pub fn predictor(&self) -> Result<Predictor, ModelFileError> {
+        let model: Box<dyn ResidualRegressor> = match &self.state {
+            SavedState::ExactGp(s) => Box::new(ExactGp::from_state(s.clone())?),
+            SavedState::SparseGp(s) => Box::new(SparseGp::from_state(s.clone())?),
+            SavedState::Ilgr(s) => Box::new(Ilgr::from_state(s.clone())?),
+        };
+        Ok(Predictor {
+            model,
+            input_names: self.input_names.clone(),
+            input_standardizer: self.input_standardizer.clone(),
+        })
+    }
+}
+
+/// A loaded model that predicts from raw input rows.
+pub struct Predictor {
+    model: Box<dyn ResidualRegressor>,
+    input_names: Vec<String>,
+    input_standardizer: Option<Standardizer>,
+}
+
+impl Predictor {
+    /// Mean and variance for each row of `rows`, whose columns are named
+    /// `columns` (any order, extra columns ignored), in raw units.
+    ///
+    /// # Errors
+    /// [`ModelFileError::MissingColumn`] naming the first missing column,
+    /// or the model's error.
+    pub fn predict(
+        &self,
+        columns: &[String],
+        rows: &SampleMatrix,
+    ) -> Result<Predictions, ModelFileError> {
+        let index: Vec<usize> = self
+            .input_names
+            .iter()
+            .map(|name| {
+                columns.iter().position(|c| c == name).ok_or_else(|| {
+                    ModelFileError::MissingColumn {
+                        column: name.clone(),
+                        expected: self.input_names.clone(),
+                    }
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let picked: Vec<Vec<f64>> = rows
+            .rows()
+            .map(|r| index.iter().map(|&j| r[j]).collect())
+            .collect();
+        let mut inputs = SampleMatrix::from_rows(index.len(), &picked)?;
+        if let Some(s) = &self.input_standardizer {
+            inputs = s.transform(&inputs)?;
+        }
+        Ok(self.model.predict(&inputs)?)
+    }
+
+    /// The rebuilt model (e.g. to continue learning online with `update`,
+    /// on inputs z-scored as the file says).
+    pub fn model_mut(&mut self) -> &mut dyn ResidualRegressor {
+        self.model.as_mut()
+    }
+}
