@@ -248,6 +248,16 @@ fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
     let (md, json) = write_bench_report(&results, &plan_dir)
         .with_context(|| format!("writing {}", plan_dir.display()))?;
     println!("wrote {} and {}", md.display(), json.display());
+    if !results.failures.is_empty() {
+        for (label, reason) in &results.failures {
+            eprintln!("regressor `{label}` failed: {reason}");
+        }
+        anyhow::bail!(
+            "{} regressor(s) failed; the others are in {}",
+            results.failures.len(),
+            md.display()
+        );
+    }
     Ok(())
 }
 

@@ -128,3 +128,48 @@ sweep:
     assert!(!report.contains("failed**"), "{report}");
     assert!(!report.contains("more than once"), "{report}");
 }
+
+#[test]
+fn a_crashing_plugin_fails_its_own_bench_row_only() {
+    let Some(python) = python() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let plugin = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../regressors/tests/plugins/misbehaving.py")
+        .canonicalize()
+        .unwrap();
+    let yaml = format!(
+        "name: crashing
+dataset: {{ kind: simulated, preset: exoter-prl, seed: 1, training_runs: 1, training_run_secs: 60, test_max_secs: 60 }}
+regressors:
+  - kind: zero
+  - kind: external
+    command: [{python}, {plugin}, crash_on_fit]
+  - kind: ilgr
+bench: {{ predict_queries: 5, learning_curve_every: 30 }}
+",
+        plugin = plugin.display()
+    );
+    let file = tmp.path().join("crashing.yaml");
+    std::fs::write(&file, yaml).unwrap();
+    let out_dir = tmp.path().join("out");
+    let out = Command::new(GPODO)
+        .args(["--quiet", "bench"])
+        .arg(&file)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains("1 regressor(s) failed"), "{stderr}");
+    assert!(stderr.contains("about to crash on purpose"), "{stderr}");
+    let md = std::fs::read_to_string(out_dir.join("bench.md")).unwrap();
+    assert!(
+        md.contains("**Failed**") && md.contains("external: misbehaving.py"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| ILGR") && md.contains("| parametric only"),
+        "{md}"
+    );
+}

@@ -112,8 +112,11 @@ pub struct BenchResults {
     pub dataset: DatasetSummary,
     /// Index of the baseline row, if there is one.
     pub baseline: Option<usize>,
-    /// One row per regressor, in config order.
+    /// One row per regressor that ran, in config order.
     pub rows: Vec<BenchRow>,
+    /// The regressors that failed (label and reason); the others ran.
+    #[serde(default)]
+    pub failures: Vec<(String, String)>,
     /// Wall-clock duration (s).
     pub duration_secs: f64,
 }
@@ -219,48 +222,71 @@ pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults,
     let (rows, dataset) = prepare_model_rows(config, base)?;
     let settings = &config.bench;
     let mut out = Vec::with_capacity(config.regressors.len());
+    let mut failures = Vec::new();
+    // A regressor that fails (e.g. a plugin that crashes) is reported as
+    // failed; the others are benchmarked.
     for spec in &config.regressors {
-        let label = spec.label();
-        let wrap = |source| PipelineError::Regressor {
-            label: label.clone(),
-            source,
-        };
-        tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
-        let mut model = build_regressor(spec, base)?;
-        let fit = model.fit(&rows.train).map_err(wrap)?;
-        let t = Instant::now();
-        let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
-        let batch_predict_secs = t.elapsed().as_secs_f64();
-        let evaluation = evaluate(&predictions, &rows.test.targets)?;
-        let predict_latency =
-            predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
-        let online = if model.supports_online_update() {
-            Some(online_pass(
-                spec,
-                base,
-                &rows,
-                settings.learning_curve_every,
-            )?)
-        } else {
-            None
-        };
-        out.push(BenchRow {
-            label,
-            spec: spec.clone(),
-            fit,
-            predict_latency,
-            batch_predict_secs,
-            evaluation,
-            online,
-        });
+        match bench_one(spec, base, &rows, settings) {
+            Ok(row) => out.push(row),
+            Err(e) => {
+                tracing::warn!(regressor = %spec.label(), error = %e, "benchmark failed");
+                failures.push((spec.label(), e.to_string()));
+            }
+        }
     }
+    let baseline = baseline_index(config).and_then(|i| {
+        let label = config.regressors[i].label();
+        out.iter().position(|r| r.label == label)
+    });
     Ok(BenchResults {
         config: config.clone(),
         code_version: code_version(),
         dataset,
-        baseline: baseline_index(config),
+        baseline,
         rows: out,
+        failures,
         duration_secs: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Benchmarks one regressor.
+fn bench_one(
+    spec: &RegressorSpec,
+    base: &Path,
+    rows: &ModelRows,
+    settings: &crate::config::bench::BenchSettings,
+) -> Result<BenchRow, PipelineError> {
+    let label = spec.label();
+    let wrap = |source| PipelineError::Regressor {
+        label: label.clone(),
+        source,
+    };
+    tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
+    let mut model = build_regressor(spec, base)?;
+    let fit = model.fit(&rows.train).map_err(wrap)?;
+    let t = Instant::now();
+    let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
+    let batch_predict_secs = t.elapsed().as_secs_f64();
+    let evaluation = evaluate(&predictions, &rows.test.targets)?;
+    let predict_latency = predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
+    let online = if model.supports_online_update() {
+        Some(online_pass(
+            spec,
+            base,
+            rows,
+            settings.learning_curve_every,
+        )?)
+    } else {
+        None
+    };
+    Ok(BenchRow {
+        label,
+        spec: spec.clone(),
+        fit,
+        predict_latency,
+        batch_predict_secs,
+        evaluation,
+        online,
     })
 }
 

@@ -95,6 +95,17 @@ pub fn bench_markdown(r: &BenchResults) -> String {
         "## Batch fit and prediction\n\nFit on all training rows; scores on the test rows (pooled over the outputs). Speed-up = baseline time / this time; RMSE ratio = this / baseline.\n\n{}",
         batch.markdown()
     );
+    if !r.failures.is_empty() {
+        let _ = writeln!(s, "**Failed** (not in the tables):\n");
+        for (label, reason) in &r.failures {
+            let _ = writeln!(
+                s,
+                "- {label}: {}",
+                reason.lines().next().unwrap_or_default()
+            );
+        }
+        s.push('\n');
+    }
     let online: Vec<&BenchRow> = r.rows.iter().filter(|row| row.online.is_some()).collect();
     if online.is_empty() {
         return s;
