@@ -1,8 +1,10 @@
 //! Rover data for gpodo: the simulated ExoTeR-like testbed (the embedded
 //! default dataset), loaders for logged rover runs and residual tables, and
 //! the residual dataset of the paper's §IV-C built from logs and a motion
-//! model.
+//! model; and ROS bags (MCAP and ROS 1) read by their magic bytes
+//! ([`bags`]).
 
+pub mod bags;
 mod error;
 pub mod log;
 pub mod residuals;

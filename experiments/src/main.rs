@@ -100,6 +100,12 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Look inside a ROS bag (ROS 2 MCAP or ROS 1 .bag, recognised by its
+    /// first bytes).
+    Bag {
+        #[command(subcommand)]
+        command: BagCommand,
+    },
     /// Simulate the testbed and write every run as CSV (trajectory format).
     Simulate {
         /// Simulator preset.
@@ -117,6 +123,19 @@ enum Command {
         /// Override the training run duration (s).
         #[arg(long)]
         training_run_secs: Option<f64>,
+    },
+}
+
+#[derive(Subcommand)]
+enum BagCommand {
+    /// Topics, types, message counts, rates and duration (what `ros2 bag
+    /// info` shows).
+    Info {
+        /// The bag.
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -334,6 +353,17 @@ fn main() -> anyhow::Result<()> {
             regressor,
             save,
         } => fit(&file, &regressor, &save),
+        Command::Bag {
+            command: BagCommand::Info { file, json },
+        } => {
+            let info = gpodo_datasets::bags::BagInfo::read(&file)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&info)?);
+            } else {
+                print!("{}", info.to_text());
+            }
+            Ok(())
+        }
         Command::Predict { model, input, out } => {
             let rows = predict_csv(&model, &input, &out)?;
             println!("wrote {} ({rows} rows)", out.display());

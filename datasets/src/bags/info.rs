@@ -1,0 +1,127 @@
+//! What a bag holds: topics, types, message counts, rates and duration.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::{BagError, BagFormat, visit_messages};
+
+/// One topic of a bag.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TopicInfo {
+    /// The topic.
+    pub topic: String,
+    /// Its type as recorded.
+    pub message_type: String,
+    /// Its serialisation (`cdr`, `ros1`).
+    pub encoding: String,
+    /// Messages.
+    pub count: usize,
+    /// First receive time (ns since the epoch).
+    pub first_ns: u64,
+    /// Last receive time (ns).
+    pub last_ns: u64,
+}
+
+impl TopicInfo {
+    /// Mean rate: `(count − 1)` intervals over the span (Hz; 0 for fewer
+    /// than two messages).
+    pub fn rate_hz(&self) -> f64 {
+        let span = self.last_ns.saturating_sub(self.first_ns) as f64 * 1e-9;
+        if self.count < 2 || span <= 0.0 {
+            0.0
+        } else {
+            (self.count - 1) as f64 / span
+        }
+    }
+}
+
+/// A bag's summary.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BagInfo {
+    /// The file.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: BagFormat,
+    /// Messages in all.
+    pub messages: usize,
+    /// First receive time (ns since the epoch).
+    pub start_ns: u64,
+    /// Last receive time (ns).
+    pub end_ns: u64,
+    /// Every topic, by name.
+    pub topics: Vec<TopicInfo>,
+}
+
+impl BagInfo {
+    /// Reads every message of the bag at `path`.
+    ///
+    /// # Errors
+    /// [`BagError`].
+    pub fn read(path: &Path) -> Result<Self, BagError> {
+        let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+        let (format, messages) = visit_messages(path, |m| {
+            let entry = topics
+                .entry(m.topic.to_string())
+                .or_insert_with(|| TopicInfo {
+                    topic: m.topic.to_string(),
+                    message_type: m.message_type.to_string(),
+                    encoding: m.encoding.to_string(),
+                    count: 0,
+                    first_ns: m.log_time_ns,
+                    last_ns: m.log_time_ns,
+                });
+            entry.count += 1;
+            entry.first_ns = entry.first_ns.min(m.log_time_ns);
+            entry.last_ns = entry.last_ns.max(m.log_time_ns);
+        })?;
+        let topics: Vec<TopicInfo> = topics.into_values().collect();
+        let start_ns = topics.iter().map(|t| t.first_ns).min().unwrap_or(0);
+        let end_ns = topics.iter().map(|t| t.last_ns).max().unwrap_or(0);
+        Ok(Self {
+            path: path.to_path_buf(),
+            format,
+            messages,
+            start_ns,
+            end_ns,
+            topics,
+        })
+    }
+
+    /// Duration from the first to the last message (s).
+    pub fn duration_secs(&self) -> f64 {
+        self.end_ns.saturating_sub(self.start_ns) as f64 * 1e-9
+    }
+
+    /// The summary as `ros2 bag info` lays it out.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "Files:             {}\nFormat:            {}\nDuration:          {:.3} s\nStart:             {:.9} (s since epoch)\nEnd:               {:.9}\nMessages:          {}\nTopics:\n",
+            self.path.display(),
+            self.format,
+            self.duration_secs(),
+            self.start_ns as f64 * 1e-9,
+            self.end_ns as f64 * 1e-9,
+            self.messages
+        );
+        let width = self.topics.iter().map(|t| t.topic.len()).max().unwrap_or(0);
+        let type_width = self
+            .topics
+            .iter()
+            .map(|t| t.message_type.len())
+            .max()
+            .unwrap_or(0);
+        for t in &self.topics {
+            s.push_str(&format!(
+                "  {:width$}  {:type_width$}  {:>7} msgs  {:8.2} Hz  ({})\n",
+                t.topic,
+                t.message_type,
+                t.count,
+                t.rate_hz(),
+                t.encoding
+            ));
+        }
+        s
+    }
+}

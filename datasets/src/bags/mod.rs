@@ -1,0 +1,264 @@
+//! Robot recordings as ROS bags: ROS 2 MCAP (chunked, zstd or lz4) through
+//! the `mcap` crate and ROS 1 bag v2.0 (bz2 or lz4 chunks) through the
+//! `rosbag` crate, recognised by their magic bytes rather than their file
+//! names. [`visit_messages`] walks every message of either kind in file
+//! order with its topic, recorded type and receive time; [`BagInfo`] is
+//! what `gpodo bag info` prints (what `ros2 bag info` shows).
+
+mod info;
+
+use std::path::{Path, PathBuf};
+
+pub use info::{BagInfo, TopicInfo};
+
+/// The first bytes of an MCAP file.
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+/// The first bytes of a ROS 1 bag, version 2.0.
+const ROSBAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+/// The first bytes of an SQLite database (a ROS 2 `.db3` bag).
+const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
+
+/// The container formats gpodo reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BagFormat {
+    /// ROS 2 MCAP (messages in CDR).
+    Mcap,
+    /// ROS 1 bag v2.0 (messages in ROS 1 serialisation).
+    Ros1,
+}
+
+impl std::fmt::Display for BagFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Mcap => "MCAP (ROS 2)",
+            Self::Ros1 => "ROS 1 bag v2.0",
+        })
+    }
+}
+
+/// Why a bag could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    /// The file could not be opened or read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is not a bag gpodo reads.
+    #[error("{}: {detail}", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// What its first bytes are, and what was expected.
+        detail: String,
+    },
+    /// The container is damaged (a bad chunk, record or index).
+    #[error("{}: message {index}: {detail}", path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// How many messages were read before the damage.
+        index: usize,
+        /// The reader's message.
+        detail: String,
+    },
+}
+
+/// One message as stored: where it was published, its recorded type and
+/// encoding, when it was received, and its serialised bytes.
+#[derive(Debug, Clone, Copy)]
+pub struct RawMessage<'a> {
+    /// Its position in the file (from 0).
+    pub index: usize,
+    /// The topic.
+    pub topic: &'a str,
+    /// The type as recorded (`sensor_msgs/msg/Imu` in ROS 2,
+    /// `sensor_msgs/Imu` in ROS 1).
+    pub message_type: &'a str,
+    /// The serialisation: `cdr` (ROS 2) or `ros1`.
+    pub encoding: &'a str,
+    /// Receive (log) time, nanoseconds since the Unix epoch.
+    pub log_time_ns: u64,
+    /// The serialised message.
+    pub data: &'a [u8],
+}
+
+/// The ROS 1 form of a type name: `sensor_msgs/msg/Imu` → `sensor_msgs/Imu`.
+pub fn ros1_type_name(recorded: &str) -> String {
+    match recorded.split('/').collect::<Vec<_>>().as_slice() {
+        [package, "msg", name] => format!("{package}/{name}"),
+        _ => recorded.to_string(),
+    }
+}
+
+/// The format of the file at `path`, from its first bytes.
+///
+/// # Errors
+/// [`BagError::Io`], or [`BagError::UnknownFormat`] naming what was found.
+pub fn detect_format(path: &Path) -> Result<BagFormat, BagError> {
+    use std::io::Read;
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut head = Vec::with_capacity(16);
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(16)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    if head.starts_with(MCAP_MAGIC) {
+        return Ok(BagFormat::Mcap);
+    }
+    if head.starts_with(ROSBAG_MAGIC) {
+        return Ok(BagFormat::Ros1);
+    }
+    let shown: String = head
+        .iter()
+        .map(|b| {
+            if b.is_ascii_graphic() || *b == b' ' {
+                (*b as char).to_string()
+            } else {
+                format!("\\x{b:02x}")
+            }
+        })
+        .collect();
+    let detail = if head.starts_with(SQLITE_MAGIC) {
+        "an SQLite database (a ROS 2 .db3 bag): convert it to MCAP first, e.g. `ros2 bag convert` or `rosbags-convert --dst-storage mcap`".to_string()
+    } else {
+        format!(
+            "not a bag: it begins `{shown}`; expected an MCAP file (`\\x89MCAP0`) or a ROS 1 bag (`#ROSBAG V2.0`)"
+        )
+    };
+    Err(BagError::UnknownFormat {
+        path: path.to_path_buf(),
+        detail,
+    })
+}
+
+/// Calls `visit` with every message of the bag at `path`, in file order,
+/// and returns the format and the number of messages.
+///
+/// # Errors
+/// [`BagError`] naming the file and, for damage, the message index.
+pub fn visit_messages(
+    path: &Path,
+    mut visit: impl FnMut(RawMessage<'_>),
+) -> Result<(BagFormat, usize), BagError> {
+    let format = detect_format(path)?;
+    let count = match format {
+        BagFormat::Mcap => visit_mcap(path, &mut visit)?,
+        BagFormat::Ros1 => visit_ros1(path, &mut visit)?,
+    };
+    Ok((format, count))
+}
+
+fn visit_mcap(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usize, BagError> {
+    let bytes = std::fs::read(path).map_err(|source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let corrupt = |index: usize, e: mcap::McapError| BagError::Corrupt {
+        path: path.to_path_buf(),
+        index,
+        detail: e.to_string(),
+    };
+    let stream = mcap::MessageStream::new(&bytes).map_err(|e| corrupt(0, e))?;
+    let mut index = 0;
+    for message in stream {
+        let message = message.map_err(|e| corrupt(index, e))?;
+        let channel = &message.channel;
+        let message_type = channel.schema.as_ref().map_or("", |s| s.name.as_str());
+        visit(RawMessage {
+            index,
+            topic: &channel.topic,
+            message_type,
+            encoding: &channel.message_encoding,
+            log_time_ns: message.log_time,
+            data: &message.data,
+        });
+        index += 1;
+    }
+    Ok(index)
+}
+
+fn visit_ros1(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usize, BagError> {
+    use rosbag::{ChunkRecord, MessageRecord, RosBag};
+    let bag = RosBag::new(path).map_err(|source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let corrupt = |index: usize, e: rosbag::Error| BagError::Corrupt {
+        path: path.to_path_buf(),
+        index,
+        detail: e.to_string(),
+    };
+    // Connections (topic and type by id) precede their messages in each
+    // chunk.
+    let mut connections: std::collections::BTreeMap<u32, (String, String)> =
+        std::collections::BTreeMap::new();
+    let mut index = 0;
+    for record in bag.chunk_records() {
+        let ChunkRecord::Chunk(chunk) = record.map_err(|e| corrupt(index, e))? else {
+            continue;
+        };
+        for message in chunk.messages() {
+            match message.map_err(|e| corrupt(index, e))? {
+                MessageRecord::Connection(c) => {
+                    connections.insert(c.id, (c.topic.to_string(), c.tp.to_string()));
+                }
+                MessageRecord::MessageData(m) => {
+                    let Some((topic, message_type)) = connections.get(&m.conn_id) else {
+                        return Err(BagError::Corrupt {
+                            path: path.to_path_buf(),
+                            index,
+                            detail: format!(
+                                "a message of connection {} before its connection record",
+                                m.conn_id
+                            ),
+                        });
+                    };
+                    visit(RawMessage {
+                        index,
+                        topic,
+                        message_type,
+                        encoding: "ros1",
+                        log_time_ns: m.time,
+                        data: m.data,
+                    });
+                    index += 1;
+                }
+            }
+        }
+    }
+    Ok(index)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ros2_type_names_take_their_ros1_form() {
+        assert_eq!(ros1_type_name("sensor_msgs/msg/Imu"), "sensor_msgs/Imu");
+        assert_eq!(ros1_type_name("sensor_msgs/Imu"), "sensor_msgs/Imu");
+        assert_eq!(ros1_type_name("weird"), "weird");
+    }
+
+    #[test]
+    fn a_file_that_is_not_a_bag_is_named_with_its_first_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("log.bag");
+        std::fs::write(&csv, "time,x\n0,1\n").unwrap();
+        let e = detect_format(&csv).unwrap_err().to_string();
+        assert!(e.contains("log.bag") && e.contains("begins `time,x"), "{e}");
+        let db3 = dir.path().join("x.mcap");
+        std::fs::write(&db3, b"SQLite format 3\0rest").unwrap();
+        let e = detect_format(&db3).unwrap_err().to_string();
+        assert!(e.contains("SQLite") && e.contains("MCAP"), "{e}");
+    }
+}
