@@ -87,7 +87,7 @@ impl RegressorSpec {
             ),
             Self::External(p) => (
                 p.base_label(),
-                &["command", "label"][..],
+                &["command", "label", "timeout_secs"][..],
                 to_json(p),
                 to_json(&ExternalParams::new(p.command.clone())),
             ),

@@ -206,6 +206,12 @@ fn the_spec_resolves_the_script_against_the_experiment_folder() {
     assert!(Path::new(&resolved.command[1]).is_absolute());
     assert!(Path::new(&resolved.command[1]).exists());
     assert_eq!(spec.label(), "ridge [alpha=0.5]");
+    let slow: RegressorSpec = serde_saphyr::from_str(&format!("{yaml}timeout_secs: 5\n")).unwrap();
+    assert_eq!(
+        slow.label(),
+        "ridge [alpha=0.5]",
+        "the timeout is not a model setting"
+    );
     let bad: Result<RegressorSpec, _> = serde_saphyr::from_str("kind: external\ncommand: []\n");
     let e = bad.unwrap().validate().unwrap_err().to_string();
     assert!(e.contains("command"), "{e}");

@@ -95,6 +95,22 @@ fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec) -> String {
     format!("{dataset}|{}", json(spec))
 }
 
+/// A rough relative cost of fitting `spec` on `n` rows, to start the
+/// longest fits first: `n³` per exact-GP evaluation, times the kernel's
+/// terms (a sum needs about twice the evaluations of one kernel); `n m²`
+/// for a sparse GP; `n` for the rest.
+fn fit_cost(spec: &gpodo_regressors::RegressorSpec, n: usize) -> f64 {
+    use gpodo_regressors::RegressorSpec;
+    let n = n as f64;
+    match spec {
+        RegressorSpec::ExactGp(p) => n.powi(3) * p.kernel.to_string().split('+').count() as f64,
+        RegressorSpec::SparseGp(p) => n * (p.inducing.count as f64).powi(2),
+        // A plugin may be anything; start it early.
+        RegressorSpec::External(_) => n.powi(3),
+        _ => n,
+    }
+}
+
 /// Fits one distinct regressor and predicts its windows on the traverses.
 fn fit_shared(
     spec: &gpodo_regressors::RegressorSpec,
@@ -184,8 +200,18 @@ impl SharedWork {
         }
         // A fit that fails fails only the runs that use it (an external
         // plugin's crash is the plugin's, not the sweep's).
+        // Longest first, pulled one at a time (list scheduling): otherwise
+        // a sweep on two cores can end with one long fit running alone.
+        let mut fits: Vec<_> = fits.into_iter().collect();
+        fits.sort_by(|a, b| {
+            let cost = |(spec, p, _): &(&gpodo_regressors::RegressorSpec, Arc<Prepared>, &Path)| {
+                fit_cost(spec, p.rows.train.len())
+            };
+            cost(&b.1).total_cmp(&cost(&a.1)).then(a.0.cmp(&b.0))
+        });
         let fitted: Vec<(String, FitOutcome)> = fits
-            .into_par_iter()
+            .into_iter()
+            .par_bridge()
             .map(|(key, (spec, p, base))| {
                 let fitted = fit_shared(spec, base, &p, progress).map_err(|e| {
                     tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");

@@ -303,7 +303,7 @@ impl ExternalRegressor {
         }
         if !reply.ok {
             // The plugin refused the request but is still in step: keep it.
-            let stderr = session.process.stderr_tail();
+            let stderr = session.process.settled_stderr_tail();
             let detail = format!(
                 "the plugin replied with an error: {}",
                 reply.error.as_deref().unwrap_or("(no message)")

@@ -192,6 +192,27 @@ impl PluginProcess {
             .unwrap_or_default()
     }
 
+    /// The last stderr lines of a plugin that is still running, once its
+    /// stderr has been quiet for a moment (at most 250 ms): a plugin writes
+    /// its traceback to stderr before its error reply to stdout, and the
+    /// two pipes are read by different threads.
+    pub fn settled_stderr_tail(&mut self) -> Vec<String> {
+        let deadline = Instant::now() + Duration::from_millis(250);
+        let mut last = self.stderr_tail();
+        let mut quiet_since = Instant::now();
+        while Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+            let now = self.stderr_tail();
+            if now != last {
+                last = now;
+                quiet_since = Instant::now();
+            } else if quiet_since.elapsed() >= Duration::from_millis(40) {
+                break;
+            }
+        }
+        last
+    }
+
     /// Closes the plugin's stdin and waits up to `grace` for it to exit,
     /// then kills it; always reaps it.
     pub fn close(&mut self, grace: Duration) {
