@@ -173,3 +173,47 @@ bench: {{ predict_queries: 5, learning_curve_every: 30 }}
         "{md}"
     );
 }
+
+#[test]
+fn an_external_plugin_learns_online_in_a_gated_scheme() {
+    let Some(python) = python() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let ridge = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../plugins/python/examples/ridge.py")
+        .canonicalize()
+        .unwrap();
+    let yaml = format!(
+        "name: online-plugin
+dataset: {{ kind: simulated, preset: exoter-prl, seed: 1, training_runs: 1, training_run_secs: 60, test_max_secs: 90 }}
+regressors:
+  - kind: zero
+schemes:
+  - label: ridge online
+    online: {{ regressor: {{ kind: external, command: [{python}, {ridge}], alpha: 10.0 }} }}
+    selector: {{ kind: fixed_rate, fps: 1.0 }}
+",
+        ridge = ridge.display()
+    );
+    let file = tmp.path().join("online.yaml");
+    std::fs::write(&file, yaml).unwrap();
+    let out_dir = tmp.path().join("out");
+    let out = Command::new(GPODO)
+        .args(["--quiet", "run"])
+        .arg(&file)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let record = &records(&out_dir)[0];
+    let scheme = &record["metrics"]["schemes"][0];
+    assert_eq!(scheme["label"], "ridge online");
+    assert!(
+        scheme["online_targets"].as_u64().unwrap() > 10,
+        "the plugin learned from VO: {scheme}"
+    );
+}
