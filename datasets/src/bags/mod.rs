@@ -2,10 +2,14 @@
 //! the `mcap` crate and ROS 1 bag v2.0 (bz2 or lz4 chunks) through the
 //! `rosbag` crate, recognised by their magic bytes rather than their file
 //! names. [`visit_messages`] walks every message of either kind in file
-//! order with its topic, recorded type and receive time; [`BagInfo`] is
-//! what `gpodo bag info` prints (what `ros2 bag info` shows).
+//! order with its topic, recorded type and receive time; [`messages`]
+//! decodes the message types gpodo uses from either serialisation
+//! ([`wire`]); [`BagInfo`] is what `gpodo bag info` prints (what `ros2 bag
+//! info` shows).
 
 mod info;
+pub mod messages;
+pub mod wire;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,256 @@
+//! The ROS messages gpodo reads from bags, decoded from either
+//! serialisation into the same typed structs: `sensor_msgs/JointState`,
+//! `sensor_msgs/Imu`, `sensor_msgs/NavSatFix`, `nav_msgs/Odometry`,
+//! `geometry_msgs/PoseStamped`, `PoseWithCovarianceStamped`,
+//! `TwistStamped` and `tf2_msgs/TFMessage`.
+
+use serde::Serialize;
+
+use super::ros1_type_name;
+use super::wire::{WireError, WireReader};
+
+/// `std_msgs/Header` (ROS 1's `seq` is dropped: ROS 2 has none).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Header {
+    /// Stamp, nanoseconds since the epoch.
+    pub stamp_ns: i64,
+    /// Coordinate frame.
+    pub frame_id: String,
+}
+
+/// `geometry_msgs/Pose`: position and unit quaternion `[x, y, z, w]`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Pose {
+    /// Position (m).
+    pub position: [f64; 3],
+    /// Orientation `[x, y, z, w]`.
+    pub orientation: [f64; 4],
+}
+
+/// `geometry_msgs/Twist`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Twist {
+    /// Linear velocity (m/s).
+    pub linear: [f64; 3],
+    /// Angular velocity (rad/s).
+    pub angular: [f64; 3],
+}
+
+/// `sensor_msgs/Imu`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Imu {
+    /// Header.
+    pub header: Header,
+    /// Orientation `[x, y, z, w]`.
+    pub orientation: [f64; 4],
+    /// Its covariance (row-major 3 × 3).
+    pub orientation_covariance: [f64; 9],
+    /// Angular velocity (rad/s).
+    pub angular_velocity: [f64; 3],
+    /// Its covariance.
+    pub angular_velocity_covariance: [f64; 9],
+    /// Linear acceleration (m/s²).
+    pub linear_acceleration: [f64; 3],
+    /// Its covariance.
+    pub linear_acceleration_covariance: [f64; 9],
+}
+
+/// `nav_msgs/Odometry`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Odometry {
+    /// Header (the pose's frame).
+    pub header: Header,
+    /// The twist's frame.
+    pub child_frame_id: String,
+    /// Pose.
+    pub pose: Pose,
+    /// Its covariance (row-major 6 × 6).
+    pub pose_covariance: Vec<f64>,
+    /// Twist.
+    pub twist: Twist,
+    /// Its covariance (row-major 6 × 6).
+    pub twist_covariance: Vec<f64>,
+}
+
+/// `sensor_msgs/NavSatFix`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NavSatFix {
+    /// Header.
+    pub header: Header,
+    /// Fix status (−1 no fix, 0 fix, 1 SBAS, 2 GBAS).
+    pub status: i8,
+    /// Satellite services used.
+    pub service: u16,
+    /// Latitude (degrees).
+    pub latitude: f64,
+    /// Longitude (degrees).
+    pub longitude: f64,
+    /// Altitude (m).
+    pub altitude: f64,
+    /// ENU position covariance (row-major 3 × 3, m²).
+    pub position_covariance: [f64; 9],
+    /// How the covariance is known (0 unknown … 3 known).
+    pub position_covariance_type: u8,
+}
+
+/// `sensor_msgs/JointState`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JointState {
+    /// Header.
+    pub header: Header,
+    /// Joint names.
+    pub name: Vec<String>,
+    /// Positions (rad or m).
+    pub position: Vec<f64>,
+    /// Velocities.
+    pub velocity: Vec<f64>,
+    /// Efforts.
+    pub effort: Vec<f64>,
+}
+
+/// `geometry_msgs/TransformStamped`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TransformStamped {
+    /// Header (the parent frame).
+    pub header: Header,
+    /// The child frame.
+    pub child_frame_id: String,
+    /// Translation (m).
+    pub translation: [f64; 3],
+    /// Rotation `[x, y, z, w]`.
+    pub rotation: [f64; 4],
+}
+
+/// A decoded message.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum RosMessage {
+    /// `sensor_msgs/Imu`.
+    Imu(Imu),
+    /// `nav_msgs/Odometry`.
+    Odometry(Odometry),
+    /// `sensor_msgs/NavSatFix`.
+    NavSatFix(NavSatFix),
+    /// `sensor_msgs/JointState`.
+    JointState(JointState),
+    /// `geometry_msgs/PoseStamped`.
+    PoseStamped(Header, Pose),
+    /// `geometry_msgs/PoseWithCovarianceStamped`: pose and its 6 × 6
+    /// covariance.
+    PoseWithCovarianceStamped(Header, Pose, Vec<f64>),
+    /// `geometry_msgs/TwistStamped`.
+    TwistStamped(Header, Twist),
+    /// `tf2_msgs/TFMessage`.
+    Tf(Vec<TransformStamped>),
+}
+
+/// The types [`decode`] reads, in their ROS 1 spelling.
+pub const SUPPORTED_TYPES: [&str; 8] = [
+    "sensor_msgs/Imu",
+    "nav_msgs/Odometry",
+    "sensor_msgs/NavSatFix",
+    "sensor_msgs/JointState",
+    "geometry_msgs/PoseStamped",
+    "geometry_msgs/PoseWithCovarianceStamped",
+    "geometry_msgs/TwistStamped",
+    "tf2_msgs/TFMessage",
+];
+
+fn header(r: &mut WireReader<'_>) -> Result<Header, WireError> {
+    let stamp_ns = if r.is_cdr() {
+        let sec = i64::from(r.i32()?);
+        sec * 1_000_000_000 + i64::from(r.u32()?)
+    } else {
+        let _seq = r.u32()?;
+        let sec = i64::from(r.u32()?);
+        sec * 1_000_000_000 + i64::from(r.u32()?)
+    };
+    Ok(Header {
+        stamp_ns,
+        frame_id: r.string()?,
+    })
+}
+
+fn pose(r: &mut WireReader<'_>) -> Result<Pose, WireError> {
+    Ok(Pose {
+        position: r.f64s()?,
+        orientation: r.f64s()?,
+    })
+}
+
+fn twist(r: &mut WireReader<'_>) -> Result<Twist, WireError> {
+    Ok(Twist {
+        linear: r.f64s()?,
+        angular: r.f64s()?,
+    })
+}
+
+fn covariance36(r: &mut WireReader<'_>) -> Result<Vec<f64>, WireError> {
+    Ok(r.f64s::<36>()?.to_vec())
+}
+
+/// Decodes one message of type `message_type` (ROS 1 or ROS 2 spelling)
+/// serialised as `encoding` (`ros1` or `cdr`).
+///
+/// # Errors
+/// An unsupported type, or bytes that do not hold that type.
+pub fn decode(message_type: &str, encoding: &str, data: &[u8]) -> Result<RosMessage, WireError> {
+    let mut r = WireReader::new(data, encoding)?;
+    let r = &mut r;
+    let message = match ros1_type_name(message_type).as_str() {
+        "sensor_msgs/Imu" => RosMessage::Imu(Imu {
+            header: header(r)?,
+            orientation: r.f64s()?,
+            orientation_covariance: r.f64s()?,
+            angular_velocity: r.f64s()?,
+            angular_velocity_covariance: r.f64s()?,
+            linear_acceleration: r.f64s()?,
+            linear_acceleration_covariance: r.f64s()?,
+        }),
+        "nav_msgs/Odometry" => RosMessage::Odometry(Odometry {
+            header: header(r)?,
+            child_frame_id: r.string()?,
+            pose: pose(r)?,
+            pose_covariance: covariance36(r)?,
+            twist: twist(r)?,
+            twist_covariance: covariance36(r)?,
+        }),
+        "sensor_msgs/NavSatFix" => RosMessage::NavSatFix(NavSatFix {
+            header: header(r)?,
+            status: r.i8()?,
+            service: r.u16()?,
+            latitude: r.f64()?,
+            longitude: r.f64()?,
+            altitude: r.f64()?,
+            position_covariance: r.f64s()?,
+            position_covariance_type: r.u8()?,
+        }),
+        "sensor_msgs/JointState" => RosMessage::JointState(JointState {
+            header: header(r)?,
+            name: r.strings()?,
+            position: r.f64_seq()?,
+            velocity: r.f64_seq()?,
+            effort: r.f64_seq()?,
+        }),
+        "geometry_msgs/PoseStamped" => RosMessage::PoseStamped(header(r)?, pose(r)?),
+        "geometry_msgs/PoseWithCovarianceStamped" => {
+            RosMessage::PoseWithCovarianceStamped(header(r)?, pose(r)?, covariance36(r)?)
+        }
+        "geometry_msgs/TwistStamped" => RosMessage::TwistStamped(header(r)?, twist(r)?),
+        "tf2_msgs/TFMessage" => RosMessage::Tf(r.seq(|r| {
+            Ok(TransformStamped {
+                header: header(r)?,
+                child_frame_id: r.string()?,
+                translation: r.f64s()?,
+                rotation: r.f64s()?,
+            })
+        })?),
+        other => {
+            return Err(WireError(format!(
+                "type `{other}` is not one gpodo reads (it reads {})",
+                SUPPORTED_TYPES.join(", ")
+            )));
+        }
+    };
+    r.finish()?;
+    Ok(message)
+}
