@@ -96,7 +96,7 @@ enum Command {
         /// The input rows (CSV with a header, raw units).
         #[arg(long)]
         input: PathBuf,
-        /// Where to write the predictions (CSV: mean_<target>..., var_<target>...).
+        /// Where to write the predictions (CSV: mean_TARGET..., var_TARGET... per row).
         #[arg(long)]
         out: PathBuf,
     },
