@@ -188,3 +188,62 @@ fn cdr_alignment_counts_from_after_the_encapsulation_header() {
     let e = decode("std_msgs/String", "ros1", &ros1).unwrap_err();
     assert!(e.0.contains("not one gpodo reads"), "{}", e.0);
 }
+
+#[test]
+fn gps_fixes_in_local_enu_span_the_drive_the_wheel_odometry_measured() {
+    use gpodo_datasets::bags::enu::LocalEnu;
+    let mut enu: Option<LocalEnu> = None;
+    let mut gps = Vec::new();
+    for m in decoded("husky_test1.bag", "/fix") {
+        let RosMessage::NavSatFix(f) = m else {
+            panic!()
+        };
+        if f.status < 0 {
+            continue;
+        }
+        let frame = *enu.get_or_insert_with(|| LocalEnu::new(f.latitude, f.longitude, f.altitude));
+        gps.push(frame.to_enu(f.latitude, f.longitude, f.altitude));
+    }
+    let mut odom = Vec::new();
+    for m in decoded("husky_test1.bag", "/husky_velocity_controller/odom") {
+        let RosMessage::Odometry(o) = m else { panic!() };
+        odom.push(o.pose.position);
+    }
+    let length = |p: &[[f64; 3]]| -> f64 {
+        p.windows(2)
+            .map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt())
+            .sum()
+    };
+    let extent = |p: &[[f64; 3]]| -> f64 {
+        let (xs, ys): (Vec<f64>, Vec<f64>) = p.iter().map(|q| (q[0], q[1])).unzip();
+        let span = |v: &[f64]| {
+            v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+        };
+        span(&xs).hypot(span(&ys))
+    };
+    assert!(
+        gps[0].iter().all(|v| v.abs() < 1e-9),
+        "the first fix is the origin"
+    );
+    eprintln!(
+        "GPS: {} fixes, path {:.1} m, extent {:.1} m; odometry: path {:.1} m, extent {:.1} m",
+        gps.len(),
+        length(&gps),
+        extent(&gps),
+        length(&odom),
+        extent(&odom)
+    );
+    // Two independent sensors of the same drive: the GPS track in metres
+    // (noisier, so a little longer) and the wheel odometry. Measured:
+    // 395.2 m against 358.8 m of path, 156.9 m against 181.7 m of extent.
+    for (what, g, o) in [
+        ("path", length(&gps), length(&odom)),
+        ("extent", extent(&gps), extent(&odom)),
+    ] {
+        let ratio = g / o;
+        assert!(
+            (0.8..1.25).contains(&ratio),
+            "{what}: GPS {g:.1} m, odometry {o:.1} m"
+        );
+    }
+}

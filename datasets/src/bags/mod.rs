@@ -7,6 +7,7 @@
 //! ([`wire`]); [`BagInfo`] is what `gpodo bag info` prints (what `ros2 bag
 //! info` shows).
 
+pub mod enu;
 mod info;
 pub mod messages;
 pub mod wire;
