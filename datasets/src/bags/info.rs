@@ -113,13 +113,20 @@ impl BagInfo {
             .max()
             .unwrap_or(0);
         for t in &self.topics {
+            let decoded = super::messages::SUPPORTED_TYPES
+                .contains(&super::ros1_type_name(&t.message_type).as_str());
             s.push_str(&format!(
-                "  {:width$}  {:type_width$}  {:>7} msgs  {:8.2} Hz  ({})\n",
+                "  {:width$}  {:type_width$}  {:>7} msgs  {:8.2} Hz  ({}{})\n",
                 t.topic,
                 t.message_type,
                 t.count,
                 t.rate_hz(),
-                t.encoding
+                t.encoding,
+                if decoded {
+                    ""
+                } else {
+                    "; not a type gpodo reads"
+                }
             ));
         }
         s
