@@ -247,3 +247,34 @@ fn gps_fixes_in_local_enu_span_the_drive_the_wheel_odometry_measured() {
         );
     }
 }
+
+#[test]
+fn a_topic_is_read_for_a_role_that_names_what_it_needs() {
+    use gpodo_datasets::bags::topic::read_topic;
+    let bag = data("husky_test1.mcap");
+    let imu = read_topic(&bag, "/imu/data", "imu", &["sensor_msgs/Imu"]).unwrap();
+    assert_eq!(imu.len(), 11865);
+    assert!(imu.windows(2).all(|w| w[0].log_time_ns <= w[1].log_time_ns));
+    let e = read_topic(
+        &bag,
+        "/imu/data",
+        "ground truth",
+        &["nav_msgs/Odometry", "geometry_msgs/PoseStamped"],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("husky_test1.mcap")
+            && e.contains("`/imu/data` is `sensor_msgs/msg/Imu`")
+            && e.contains("ground truth role needs one of nav_msgs/Odometry"),
+        "{e}"
+    );
+    let e = read_topic(&bag, "/joint_states", "joints", &["sensor_msgs/JointState"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no topic `/joint_states`")
+            && e.contains("/fix, /husky_velocity_controller/odom, /imu/data"),
+        "{e}"
+    );
+}

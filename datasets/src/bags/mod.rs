@@ -10,6 +10,7 @@
 pub mod enu;
 mod info;
 pub mod messages;
+pub mod topic;
 pub mod wire;
 
 use std::path::{Path, PathBuf};
