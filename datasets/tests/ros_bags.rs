@@ -278,3 +278,96 @@ fn a_topic_is_read_for_a_role_that_names_what_it_needs() {
         "{e}"
     );
 }
+
+mod import {
+    use super::data;
+    use gpodo_datasets::bags::import::{TopicMap, import_bag};
+    use gpodo_datasets::log::{read_log_csv, write_log_csv};
+
+    fn map(yaml: &str) -> TopicMap {
+        serde_saphyr::from_str(yaml).unwrap()
+    }
+
+    fn path_length(log: &gpodo_datasets::log::RoverLog) -> f64 {
+        log.ground_truth
+            .windows(2)
+            .map(|w| {
+                (w[1].translation.vector - w[0].translation.vector)
+                    .xy()
+                    .norm()
+            })
+            .sum()
+    }
+
+    #[test]
+    fn the_husky_recording_becomes_a_rover_log_the_logs_dataset_reads() {
+        // The recording's IMU has its y axis up (gravity reads +10 m/s² on
+        // y at rest): rotate it by +90° about x into the body frame.
+        let m = map(
+            "imu: /imu/data\nimu_rotation_rpy_rad: [1.5707963267948966, 0, 0]\nground_truth: /husky_velocity_controller/odom\nrate_hz: 10\n",
+        );
+        for file in ["husky_test1.bag", "husky_test1.mcap"] {
+            let (log, report) = import_bag(&data(file), "husky", &m).unwrap();
+            // 10 Hz over the ~395 s every stream covers.
+            assert!((3900..=3960).contains(&report.rows), "{file}: {report:?}");
+            assert_eq!(report.streams[0].messages, 11865);
+            // Odometry at 10 Hz, with intervals up to 0.21 s.
+            assert!(report.streams[1].max_gap_bridged_secs < 0.25, "{report:?}");
+            let tmp = tempfile::tempdir().unwrap();
+            let (csv, _) = write_log_csv(&log, tmp.path()).unwrap();
+            let back = read_log_csv(&csv).unwrap();
+            assert_eq!(back.samples.len(), report.rows);
+            // The resampled odometry keeps the distance driven (358.8 m at
+            // its own 10 Hz).
+            let length = path_length(&back);
+            assert!((length - 358.8).abs() < 0.02 * 358.8, "{file}: {length} m");
+            // Mean specific force ≈ gravity on +z, small mean roll and pitch.
+            let n = back.samples.len() as f64;
+            let mean = |f: &dyn Fn(&gpodo_traits::ProprioceptiveSample) -> f64| {
+                back.samples.iter().map(f).sum::<f64>() / n
+            };
+            assert!((mean(&|s| s.imu.accel_mps2.z) - 9.8).abs() < 0.5, "{file}");
+            assert!(
+                mean(&|s| s.imu.roll_rad).abs() < 0.1 && mean(&|s| s.imu.pitch_rad).abs() < 0.1,
+                "{file}"
+            );
+        }
+    }
+
+    #[test]
+    fn gnss_ground_truth_is_local_enu_and_gaps_are_not_bridged() {
+        let (log, report) = import_bag(
+            &data("husky_test1.mcap"),
+            "husky_gps",
+            &map("imu: /imu/data\nground_truth: /fix\n"),
+        )
+        .unwrap();
+        assert!(report.rows > 3800, "{report:?}");
+        let gt = &report.streams[1];
+        assert!((0.35..=0.5).contains(&gt.max_gap_bridged_secs), "{gt:?}");
+        assert!(log.ground_truth[0].translation.vector.norm() < 5.0);
+        // GPS comes at 2.5 Hz: with at most 0.2 s bridged, only a row that
+        // falls on a fix survives; the others are counted, not invented.
+        let (_, tight) = import_bag(
+            &data("husky_test1.mcap"),
+            "x",
+            &map("imu: /imu/data\nground_truth: /fix\nmax_gap_secs: 0.2\n"),
+        )
+        .unwrap();
+        assert!(tight.rows <= 1, "{tight:?}");
+        assert_eq!(tight.streams[1].rows_in_gaps, tight.rows_dropped);
+        assert!(tight.rows_dropped > 3900);
+        // A role fed the wrong type.
+        let e = import_bag(
+            &data("husky_test1.bag"),
+            "x",
+            &map("imu: /fix\nground_truth: /fix\n"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("the imu role needs one of sensor_msgs/Imu"),
+            "{e}"
+        );
+    }
+}

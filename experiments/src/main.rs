@@ -100,6 +100,20 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Turn ROS bags into the rover-log CSV that `dataset: {kind: logs}`
+    /// reads, through a topic map (which topic is the IMU, the ground
+    /// truth, the joints; the common clock's rate; the longest gap bridged).
+    Import {
+        /// The bags (MCAP or ROS 1).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// The topic map (YAML).
+        #[arg(long)]
+        topics: PathBuf,
+        /// The folder to write NAME.csv into (NAME: each bag's file stem).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Look inside a ROS bag (ROS 2 MCAP or ROS 1 .bag, recognised by its
     /// first bytes).
     Bag {
@@ -298,6 +312,56 @@ fn fit(file: &Path, label: &str, save: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
+    use gpodo_datasets::bags::import::{TopicMap, import_bag};
+    let text = std::fs::read_to_string(topics)
+        .with_context(|| format!("reading the topic map {}", topics.display()))?;
+    let map: TopicMap =
+        serde_saphyr::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", topics.display()))?;
+    let mut stems = std::collections::BTreeSet::new();
+    for file in files {
+        let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned());
+        if !stems.insert(stem.clone()) {
+            anyhow::bail!(
+                "two inputs are named `{}`; their logs would overwrite each other (rename one)",
+                stem.unwrap_or_default()
+            );
+        }
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    for file in files {
+        let name = file.file_stem().map_or_else(
+            || "recording".to_string(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        let (log, report) = import_bag(file, &name, &map)?;
+        let (csv, _) = write_log_csv(&log, out)?;
+        println!(
+            "wrote {} ({} rows at {} Hz, {} dropped in gaps; {:.1} s, {:.1} m of ground truth)",
+            csv.display(),
+            report.rows,
+            map.rate_hz,
+            report.rows_dropped,
+            log.duration_secs(),
+            log.path_length_m()
+        );
+        for s in &report.streams {
+            println!(
+                "  {:12} {:32} {:6} msgs, {} duplicated, {} out of order, {} unusable, {} rows in gaps, longest gap bridged {:.3} s",
+                s.role,
+                s.topic,
+                s.messages,
+                s.duplicates,
+                s.out_of_order,
+                s.unusable,
+                s.rows_in_gaps,
+                s.max_gap_bridged_secs
+            );
+        }
+    }
+    Ok(())
+}
+
 fn simulate(
     preset: Preset,
     seed: u64,
@@ -353,6 +417,7 @@ fn main() -> anyhow::Result<()> {
             regressor,
             save,
         } => fit(&file, &regressor, &save),
+        Command::Import { files, topics, out } => import(&files, &topics, &out),
         Command::Bag {
             command: BagCommand::Info { file, json },
         } => {

@@ -8,6 +8,7 @@
 //! info` shows).
 
 pub mod enu;
+pub mod import;
 mod info;
 pub mod messages;
 pub mod topic;

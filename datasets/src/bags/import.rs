@@ -1,0 +1,598 @@
+//! A recording turned into the rover-log CSV that `dataset: {kind: logs}`
+//! reads (`gpodo import`): each role's topic read and checked
+//! ([`read_topic`]), every stream put on one clock at `rate_hz` by linear
+//! interpolation (quaternions normalised after aligning their signs), and
+//! never across a gap longer than `max_gap_secs`: rows that would need it
+//! are dropped and counted, as are duplicated and out-of-order stamps.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+use gpodo_traits::{ImuSample, JointState as Joint, ProprioceptiveSample};
+
+use super::enu::LocalEnu;
+use super::messages::RosMessage;
+use super::topic::{Stamped, TopicError, read_topic};
+use crate::log::RoverLog;
+
+fn default_rate() -> f64 {
+    10.0
+}
+
+fn default_gap() -> f64 {
+    0.5
+}
+
+/// Which time a message is placed at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeSource {
+    /// The message's header stamp (when the sensor measured).
+    #[default]
+    Header,
+    /// When the recorder received it.
+    Receive,
+}
+
+/// One joint of the bag's `JointState` feeding one joint of the rover.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointRef {
+    /// The joint's name in the bag.
+    pub joint: String,
+    /// Radians per unit of the recorded position (e.g. 2π/ticks per turn
+    /// over a gear ratio; default 1).
+    #[serde(default = "one")]
+    pub position_scale: f64,
+    /// Radians per second per unit of the recorded velocity (e.g. 2π/60
+    /// for rpm; default 1).
+    #[serde(default = "one")]
+    pub rate_scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The joints role: a `sensor_msgs/JointState` topic and which of its
+/// joints are the rover's wheels, steering joints and bogies (by the
+/// rover's names, e.g. `fl`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointMap {
+    /// The topic.
+    pub topic: String,
+    /// Wheels: rover name → bag joint.
+    #[serde(default)]
+    pub wheels: BTreeMap<String, JointRef>,
+    /// Steering joints.
+    #[serde(default)]
+    pub steering: BTreeMap<String, JointRef>,
+    /// Passive bogies.
+    #[serde(default)]
+    pub bogies: BTreeMap<String, JointRef>,
+}
+
+/// Which topic plays which role, and how streams are put on one clock.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TopicMap {
+    /// `sensor_msgs/Imu`: gyro, specific force, and roll and pitch from its
+    /// orientation.
+    pub imu: String,
+    /// How the IMU is mounted: `body_from_imu` as roll, pitch and yaw
+    /// (rad, default 0), applied to its rates, forces and orientation
+    /// (without a TF tree in the recording, this is the only place to say
+    /// it; gravity should then read about +9.8 on the body's z at rest).
+    #[serde(default)]
+    pub imu_rotation_rpy_rad: [f64; 3],
+    /// The ground-truth pose: `nav_msgs/Odometry`,
+    /// `geometry_msgs/PoseStamped`, `geometry_msgs/PoseWithCovarianceStamped`,
+    /// or `sensor_msgs/NavSatFix` (position in a local east-north-up frame
+    /// about the first fix, orientation from the IMU).
+    pub ground_truth: String,
+    /// Joint encoders (optional).
+    #[serde(default)]
+    pub joints: Option<JointMap>,
+    /// Rate of the common clock (Hz, default 10).
+    #[serde(default = "default_rate")]
+    pub rate_hz: f64,
+    /// Longest interval between two messages of a stream that is
+    /// interpolated across (s, default 0.5).
+    #[serde(default = "default_gap")]
+    pub max_gap_secs: f64,
+    /// Header stamps (default) or receive times.
+    #[serde(default)]
+    pub time: TimeSource,
+}
+
+/// What an import did with each stream.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct StreamReport {
+    /// The role (`imu`, `ground_truth`, `joints`).
+    pub role: String,
+    /// The topic.
+    pub topic: String,
+    /// Messages read.
+    pub messages: usize,
+    /// Messages whose stamp repeated the previous one (dropped).
+    pub duplicates: usize,
+    /// Messages stamped before the previous one (sorted into place).
+    pub out_of_order: usize,
+    /// Messages that carried nothing usable (e.g. a GNSS fix with no fix).
+    pub unusable: usize,
+    /// Clock rows dropped because this stream had a longer gap there.
+    pub rows_in_gaps: usize,
+    /// The longest interval interpolated across (s).
+    pub max_gap_bridged_secs: f64,
+}
+
+/// What an import wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImportReport {
+    /// Rows of the log.
+    pub rows: usize,
+    /// Clock rows dropped (in a gap of some stream).
+    pub rows_dropped: usize,
+    /// The log's time 0, seconds since the epoch.
+    pub start_epoch_secs: f64,
+    /// One entry per stream.
+    pub streams: Vec<StreamReport>,
+}
+
+/// Why a recording could not be imported.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// A topic could not be read for its role.
+    #[error(transparent)]
+    Topic(#[from] TopicError),
+    /// The topic map is unusable.
+    #[error("topic map: {0}")]
+    Map(String),
+    /// Nothing was left on the common clock.
+    #[error(
+        "{file}: no row of the common clock has every stream within max_gap_secs ({gap} s): {detail}"
+    )]
+    Empty {
+        /// The bag.
+        file: String,
+        /// The gap allowed.
+        gap: f64,
+        /// Per stream: messages and rows lost in gaps.
+        detail: String,
+    },
+}
+
+/// A stream on its own clock: time (s since the epoch) and values.
+struct Stream {
+    report: StreamReport,
+    times: Vec<f64>,
+    values: Vec<Vec<f64>>,
+    /// Index ranges of values that are quaternions `[x, y, z, w]`.
+    quaternions: Vec<usize>,
+}
+
+impl Stream {
+    fn new(
+        role: &str,
+        topic: &str,
+        mut samples: Vec<(f64, Vec<f64>)>,
+        messages: usize,
+        unusable: usize,
+        quaternions: Vec<usize>,
+    ) -> Self {
+        let mut report = StreamReport {
+            role: role.into(),
+            topic: topic.into(),
+            messages,
+            unusable,
+            ..StreamReport::default()
+        };
+        report.out_of_order = samples.windows(2).filter(|w| w[1].0 < w[0].0).count();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let before = samples.len();
+        samples.dedup_by(|b, a| b.0 == a.0);
+        report.duplicates = before - samples.len();
+        let (times, values) = samples.into_iter().unzip();
+        Self {
+            report,
+            times,
+            values,
+            quaternions,
+        }
+    }
+
+    /// The values at `t`, interpolated between the messages around it, or
+    /// `None` when they are more than `max_gap` apart (or `t` is outside).
+    fn at(&mut self, t: f64, max_gap: f64) -> Option<Vec<f64>> {
+        let k = self.times.partition_point(|&s| s <= t);
+        if k == 0 {
+            return None;
+        }
+        let i = k - 1;
+        if self.times[i] == t {
+            return Some(self.values[i].clone());
+        }
+        let j = k;
+        if j >= self.times.len() {
+            return None;
+        }
+        let gap = self.times[j] - self.times[i];
+        if gap > max_gap {
+            self.report.rows_in_gaps += 1;
+            return None;
+        }
+        self.report.max_gap_bridged_secs = self.report.max_gap_bridged_secs.max(gap);
+        let u = (t - self.times[i]) / gap;
+        let (a, b) = (&self.values[i], &self.values[j]);
+        let mut v: Vec<f64> = a.iter().zip(b).map(|(a, b)| a + u * (b - a)).collect();
+        for &q in &self.quaternions {
+            // The shorter way round, then back onto the unit sphere.
+            let dot: f64 = (0..4).map(|c| a[q + c] * b[q + c]).sum();
+            let sign = if dot < 0.0 { -1.0 } else { 1.0 };
+            let mut n = 0.0;
+            for c in 0..4 {
+                v[q + c] = a[q + c] + u * (sign * b[q + c] - a[q + c]);
+                n += v[q + c] * v[q + c];
+            }
+            let n = n.sqrt();
+            for c in 0..4 {
+                v[q + c] /= n;
+            }
+        }
+        Some(v)
+    }
+}
+
+fn seconds(ns: i64) -> f64 {
+    ns as f64 * 1e-9
+}
+
+fn stamp(map: &TopicMap, s: &Stamped, header_ns: i64) -> f64 {
+    match map.time {
+        TimeSource::Header => seconds(header_ns),
+        TimeSource::Receive => s.log_time_ns as f64 * 1e-9,
+    }
+}
+
+/// Roll and pitch (rad) of a `[x, y, z, w]` orientation (ZYX Euler angles).
+fn roll_pitch(q: &[f64]) -> (f64, f64) {
+    let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    (roll, pitch)
+}
+
+/// Imports the bag at `path` as the rover log `name`.
+///
+/// # Errors
+/// [`ImportError`] naming the file, topic and what is wrong.
+pub fn import_bag(
+    path: &Path,
+    name: &str,
+    map: &TopicMap,
+) -> Result<(RoverLog, ImportReport), ImportError> {
+    if !(map.rate_hz.is_finite() && map.rate_hz > 0.0) {
+        return Err(ImportError::Map(
+            "`rate_hz` must be a positive number".into(),
+        ));
+    }
+    if !(map.max_gap_secs.is_finite() && map.max_gap_secs > 0.0) {
+        return Err(ImportError::Map(
+            "`max_gap_secs` must be a positive number of seconds".into(),
+        ));
+    }
+    // IMU: orientation (4), gyro (3), specific force (3).
+    let imu_messages = read_topic(path, &map.imu, "imu", &["sensor_msgs/Imu"])?;
+    let n_imu = imu_messages.len();
+    let [r, p, y] = map.imu_rotation_rpy_rad;
+    let body_from_imu = UnitQuaternion::from_euler_angles(r, p, y);
+    let imu_samples: Vec<(f64, Vec<f64>)> = imu_messages
+        .iter()
+        .filter_map(|s| match &s.message {
+            RosMessage::Imu(m) => {
+                let o = m.orientation;
+                let world_from_imu =
+                    UnitQuaternion::from_quaternion(Quaternion::new(o[3], o[0], o[1], o[2]));
+                let q = world_from_imu * body_from_imu.inverse();
+                let gyro = body_from_imu * Vector3::from(m.angular_velocity);
+                let acc = body_from_imu * Vector3::from(m.linear_acceleration);
+                let mut v = vec![q.i, q.j, q.k, q.w];
+                v.extend(gyro.iter());
+                v.extend(acc.iter());
+                Some((stamp(map, s, m.header.stamp_ns), v))
+            }
+            _ => None,
+        })
+        .collect();
+    let mut imu = Stream::new("imu", &map.imu, imu_samples, n_imu, 0, vec![0]);
+    // Ground truth: position (3) and, except from GNSS, orientation (4).
+    let gt_messages = read_topic(
+        path,
+        &map.ground_truth,
+        "ground_truth",
+        &[
+            "nav_msgs/Odometry",
+            "geometry_msgs/PoseStamped",
+            "geometry_msgs/PoseWithCovarianceStamped",
+            "sensor_msgs/NavSatFix",
+        ],
+    )?;
+    let n_gt = gt_messages.len();
+    let mut enu: Option<LocalEnu> = None;
+    let mut unusable = 0;
+    let mut gnss = false;
+    let mut gt_samples = Vec::new();
+    for s in &gt_messages {
+        let (header, values) = match &s.message {
+            RosMessage::Odometry(m) => (
+                &m.header,
+                [m.pose.position.to_vec(), m.pose.orientation.to_vec()].concat(),
+            ),
+            RosMessage::PoseStamped(h, p) | RosMessage::PoseWithCovarianceStamped(h, p, _) => {
+                (h, [p.position.to_vec(), p.orientation.to_vec()].concat())
+            }
+            RosMessage::NavSatFix(f) => {
+                gnss = true;
+                if f.status < 0 || !(f.latitude.is_finite() && f.longitude.is_finite()) {
+                    unusable += 1;
+                    continue;
+                }
+                let frame =
+                    *enu.get_or_insert_with(|| LocalEnu::new(f.latitude, f.longitude, f.altitude));
+                let alt = if f.altitude.is_finite() {
+                    f.altitude
+                } else {
+                    0.0
+                };
+                (
+                    &f.header,
+                    frame.to_enu(f.latitude, f.longitude, alt).to_vec(),
+                )
+            }
+            _ => continue,
+        };
+        gt_samples.push((stamp(map, s, header.stamp_ns), values));
+    }
+    let gt_quaternions = if gnss { vec![] } else { vec![3] };
+    let mut gt = Stream::new(
+        "ground_truth",
+        &map.ground_truth,
+        gt_samples,
+        n_gt,
+        unusable,
+        gt_quaternions,
+    );
+    // Joints: position and rate per mapped joint, in the rover's order.
+    let groups: [(&str, Vec<(String, JointRef)>); 3] = match &map.joints {
+        Some(j) => [
+            ("wheels", j.wheels.clone().into_iter().collect()),
+            ("steering", j.steering.clone().into_iter().collect()),
+            ("bogies", j.bogies.clone().into_iter().collect()),
+        ],
+        None => [("wheels", vec![]), ("steering", vec![]), ("bogies", vec![])],
+    };
+    let mut joints = match &map.joints {
+        Some(j) => {
+            let messages = read_topic(path, &j.topic, "joints", &["sensor_msgs/JointState"])?;
+            let n = messages.len();
+            let mut unusable = 0;
+            let mut samples = Vec::new();
+            for s in &messages {
+                let RosMessage::JointState(m) = &s.message else {
+                    continue;
+                };
+                let mut v = Vec::new();
+                let mut ok = true;
+                for (_, refs) in &groups {
+                    for (_, r) in refs {
+                        match m.name.iter().position(|n| *n == r.joint) {
+                            Some(k) if k < m.position.len() && k < m.velocity.len() => {
+                                v.push(m.position[k] * r.position_scale);
+                                v.push(m.velocity[k] * r.rate_scale);
+                            }
+                            _ => ok = false,
+                        }
+                    }
+                }
+                if ok {
+                    samples.push((stamp(map, s, m.header.stamp_ns), v));
+                } else {
+                    unusable += 1;
+                }
+            }
+            Some(Stream::new(
+                "joints",
+                &j.topic,
+                samples,
+                n,
+                unusable,
+                vec![],
+            ))
+        }
+        None => None,
+    };
+    // The common clock, over the span every stream covers.
+    let mut streams: Vec<&mut Stream> = vec![&mut imu, &mut gt];
+    if let Some(j) = joints.as_mut() {
+        streams.push(j);
+    }
+    let start = streams
+        .iter()
+        .filter_map(|s| s.times.first())
+        .cloned()
+        .fold(f64::MIN, f64::max);
+    let end = streams
+        .iter()
+        .filter_map(|s| s.times.last())
+        .cloned()
+        .fold(f64::MAX, f64::min);
+    let dt = 1.0 / map.rate_hz;
+    let steps = if end > start {
+        ((end - start) / dt).floor() as usize + 1
+    } else {
+        0
+    };
+    let mut samples = Vec::new();
+    let mut ground_truth = Vec::new();
+    let mut dropped = 0;
+    for k in 0..steps {
+        let t = start + k as f64 * dt;
+        let values: Vec<Option<Vec<f64>>> = streams
+            .iter_mut()
+            .map(|s| s.at(t, map.max_gap_secs))
+            .collect();
+        let (Some(Some(i)), Some(Some(g))) = (values.first(), values.get(1)) else {
+            dropped += 1;
+            continue;
+        };
+        let jv = values.get(2).cloned().flatten();
+        if joints_needed(&groups) && jv.is_none() {
+            dropped += 1;
+            continue;
+        }
+        let (roll, pitch) = roll_pitch(&i[0..4]);
+        let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
+        let mut at = 0;
+        for (g, (_, refs)) in groups.iter().enumerate() {
+            for _ in refs {
+                let v = jv.as_deref().unwrap_or(&[]);
+                group_joints[g].push(Joint {
+                    position_rad: v.get(at).copied().unwrap_or(0.0),
+                    rate_radps: v.get(at + 1).copied().unwrap_or(0.0),
+                });
+                at += 2;
+            }
+        }
+        let [wheels, steering, bogies] = group_joints;
+        samples.push(ProprioceptiveSample {
+            time_secs: t - start,
+            wheels,
+            steering,
+            bogies,
+            imu: ImuSample {
+                gyro_radps: Vector3::new(i[4], i[5], i[6]),
+                accel_mps2: Vector3::new(i[7], i[8], i[9]),
+                roll_rad: roll,
+                pitch_rad: pitch,
+            },
+            contact_angles_rad: None,
+        });
+        let q = if gnss {
+            [i[0], i[1], i[2], i[3]]
+        } else {
+            [g[3], g[4], g[5], g[6]]
+        };
+        ground_truth.push(Isometry3::from_parts(
+            Translation3::new(g[0], g[1], g[2]),
+            UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2])),
+        ));
+    }
+    let reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
+    if samples.is_empty() {
+        let detail = reports
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} `{}`: {} messages, {} rows in gaps",
+                    r.role, r.topic, r.messages, r.rows_in_gaps
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(ImportError::Empty {
+            file: path.display().to_string(),
+            gap: map.max_gap_secs,
+            detail,
+        });
+    }
+    let names = |g: usize| {
+        groups[g]
+            .1
+            .iter()
+            .map(|(n, _)| n.clone())
+            .collect::<Vec<_>>()
+    };
+    let log = RoverLog {
+        name: name.into(),
+        wheel_names: names(0),
+        steer_names: names(1),
+        bogie_names: names(2),
+        samples,
+        ground_truth,
+        camera_times_secs: Vec::new(),
+    };
+    let report = ImportReport {
+        rows: log.samples.len(),
+        rows_dropped: dropped,
+        start_epoch_secs: start,
+        streams: reports,
+    };
+    Ok((log, report))
+}
+
+fn joints_needed(groups: &[(&str, Vec<(String, JointRef)>); 3]) -> bool {
+    groups.iter().any(|(_, refs)| !refs.is_empty())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roll_and_pitch_of_known_rotations() {
+        let q = UnitQuaternion::from_euler_angles(0.1, -0.2, 0.7);
+        let (r, p) = roll_pitch(&[q.i, q.j, q.k, q.w]);
+        assert!((r - 0.1).abs() < 1e-12 && (p + 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn interpolation_stops_at_gaps_and_takes_the_short_way_round() {
+        let q0 = [0.0, 0.0, 0.0, 1.0];
+        let q1 = [0.0, 0.0, -0.0, -1.0]; // the same rotation, other sign
+        let mut s = Stream::new(
+            "t",
+            "/t",
+            vec![
+                (0.0, [vec![0.0], q0.to_vec()].concat()),
+                (1.0, [vec![2.0], q1.to_vec()].concat()),
+                (5.0, [vec![4.0], q0.to_vec()].concat()),
+            ],
+            3,
+            0,
+            vec![1],
+        );
+        let v = s.at(0.25, 1.5).unwrap();
+        assert!((v[0] - 0.5).abs() < 1e-12);
+        assert!(
+            (v[4].abs() - 1.0).abs() < 1e-12,
+            "no collapse through zero: {v:?}"
+        );
+        assert!(s.at(3.0, 1.5).is_none());
+        assert_eq!(s.report.rows_in_gaps, 1);
+        assert_eq!(s.report.max_gap_bridged_secs, 1.0);
+        assert!(s.at(-1.0, 1.5).is_none() && s.at(6.0, 1.5).is_none());
+    }
+
+    #[test]
+    fn duplicates_and_out_of_order_stamps_are_counted() {
+        let s = Stream::new(
+            "t",
+            "/t",
+            vec![
+                (1.0, vec![1.0]),
+                (0.0, vec![0.0]),
+                (1.0, vec![9.0]),
+                (2.0, vec![2.0]),
+            ],
+            4,
+            0,
+            vec![],
+        );
+        assert_eq!((s.report.out_of_order, s.report.duplicates), (1, 1));
+        assert_eq!(s.times, vec![0.0, 1.0, 2.0]);
+    }
+}
