@@ -63,6 +63,9 @@ pub enum PipelineError {
     /// Reading or simulating data failed.
     #[error(transparent)]
     Dataset(#[from] gpodo_datasets::DatasetError),
+    /// A ROS bag could not be imported.
+    #[error(transparent)]
+    Bag(#[from] gpodo_datasets::bags::import::ImportError),
     /// The rover description or motion model is invalid.
     #[error(transparent)]
     Kinematics(#[from] gpodo_kinematics::KinematicsError),

@@ -110,6 +110,18 @@ pub enum DatasetSpec {
         /// Test runs.
         test: Vec<PathBuf>,
     },
+    /// ROS bags (MCAP or ROS 1; paths relative to the experiment file),
+    /// each turned into a rover log through the topic map as `gpodo
+    /// import` does (README, "From ROS bags").
+    Bags {
+        /// Training recordings.
+        train: Vec<PathBuf>,
+        /// Test recordings.
+        test: Vec<PathBuf>,
+        /// Which topic plays which role, the clock rate and the longest gap
+        /// bridged.
+        topics: gpodo_datasets::bags::import::TopicMap,
+    },
     /// A residual table (features and targets already computed), split in
     /// time order.
     ResidualTable {

@@ -65,7 +65,9 @@ impl ExperimentConfig {
                     "a fraction in (0, 1)",
                 ))
             }
-            DatasetSpec::Logs { train, test } if train.is_empty() || test.is_empty() => {
+            DatasetSpec::Logs { train, test } | DatasetSpec::Bags { train, test, .. }
+                if train.is_empty() || test.is_empty() =>
+            {
                 Err(Issue::new(
                     "dataset",
                     "no training or no test log",

@@ -167,6 +167,28 @@ pub(crate) fn prepare(
             let (train, test) = (read(train)?, read(test)?);
             from_logs(config, base, &train, &test, "rover logs".into(), None)
         }
+        DatasetSpec::Bags {
+            train,
+            test,
+            topics,
+        } => {
+            let read = |paths: &[PathBuf]| {
+                paths
+                    .iter()
+                    .map(|p| {
+                        let path = resolve(base, p);
+                        let name = path
+                            .file_stem()
+                            .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
+                        let (log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
+                        tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
+                        Ok(log)
+                    })
+                    .collect::<Result<Vec<_>, PipelineError>>()
+            };
+            let (train, test) = (read(train)?, read(test)?);
+            from_logs(config, base, &train, &test, "ROS bags".into(), None)
+        }
         DatasetSpec::ResidualTable {
             path,
             inputs,
