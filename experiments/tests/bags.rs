@@ -249,6 +249,15 @@ mod synthetic {
                 String::from_utf8_lossy(&out.stderr)
             );
             rmse.push(parametric_rmse(&dir));
+            if name == "bag" {
+                let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+                assert!(
+                    report.contains("ROS bags at 12.5 Hz")
+                        && report.contains("train_01: 750 rows, 0 dropped in gaps")
+                        && report.contains("joints /joint_states: 750 msgs, 0 duplicated"),
+                    "the report says what the import did"
+                );
+            }
         }
         eprintln!("parametric residual RMSE: CSV {} MCAP {}", rmse[0], rmse[1]);
         assert!(

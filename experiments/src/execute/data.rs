@@ -172,6 +172,7 @@ pub(crate) fn prepare(
             test,
             topics,
         } => {
+            let imported = std::cell::RefCell::new(Vec::new());
             let read = |paths: &[PathBuf]| {
                 paths
                     .iter()
@@ -182,12 +183,19 @@ pub(crate) fn prepare(
                             .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
                         let (log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
                         tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
+                        imported.borrow_mut().push(import_summary(&name, &report));
                         Ok(log)
                     })
                     .collect::<Result<Vec<_>, PipelineError>>()
             };
             let (train, test) = (read(train)?, read(test)?);
-            from_logs(config, base, &train, &test, "ROS bags".into(), None)
+            let source = format!(
+                "ROS bags at {} Hz, at most {} s bridged ({})",
+                topics.rate_hz,
+                topics.max_gap_secs,
+                imported.into_inner().join("; ")
+            );
+            from_logs(config, base, &train, &test, source, None)
         }
         DatasetSpec::ResidualTable {
             path,
@@ -263,6 +271,34 @@ pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer
     let mut test = data.test.clone().with_standardized_inputs(true);
     test.inputs = scaler.transform(&data.test.inputs)?;
     Ok((ModelRows { train, test }, scaler))
+}
+
+/// One line on what importing a bag did: rows kept and dropped, and per
+/// stream the duplicates, out-of-order stamps, unusable messages and the
+/// longest gap bridged.
+fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) -> String {
+    let streams: Vec<String> = r
+        .streams
+        .iter()
+        .map(|s| {
+            format!(
+                "{} {}: {} msgs, {} duplicated, {} out of order, {} unusable, longest gap {:.3} s",
+                s.role,
+                s.topic,
+                s.messages,
+                s.duplicates,
+                s.out_of_order,
+                s.unusable,
+                s.max_gap_bridged_secs
+            )
+        })
+        .collect();
+    format!(
+        "{name}: {} rows, {} dropped in gaps; {}",
+        r.rows,
+        r.rows_dropped,
+        streams.join(", ")
+    )
 }
 
 /// The data of `config` as the regressors see them, and where they came
