@@ -1,6 +1,6 @@
 //! A recording turned into the rover-log CSV that `dataset: {kind: logs}`
 //! reads (`gpodo import`): each role's topic read and checked
-//! ([`read_topic`]), every stream put on one clock at `rate_hz` by linear
+//! (in one pass, [`read_topics`]), every stream put on one clock at `rate_hz` by linear
 //! interpolation (quaternions normalised after aligning their signs), and
 //! never across a gap longer than `max_gap_secs`: rows that would need it
 //! are dropped and counted, as are duplicated and out-of-order stamps.
@@ -15,7 +15,7 @@ use gpodo_traits::{ImuSample, JointState as Joint, ProprioceptiveSample};
 
 use super::enu::LocalEnu;
 use super::messages::RosMessage;
-use super::topic::{Stamped, TopicError, read_topic};
+use super::topic::{Stamped, TopicError, TopicRequest, read_topics};
 use crate::log::RoverLog;
 
 fn default_rate() -> f64 {
@@ -285,8 +285,38 @@ pub fn import_bag(
             "`max_gap_secs` must be a positive number of seconds".into(),
         ));
     }
+    // Every role's topic, read in one pass over the bag.
+    let mut requests = vec![
+        TopicRequest {
+            topic: &map.imu,
+            role: "imu",
+            expected: &["sensor_msgs/Imu"],
+        },
+        TopicRequest {
+            topic: &map.ground_truth,
+            role: "ground_truth",
+            expected: &[
+                "nav_msgs/Odometry",
+                "geometry_msgs/PoseStamped",
+                "geometry_msgs/PoseWithCovarianceStamped",
+                "sensor_msgs/NavSatFix",
+            ],
+        },
+    ];
+    if let Some(j) = &map.joints {
+        requests.push(TopicRequest {
+            topic: &j.topic,
+            role: "joints",
+            expected: &["sensor_msgs/JointState"],
+        });
+    }
+    let mut read = read_topics(path, &requests)?.into_iter();
+    let (imu_messages, gt_messages) = (
+        read.next().unwrap_or_default(),
+        read.next().unwrap_or_default(),
+    );
+    let joint_messages = read.next();
     // IMU: orientation (4), gyro (3), specific force (3).
-    let imu_messages = read_topic(path, &map.imu, "imu", &["sensor_msgs/Imu"])?;
     let n_imu = imu_messages.len();
     let [r, p, y] = map.imu_rotation_rpy_rad;
     let body_from_imu = UnitQuaternion::from_euler_angles(r, p, y);
@@ -310,17 +340,6 @@ pub fn import_bag(
         .collect();
     let mut imu = Stream::new("imu", &map.imu, imu_samples, n_imu, 0, vec![0]);
     // Ground truth: position (3) and, except from GNSS, orientation (4).
-    let gt_messages = read_topic(
-        path,
-        &map.ground_truth,
-        "ground_truth",
-        &[
-            "nav_msgs/Odometry",
-            "geometry_msgs/PoseStamped",
-            "geometry_msgs/PoseWithCovarianceStamped",
-            "sensor_msgs/NavSatFix",
-        ],
-    )?;
     let n_gt = gt_messages.len();
     let mut enu: Option<LocalEnu> = None;
     let mut unusable = 0;
@@ -375,9 +394,8 @@ pub fn import_bag(
         ],
         None => [("wheels", vec![]), ("steering", vec![]), ("bogies", vec![])],
     };
-    let mut joints = match &map.joints {
-        Some(j) => {
-            let messages = read_topic(path, &j.topic, "joints", &["sensor_msgs/JointState"])?;
+    let mut joints = match (&map.joints, joint_messages) {
+        (Some(j), Some(messages)) => {
             let n = messages.len();
             let mut unusable = 0;
             let mut samples = Vec::new();
@@ -413,7 +431,7 @@ pub fn import_bag(
                 vec![],
             ))
         }
-        None => None,
+        _ => None,
     };
     // The common clock, over the span every stream covers.
     let mut streams: Vec<&mut Stream> = vec![&mut imu, &mut gt];

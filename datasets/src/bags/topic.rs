@@ -63,66 +63,102 @@ pub enum TopicError {
     },
 }
 
-/// Every message of `topic` in the bag at `path`, decoded, for `role`
-/// (a name for errors), whose recorded type must be one of `expected`
-/// (ROS 1 spelling, e.g. `sensor_msgs/Imu`).
+/// One topic to read, for a role that needs one of `expected` (ROS 1
+/// spelling, e.g. `sensor_msgs/Imu`).
+#[derive(Debug, Clone, Copy)]
+pub struct TopicRequest<'a> {
+    /// The topic.
+    pub topic: &'a str,
+    /// The role, for errors.
+    pub role: &'a str,
+    /// The types the role reads.
+    pub expected: &'a [&'a str],
+}
+
+/// Every message of each requested topic in the bag at `path`, decoded, in
+/// one pass over the file (a bag is decompressed once, whatever the number
+/// of roles); one vector per request, in request order.
 ///
 /// # Errors
 /// [`TopicError`] naming the file, topic, type and message index.
-pub fn read_topic(
+pub fn read_topics(
     path: &Path,
-    topic: &str,
-    role: &str,
-    expected: &[&str],
-) -> Result<Vec<Stamped>, TopicError> {
+    requests: &[TopicRequest<'_>],
+) -> Result<Vec<Vec<Stamped>>, TopicError> {
     let file = path.display().to_string();
     let mut topics = std::collections::BTreeSet::new();
-    let mut out = Vec::new();
+    let mut out: Vec<Vec<Stamped>> = vec![Vec::new(); requests.len()];
     let mut failure: Option<TopicError> = None;
     visit_messages(path, |m| {
         if failure.is_some() {
             return;
         }
         topics.insert(m.topic.to_string());
-        if m.topic != topic {
-            return;
-        }
-        let recorded = ros1_type_name(m.message_type);
-        if !expected.contains(&recorded.as_str()) {
-            failure = Some(TopicError::WrongType {
-                file: file.clone(),
-                topic: topic.into(),
-                recorded: m.message_type.into(),
-                role: role.into(),
-                expected: expected.iter().map(|s| s.to_string()).collect(),
-            });
-            return;
-        }
-        match decode(m.message_type, m.encoding, m.data) {
-            Ok(message) => out.push(Stamped {
-                log_time_ns: m.log_time_ns,
-                message,
-            }),
-            Err(e) => {
-                failure = Some(TopicError::Undecodable {
+        for (r, messages) in requests.iter().zip(out.iter_mut()) {
+            if m.topic != r.topic {
+                continue;
+            }
+            let recorded = ros1_type_name(m.message_type);
+            if !r.expected.contains(&recorded.as_str()) {
+                failure = Some(TopicError::WrongType {
                     file: file.clone(),
-                    topic: topic.into(),
+                    topic: r.topic.into(),
                     recorded: m.message_type.into(),
-                    index: m.index,
-                    detail: e.0,
+                    role: r.role.into(),
+                    expected: r.expected.iter().map(|s| s.to_string()).collect(),
                 });
+                return;
+            }
+            match decode(m.message_type, m.encoding, m.data) {
+                Ok(message) => messages.push(Stamped {
+                    log_time_ns: m.log_time_ns,
+                    message,
+                }),
+                Err(e) => {
+                    failure = Some(TopicError::Undecodable {
+                        file: file.clone(),
+                        topic: r.topic.into(),
+                        recorded: m.message_type.into(),
+                        index: m.index,
+                        detail: e.0,
+                    });
+                    return;
+                }
             }
         }
     })?;
     if let Some(e) = failure {
         return Err(e);
     }
-    if out.is_empty() {
+    if let Some(r) = requests
+        .iter()
+        .zip(&out)
+        .find_map(|(r, m)| m.is_empty().then_some(r))
+    {
         return Err(TopicError::UnknownTopic {
             file,
-            topic: topic.into(),
+            topic: r.topic.into(),
             available: topics.into_iter().collect(),
         });
     }
     Ok(out)
+}
+
+/// Every message of `topic` in the bag at `path`, decoded, for `role`
+/// (a name for errors), whose recorded type must be one of `expected`.
+///
+/// # Errors
+/// As [`read_topics`].
+pub fn read_topic(
+    path: &Path,
+    topic: &str,
+    role: &str,
+    expected: &[&str],
+) -> Result<Vec<Stamped>, TopicError> {
+    let request = TopicRequest {
+        topic,
+        role,
+        expected,
+    };
+    Ok(read_topics(path, &[request])?.remove(0))
 }
