@@ -6,9 +6,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use std::process::Command;
 
-const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+mod common;
+
+use common::{GPODO, gpodo_on};
 
 fn run(dir: &Path, imu_topic: &str) -> String {
     let ros = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/ros");
@@ -30,13 +31,7 @@ regressors:
     );
     let file = dir.join("husky.yaml");
     std::fs::write(&file, yaml).unwrap();
-    let out = Command::new(GPODO)
-        .args(["--quiet", "run"])
-        .arg(&file)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
+    let out = gpodo_on("run", &file, &dir.join("out"), &[]);
     assert!(!out.status.success());
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
@@ -236,13 +231,7 @@ mod synthetic {
             let file = tmp.path().join(format!("{name}.yaml"));
             std::fs::write(&file, yaml).unwrap();
             let dir = tmp.path().join(format!("out-{name}"));
-            let out = Command::new(GPODO)
-                .args(["--quiet", "run"])
-                .arg(&file)
-                .arg("--out")
-                .arg(&dir)
-                .output()
-                .unwrap();
+            let out = super::gpodo_on("run", &file, &dir, &[]);
             assert!(
                 out.status.success(),
                 "{name}: {}",

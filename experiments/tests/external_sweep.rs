@@ -7,26 +7,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use std::process::Command;
 
-const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+mod common;
 
-fn python() -> Option<String> {
-    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = Command::new(&python)
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if ok {
-        return Some(python);
-    }
-    assert!(
-        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
-        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import numpy"
-    );
-    eprintln!("SKIPPED: no `{python}` with NumPy (set GPODO_PYTHON to one)");
-    None
-}
+use common::{gpodo_on, python};
 
 fn records(dir: &Path) -> Vec<serde_json::Value> {
     std::fs::read_to_string(dir.join("runs.jsonl"))
@@ -65,16 +49,7 @@ sweep:
     let file = tmp.path().join("flaky.yaml");
     std::fs::write(&file, yaml).unwrap();
     let out_dir = tmp.path().join("out");
-    let run = |extra: &[&str]| {
-        let mut cmd = Command::new(GPODO);
-        cmd.arg("--quiet")
-            .arg("run")
-            .arg(&file)
-            .arg("--out")
-            .arg(&out_dir)
-            .args(extra);
-        cmd.output().unwrap()
-    };
+    let run = |extra: &[&str]| gpodo_on("run", &file, &out_dir, extra);
 
     let first = run(&[]);
     let stderr = String::from_utf8_lossy(&first.stderr);
@@ -152,13 +127,7 @@ bench: {{ predict_queries: 5, learning_curve_every: 30 }}
     let file = tmp.path().join("crashing.yaml");
     std::fs::write(&file, yaml).unwrap();
     let out_dir = tmp.path().join("out");
-    let out = Command::new(GPODO)
-        .args(["--quiet", "bench"])
-        .arg(&file)
-        .arg("--out")
-        .arg(&out_dir)
-        .output()
-        .unwrap();
+    let out = gpodo_on("bench", &file, &out_dir, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(stderr.contains("1 regressor(s) failed"), "{stderr}");
@@ -197,13 +166,7 @@ schemes:
     let file = tmp.path().join("online.yaml");
     std::fs::write(&file, yaml).unwrap();
     let out_dir = tmp.path().join("out");
-    let out = Command::new(GPODO)
-        .args(["--quiet", "run"])
-        .arg(&file)
-        .arg("--out")
-        .arg(&out_dir)
-        .output()
-        .unwrap();
+    let out = gpodo_on("run", &file, &out_dir, &[]);
     assert!(
         out.status.success(),
         "{}",

@@ -13,7 +13,9 @@ use gpodo_experiments::config::ExperimentConfig;
 use gpodo_experiments::execute::models::{fit_model, read_rows};
 use gpodo_regressors::model_file::ModelFile;
 
-const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+mod common;
+
+use common::{GPODO, gpodo_on};
 
 const TINY: &str = "name: tiny-model
 dataset: { kind: simulated, preset: exoter-prl, seed: 3, training_runs: 1, training_run_secs: 90, test_max_secs: 60 }
@@ -104,13 +106,7 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("held-out RMSE"));
     // The rows `gpodo run` writes (raw inputs and the residual targets).
     let results = tmp.path().join("results");
-    let out = Command::new(GPODO)
-        .args(["--quiet", "run"])
-        .arg(&file)
-        .arg("--out")
-        .arg(&results)
-        .output()
-        .unwrap();
+    let out = gpodo_on("run", &file, &results, &[]);
     assert!(
         out.status.success(),
         "{}",

@@ -202,15 +202,14 @@ impl SharedWork {
         // plugin's crash is the plugin's, not the sweep's).
         // Longest first, pulled one at a time (list scheduling): otherwise
         // a sweep on two cores can end with one long fit running alone.
-        let mut fits: Vec<_> = fits.into_iter().collect();
-        fits.sort_by(|a, b| {
-            let cost = |(spec, p, _): &(&gpodo_regressors::RegressorSpec, Arc<Prepared>, &Path)| {
-                fit_cost(spec, p.rows.train.len())
-            };
-            cost(&b.1).total_cmp(&cost(&a.1)).then(a.0.cmp(&b.0))
-        });
+        let mut fits: Vec<_> = fits
+            .into_iter()
+            .map(|(key, fit)| (fit_cost(fit.0, fit.1.rows.train.len()), key, fit))
+            .collect();
+        fits.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let fitted: Vec<(String, FitOutcome)> = fits
             .into_iter()
+            .map(|(_, key, fit)| (key, fit))
             .par_bridge()
             .map(|(key, (spec, p, base))| {
                 let fitted = fit_shared(spec, base, &p, progress).map_err(|e| {

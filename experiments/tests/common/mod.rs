@@ -1,0 +1,41 @@
+//! Helpers shared by the integration tests that run the `gpodo` binary.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// The binary under test.
+pub const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+
+/// `gpodo --quiet COMMAND FILE --out DIR EXTRA…`.
+pub fn gpodo_on(command: &str, file: &Path, out: &Path, extra: &[&str]) -> Output {
+    Command::new(GPODO)
+        .args(["--quiet", command])
+        .arg(file)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .expect("the gpodo binary runs")
+}
+
+/// The Python with NumPy the plugin tests run (`GPODO_PYTHON`, else
+/// `python3`), or `None` after saying why, unless `GPODO_REQUIRE_PYTHON` is
+/// set (as CI sets it), which makes its absence a failure.
+pub fn python() -> Option<String> {
+    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
+    let ok = Command::new(&python)
+        .args(["-c", "import numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ok {
+        return Some(python);
+    }
+    assert!(
+        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
+        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import numpy"
+    );
+    eprintln!("SKIPPED: no `{python}` with NumPy (set GPODO_PYTHON to one)");
+    None
+}
