@@ -36,6 +36,7 @@
 //! | `steer_<s>_pos_rad, steer_<s>_rate_radps` | for each steering joint `<s>` | rad, rad/s |
 //! | `bogie_<b>_pos_rad, bogie_<b>_rate_radps` | for each passive bogie joint `<b>` | rad, rad/s |
 //! | `contact_<w>_rad` | optional: wheel–terrain contact angle of each wheel `<w>` (all wheels or none) | rad |
+//! | `odom_vx_mps, odom_vy_mps, odom_vz_mps, odom_wx_radps, odom_wy_radps, odom_wz_radps` | optional (all six or none): the robot's own odometry twist in the body frame, as its drive controller reports it | m/s, rad/s |
 //! | `x_...` | optional user extras, ignored | – |
 //!
 //! The writer puts the columns in this order, with joints in the log's
@@ -298,6 +299,10 @@ impl RoverLog {
             }
             _ => {}
         }
+        if sample.odometry.is_some() != layout.has_odometry() {
+            let detail = "odometry must be given in every sample or in none".to_string();
+            return Err(self.invalid(Some(i), detail));
+        }
         let values = layout.encode(sample, &self.ground_truth[i]);
         if let Some((column, _)) = layout
             .column_names()
@@ -336,6 +341,69 @@ impl RoverLog {
     }
 
     /// A [`DatasetError::InvalidLog`] for this log.
+    /// The log cut in time: the samples before `fraction` of its duration
+    /// (named `<name>-train`) and the rest (`<name>-test`), camera frames
+    /// with their samples; the way to hold out the end of one recording.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] for a fraction outside (0, 1), and
+    /// [`DatasetError::InvalidLog`] when a part would have fewer than two
+    /// samples.
+    pub fn split_in_time(&self, fraction: f64) -> Result<(RoverLog, RoverLog), DatasetError> {
+        if !(fraction > 0.0 && fraction < 1.0) {
+            return Err(DatasetError::InvalidConfig {
+                field: "train_fraction".into(),
+                expected: format!("a fraction in (0, 1), found {fraction}"),
+            });
+        }
+        let t0 = self.samples.first().map_or(0.0, |s| s.time_secs);
+        let cut_time = t0 + fraction * self.duration_secs();
+        let cut = self.samples.partition_point(|s| s.time_secs < cut_time);
+        if cut < 2 || self.samples.len() - cut < 2 {
+            return Err(self.invalid(
+                None,
+                format!(
+                    "cutting at {:.0} % leaves {} and {} samples; each part needs two",
+                    100.0 * fraction,
+                    cut,
+                    self.samples.len() - cut
+                ),
+            ));
+        }
+        let part = |suffix: &str, range: std::ops::Range<usize>| {
+            let (from, to) = (
+                self.samples[range.start].time_secs,
+                self.samples[range.end - 1].time_secs,
+            );
+            RoverLog {
+                name: format!("{}-{suffix}", self.name),
+                samples: self.samples[range.clone()].to_vec(),
+                ground_truth: self.ground_truth[range].to_vec(),
+                camera_times_secs: self
+                    .camera_times_secs
+                    .iter()
+                    .copied()
+                    .filter(|&t| t >= from && t <= to)
+                    .collect(),
+                ..self.clone_names()
+            }
+        };
+        Ok((part("train", 0..cut), part("test", cut..self.samples.len())))
+    }
+
+    /// A log with this log's name and joints and nothing else.
+    fn clone_names(&self) -> RoverLog {
+        RoverLog {
+            name: self.name.clone(),
+            wheel_names: self.wheel_names.clone(),
+            steer_names: self.steer_names.clone(),
+            bogie_names: self.bogie_names.clone(),
+            samples: Vec::new(),
+            ground_truth: Vec::new(),
+            camera_times_secs: Vec::new(),
+        }
+    }
+
     fn invalid(&self, sample: Option<usize>, detail: String) -> DatasetError {
         DatasetError::InvalidLog {
             log: self.name.clone(),

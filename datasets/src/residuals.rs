@@ -10,7 +10,10 @@
 //! * inputs `x_k`: the paper's list (§V), named as in the authors' ExoTeR
 //!   table: `roll, pitch`, bogie and steering positions (`pos_*_passive`,
 //!   `pos_*_steer`), their speeds (`spd_*`), the wheels' translational speeds
-//!   (`spd_*_transl` = radius × wheel rate), `acc_x..z`, `gyro_x..z`.
+//!   (`spd_*_transl` = radius × wheel rate), `acc_x..z`, `gyro_x..z`;
+//!   when the log carries the robot's own odometry, its twist too
+//!   (`odom_vx..vz`, `odom_wx..wz`): for a robot without joint encoders it
+//!   is what plays the joint speeds' part.
 //!
 //! Steps can be averaged over windows (the authors used 1-s means; they
 //! also low-pass the motion-capture velocities, which the window does
@@ -74,8 +77,16 @@ pub fn feature_names(log: &RoverLog) -> Vec<String> {
     names.extend(log.steer_names.iter().map(|s| format!("spd_{s}_steer")));
     names.extend(log.wheel_names.iter().map(|w| format!("spd_{w}_transl")));
     names.extend(["acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"].map(String::from));
+    if log.samples.first().is_some_and(|s| s.odometry.is_some()) {
+        names.extend(ODOMETRY_FEATURES.map(String::from));
+    }
     names
 }
+
+/// Input names of the robot's own odometry twist, when the log has it.
+pub const ODOMETRY_FEATURES: [&str; 6] = [
+    "odom_vx", "odom_vy", "odom_vz", "odom_wx", "odom_wy", "odom_wz",
+];
 
 /// The inputs of step `k`.
 fn step_features(log: &RoverLog, k: usize, wheel_radius_m: f64) -> Vec<f64> {
@@ -88,6 +99,14 @@ fn step_features(log: &RoverLog, k: usize, wheel_radius_m: f64) -> Vec<f64> {
     x.extend(s.wheels.iter().map(|j| j.rate_radps * wheel_radius_m));
     x.extend(s.imu.accel_mps2.iter());
     x.extend(s.imu.gyro_radps.iter());
+    if let Some(odometry) = &s.odometry {
+        x.extend(
+            odometry
+                .linear_mps
+                .iter()
+                .chain(odometry.angular_radps.iter()),
+        );
+    }
     x
 }
 
@@ -223,7 +242,7 @@ pub fn residual_dataset(
         if feature_names(log) != names {
             return Err(DatasetError::InvalidConfig {
                 field: format!("runs ({})", log.name),
-                expected: format!("the same joints as run {}", first.name),
+                expected: format!("the same inputs (joints, odometry) as run {}", first.name),
             });
         }
         log.validate()?;

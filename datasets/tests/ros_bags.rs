@@ -370,4 +370,69 @@ mod import {
             "{e}"
         );
     }
+
+    /// The topic map of `experiments/husky-bags.yaml`.
+    const HUSKY: &str = "imu: /imu/data
+imu_rotation_rpy_rad: [1.5707963267948966, 0, 0]
+ground_truth: /fix
+gnss_heading: course
+odometry: /husky_velocity_controller/odom
+rate_hz: 10
+max_gap_secs: 0.5
+";
+
+    #[test]
+    fn the_ros1_and_mcap_copies_import_to_identical_rows() {
+        let (a, ra) = import_bag(&data("husky_test1.bag"), "husky", &map(HUSKY)).unwrap();
+        let (b, rb) = import_bag(&data("husky_test1.mcap"), "husky", &map(HUSKY)).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(ra, rb);
+        assert_eq!(ra.rows, 3952);
+        let roles: Vec<&str> = ra.streams.iter().map(|s| s.role.as_str()).collect();
+        assert_eq!(roles, ["imu", "ground_truth", "odometry"]);
+        assert_eq!(ra.streams[2].messages, 3952);
+        // The receiver's own σ (SBAS fixes): under 2 m horizontally.
+        let [h, v] = ra.gnss_sigma_m.unwrap();
+        assert!(h > 0.1 && h < 2.0 && v > h, "{h} {v}");
+    }
+
+    #[test]
+    fn the_robot_odometry_and_the_gnss_course_describe_the_same_drive() {
+        let (log, report) = import_bag(&data("husky_test1.mcap"), "husky", &map(HUSKY)).unwrap();
+        let heading = report.gnss_heading.unwrap();
+        // The robot drives mostly forwards, and the course is known on
+        // most rows.
+        assert!(heading.rows_from_course > 3000, "{heading:?}");
+        assert!(
+            heading.rows_reversed < heading.rows_from_course / 10,
+            "{heading:?}"
+        );
+        // Over the drive, GPS distance ≈ odometry distance (the odometry's
+        // scale is right: 358.1 m against 358.7 m): compare in 2-s strides.
+        let (mut gps, mut odom) = (0.0, 0.0);
+        for k in (0..log.samples.len() - 20).step_by(20) {
+            let d = log.ground_truth[k + 20].translation.vector
+                - log.ground_truth[k].translation.vector;
+            gps += d.xy().norm();
+            odom += log.samples[k..k + 20]
+                .iter()
+                .map(|s| 0.1 * s.odometry.unwrap().linear_mps.x.abs())
+                .sum::<f64>();
+        }
+        assert!(
+            (gps / odom - 1.0).abs() < 0.05,
+            "GPS {gps} m, odometry {odom} m"
+        );
+        // In the course-aligned body frame the GPS velocity is forward: its
+        // 2-s mean lateral part is small next to the forward part.
+        let (mut forward, mut lateral) = (0.0, 0.0);
+        for k in (0..log.samples.len() - 20).step_by(20) {
+            let d = log.ground_truth[k + 20].translation.vector
+                - log.ground_truth[k].translation.vector;
+            let body = log.ground_truth[k + 10].rotation.inverse() * d;
+            forward += body.x.abs();
+            lateral += body.y.abs();
+        }
+        assert!(lateral < 0.25 * forward, "{lateral} vs {forward}");
+    }
 }

@@ -358,6 +358,14 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
                 s.max_gap_bridged_secs
             );
         }
+        if let Some(h) = &report.gnss_heading {
+            println!("  {h}");
+        }
+        if let Some([h, v]) = report.gnss_sigma_m {
+            println!(
+                "  GNSS σ reported by the receiver (median): {h:.2} m horizontal, {v:.2} m vertical"
+            );
+        }
     }
     Ok(())
 }

@@ -52,6 +52,78 @@ fn a_bag_dataset_is_imported_and_checked_against_the_motion_model() {
     );
 }
 
+/// Table I of a run's metrics.json: per regressor, RMSE and MAE.
+fn table_one(out: &Path) -> Vec<(String, f64, f64)> {
+    let text = std::fs::read_to_string(out.join("metrics.json")).unwrap();
+    let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+    m["regressors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let t = &r["evaluation"]["pooled"];
+            (
+                r["label"].as_str().unwrap().to_string(),
+                t["rmse"].as_f64().unwrap(),
+                t["mae"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_husky_example_runs_from_the_mcap_and_the_ros1_bag_alike() {
+    let tmp = tempfile::tempdir().unwrap();
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("husky-bags.yaml");
+    let out = gpodo_on("run", &example, &tmp.path().join("mcap"), &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The same experiment on the ROS 1 copy of the recording.
+    let ros1 = std::fs::read_to_string(&example)
+        .unwrap()
+        .replace("husky_test1.mcap", "husky_test1.bag");
+    let shared = format!("{}/../../shared", env!("CARGO_MANIFEST_DIR"));
+    let copy = tmp.path().join("husky-bags.yaml");
+    std::fs::write(&copy, ros1.replace("../../shared", &shared)).unwrap();
+    let out = gpodo_on("run", &copy, &tmp.path().join("ros1"), &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (a, b) = (
+        table_one(&tmp.path().join("mcap")),
+        table_one(&tmp.path().join("ros1")),
+    );
+    assert_eq!(a, b);
+    let labels: Vec<&str> = a.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "parametric only",
+            "exact GP: rbf",
+            "sparse GP (VFE, m=50): rbf"
+        ]
+    );
+    let report = std::fs::read_to_string(tmp.path().join("mcap/report.md")).unwrap();
+    for needle in [
+        "husky_test1-train",
+        "husky_test1-test",
+        "Motion model: reported_odometry",
+        "GNSS σ reported by the receiver",
+        "How much of the residual is noise",
+        "odom_vx",
+    ] {
+        assert!(
+            report.contains(needle),
+            "no `{needle}` in the report:\n{report}"
+        );
+    }
+}
+
 mod synthetic {
     //! A simulated ExoTeR run written as a ROS 2 MCAP (JointState, Imu and
     //! Odometry in CDR, encoded here by hand) and read back through `kind:

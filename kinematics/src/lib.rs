@@ -8,7 +8,9 @@
 //! * [`loads`]: static normal forces, the weights `C` of eq. (5);
 //! * [`weighted_jacobian`]: eq. (2)–(5), weighted least squares;
 //! * [`qp`]: the same problem with bounds, as a QP (Clarabel);
-//! * [`skid_steer`]: the ideal differential-drive model.
+//! * [`skid_steer`]: the ideal differential-drive model;
+//! * [`reported_odometry`]: the robot's own odometry as the model, for
+//!   robots without modelled kinematics.
 
 pub mod chain;
 pub mod description;
@@ -16,11 +18,13 @@ mod error;
 pub mod jacobian;
 pub mod loads;
 pub mod qp;
+pub mod reported_odometry;
 pub mod skid_steer;
 pub mod weighted_jacobian;
 
 pub use description::RoverDescription;
 pub use error::KinematicsError;
+pub use reported_odometry::{AngularSource, ReportedOdometryModel};
 pub use skid_steer::{SkidSteerModel, YawSource};
 pub use weighted_jacobian::{
     ContactAngleSource, SolveBounds, WeightedJacobianConfig, WeightedJacobianModel, Weighting,

@@ -50,4 +50,10 @@ pub struct ProprioceptiveSample {
     /// measured or estimated them (a simulator does; a real rover usually
     /// does not, and models then assume 0).
     pub contact_angles_rad: Option<Vec<f64>>,
+    /// The robot's own odometry over the interval that starts here, as its
+    /// drive controller reports it (e.g. a ROS `nav_msgs/Odometry` twist in
+    /// the body frame), for robots whose kinematics gpodo does not model;
+    /// `None` when the log has none.
+    #[serde(default)]
+    pub odometry: Option<crate::BodyTwist>,
 }

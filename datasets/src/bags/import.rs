@@ -6,12 +6,13 @@
 //! are dropped and counted, as are duplicated and out-of-order stamps.
 
 use std::collections::BTreeMap;
+use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
-use gpodo_traits::{ImuSample, JointState as Joint, ProprioceptiveSample};
+use gpodo_traits::{BodyTwist, ImuSample, JointState as Joint, ProprioceptiveSample};
 
 use super::enu::LocalEnu;
 use super::messages::RosMessage;
@@ -76,6 +77,29 @@ pub struct JointMap {
     pub bogies: BTreeMap<String, JointRef>,
 }
 
+/// Where the heading of a GNSS ground truth comes from (a fix has a
+/// position, not an orientation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GnssHeading {
+    /// The course over ground: the direction of the GNSS track over
+    /// [`COURSE_WINDOW_SECS`] about each row, where the robot moves faster
+    /// than [`COURSE_MIN_SPEED_MPS`], turned by π where the robot drives
+    /// backwards (decided against the IMU's yaw); elsewhere the IMU's yaw
+    /// with its mean offset to the course removed. Roll and pitch from the
+    /// IMU. Lateral velocity is then zero by construction while moving.
+    #[default]
+    Course,
+    /// The IMU's orientation as it is (right only when its yaw is
+    /// referenced to east-north-up, as an INS's is; most IMUs' yaw is not).
+    Imu,
+}
+
+/// Course over ground is taken over this window about each row (s).
+pub const COURSE_WINDOW_SECS: f64 = 2.0;
+/// Below this ground speed the GNSS course is not used (m/s).
+pub const COURSE_MIN_SPEED_MPS: f64 = 0.3;
+
 /// Which topic plays which role, and how streams are put on one clock.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,9 +118,18 @@ pub struct TopicMap {
     /// or `sensor_msgs/NavSatFix` (position in a local east-north-up frame
     /// about the first fix, orientation from the IMU).
     pub ground_truth: String,
+    /// How a GNSS ground truth gets its heading (default: course over
+    /// ground).
+    #[serde(default)]
+    pub gnss_heading: GnssHeading,
     /// Joint encoders (optional).
     #[serde(default)]
     pub joints: Option<JointMap>,
+    /// The robot's own odometry (optional): `nav_msgs/Odometry` (its twist,
+    /// in the child frame as ROS defines it) or `geometry_msgs/TwistStamped`
+    /// (body frame); the `reported_odometry` motion model uses it as `g`.
+    #[serde(default)]
+    pub odometry: Option<String>,
     /// Rate of the common clock (Hz, default 10).
     #[serde(default = "default_rate")]
     pub rate_hz: f64,
@@ -112,7 +145,7 @@ pub struct TopicMap {
 /// What an import did with each stream.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct StreamReport {
-    /// The role (`imu`, `ground_truth`, `joints`).
+    /// The role (`imu`, `ground_truth`, `odometry`, `joints`).
     pub role: String,
     /// The topic.
     pub topic: String,
@@ -141,6 +174,26 @@ pub struct ImportReport {
     pub start_epoch_secs: f64,
     /// One entry per stream.
     pub streams: Vec<StreamReport>,
+    /// How a GNSS ground truth got its heading, when it has one.
+    pub gnss_heading: Option<HeadingReport>,
+    /// Median horizontal and vertical position standard deviations the
+    /// GNSS receiver reported (m), when its fixes carry a covariance.
+    pub gnss_sigma_m: Option<[f64; 2]>,
+}
+
+/// How the heading of a GNSS ground truth was made ([`GnssHeading::Course`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HeadingReport {
+    /// Rows whose heading is the course over ground.
+    pub rows_from_course: usize,
+    /// Of those, rows driven backwards (course turned by π).
+    pub rows_reversed: usize,
+    /// Mean offset course − IMU yaw (deg), removed from the IMU's yaw on
+    /// the other rows.
+    pub imu_offset_deg: f64,
+    /// 10th and 90th percentiles of course − IMU yaw − offset (deg): how far
+    /// the IMU's yaw wanders from the track.
+    pub imu_spread_deg: [f64; 2],
 }
 
 /// Why a recording could not be imported.
@@ -164,6 +217,21 @@ pub enum ImportError {
         /// Per stream: messages and rows lost in gaps.
         detail: String,
     },
+}
+
+impl std::fmt::Display for HeadingReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "GNSS heading: course over ground on {} rows ({} driven backwards), elsewhere \
+             the IMU yaw {:+.1}°; course − IMU yaw spans {:+.1}° to {:+.1}° (10–90 %)",
+            self.rows_from_course,
+            self.rows_reversed,
+            self.imu_offset_deg,
+            self.imu_spread_deg[0],
+            self.imu_spread_deg[1]
+        )
+    }
 }
 
 /// A stream on its own clock: time (s since the epoch) and values.
@@ -303,6 +371,13 @@ pub fn import_bag(
             ],
         },
     ];
+    if let Some(topic) = &map.odometry {
+        requests.push(TopicRequest {
+            topic,
+            role: "odometry",
+            expected: &["nav_msgs/Odometry", "geometry_msgs/TwistStamped"],
+        });
+    }
     if let Some(j) = &map.joints {
         requests.push(TopicRequest {
             topic: &j.topic,
@@ -315,6 +390,7 @@ pub fn import_bag(
         read.next().unwrap_or_default(),
         read.next().unwrap_or_default(),
     );
+    let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
     let joint_messages = read.next();
     // IMU: orientation (4), gyro (3), specific force (3).
     let n_imu = imu_messages.len();
@@ -344,6 +420,7 @@ pub fn import_bag(
     let mut enu: Option<LocalEnu> = None;
     let mut unusable = 0;
     let mut gnss = false;
+    let mut sigmas: Vec<[f64; 2]> = Vec::new();
     let mut gt_samples = Vec::new();
     for s in &gt_messages {
         let (header, values) = match &s.message {
@@ -359,6 +436,10 @@ pub fn import_bag(
                 if f.status < 0 || !(f.latitude.is_finite() && f.longitude.is_finite()) {
                     unusable += 1;
                     continue;
+                }
+                if f.position_covariance_type > 0 {
+                    let c = &f.position_covariance;
+                    sigmas.push([(0.5 * (c[0] + c[4])).sqrt(), c[8].sqrt()]);
                 }
                 let frame =
                     *enu.get_or_insert_with(|| LocalEnu::new(f.latitude, f.longitude, f.altitude));
@@ -385,6 +466,33 @@ pub fn import_bag(
         unusable,
         gt_quaternions,
     );
+    // Odometry: the reported body twist (6).
+    let mut odometry = match (&map.odometry, odometry_messages) {
+        (Some(topic), Some(messages)) => {
+            let samples = messages
+                .iter()
+                .filter_map(|s| match &s.message {
+                    RosMessage::Odometry(m) => Some((
+                        stamp(map, s, m.header.stamp_ns),
+                        [m.twist.linear, m.twist.angular].concat(),
+                    )),
+                    RosMessage::TwistStamped(h, t) => {
+                        Some((stamp(map, s, h.stamp_ns), [t.linear, t.angular].concat()))
+                    }
+                    _ => None,
+                })
+                .collect();
+            Some(Stream::new(
+                "odometry",
+                topic,
+                samples,
+                messages.len(),
+                0,
+                vec![],
+            ))
+        }
+        _ => None,
+    };
     // Joints: position and rate per mapped joint, in the rover's order.
     let groups: [(&str, Vec<(String, JointRef)>); 3] = match &map.joints {
         Some(j) => [
@@ -435,6 +543,11 @@ pub fn import_bag(
     };
     // The common clock, over the span every stream covers.
     let mut streams: Vec<&mut Stream> = vec![&mut imu, &mut gt];
+    let odometry_at = odometry.as_ref().map(|_| streams.len());
+    if let Some(o) = odometry.as_mut() {
+        streams.push(o);
+    }
+    let joints_at = joints.as_ref().map(|_| streams.len());
     if let Some(j) = joints.as_mut() {
         streams.push(j);
     }
@@ -467,8 +580,9 @@ pub fn import_bag(
             dropped += 1;
             continue;
         };
-        let jv = values.get(2).cloned().flatten();
-        if joints_needed(&groups) && jv.is_none() {
+        let ov = odometry_at.and_then(|k| values[k].clone());
+        let jv = joints_at.and_then(|k| values[k].clone());
+        if (joints_needed(&groups) && jv.is_none()) || (odometry_at.is_some() && ov.is_none()) {
             dropped += 1;
             continue;
         }
@@ -498,6 +612,10 @@ pub fn import_bag(
                 pitch_rad: pitch,
             },
             contact_angles_rad: None,
+            odometry: ov.map(|o| BodyTwist {
+                linear_mps: Vector3::new(o[0], o[1], o[2]),
+                angular_radps: Vector3::new(o[3], o[4], o[5]),
+            }),
         });
         let q = if gnss {
             [i[0], i[1], i[2], i[3]]
@@ -510,6 +628,8 @@ pub fn import_bag(
         ));
     }
     let reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
+    let gnss_heading = (gnss && map.gnss_heading == GnssHeading::Course)
+        .then(|| course_headings(&samples, &mut ground_truth));
     if samples.is_empty() {
         let detail = reports
             .iter()
@@ -548,8 +668,108 @@ pub fn import_bag(
         rows_dropped: dropped,
         start_epoch_secs: start,
         streams: reports,
+        gnss_heading,
+        gnss_sigma_m: median_sigmas(&sigmas),
     };
     Ok((log, report))
+}
+
+/// Medians of the horizontal and vertical standard deviations.
+fn median_sigmas(sigmas: &[[f64; 2]]) -> Option<[f64; 2]> {
+    if sigmas.is_empty() {
+        return None;
+    }
+    let median = |k: usize| {
+        let mut v: Vec<f64> = sigmas.iter().map(|s| s[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Some([median(0), median(1)])
+}
+
+/// The smallest signed angle equal to `a` modulo 2π.
+fn wrap(a: f64) -> f64 {
+    (a + PI).rem_euclid(2.0 * PI) - PI
+}
+
+/// Replaces the yaw of GNSS ground-truth poses (which hold the IMU's
+/// orientation) by the course over ground, as [`GnssHeading::Course`] says.
+fn course_headings(
+    samples: &[ProprioceptiveSample],
+    ground_truth: &mut [Isometry3<f64>],
+) -> HeadingReport {
+    let times: Vec<f64> = samples.iter().map(|s| s.time_secs).collect();
+    let half = 0.5 * COURSE_WINDOW_SECS;
+    let imu_yaw: Vec<f64> = ground_truth
+        .iter()
+        .map(|p| p.rotation.euler_angles().2)
+        .collect();
+    // Course where the track over the window is long enough to have one.
+    let course: Vec<Option<f64>> = (0..times.len())
+        .map(|k| {
+            let j = times.partition_point(|&t| t < times[k] - half);
+            let l = times.partition_point(|&t| t <= times[k] + half) - 1;
+            let span = times[l] - times[j];
+            if span < half {
+                return None;
+            }
+            let d = ground_truth[l].translation.vector - ground_truth[j].translation.vector;
+            (d.xy().norm() / span >= COURSE_MIN_SPEED_MPS).then(|| d.y.atan2(d.x))
+        })
+        .collect();
+    let diffs: Vec<f64> = course
+        .iter()
+        .zip(&imu_yaw)
+        .filter_map(|(c, y)| c.map(|c| wrap(c - y)))
+        .collect();
+    // The offset modulo π from the doubled angles (forward and backward
+    // driving agree there), then the half turn most rows agree with.
+    let (s2, c2) = diffs.iter().fold((0.0, 0.0), |(s, c), d| {
+        (s + (2.0 * d).sin(), c + (2.0 * d).cos())
+    });
+    let mut offset = 0.5 * s2.atan2(c2);
+    let forward = diffs
+        .iter()
+        .filter(|d| wrap(*d - offset).abs() < FRAC_PI_2)
+        .count();
+    if 2 * forward < diffs.len() {
+        offset = wrap(offset + PI);
+    }
+    let mut reversed = 0;
+    let mut spread = Vec::with_capacity(diffs.len());
+    for (k, pose) in ground_truth.iter_mut().enumerate() {
+        let expected = imu_yaw[k] + offset;
+        let heading = match course[k] {
+            Some(c) => {
+                let mut d = wrap(c - expected);
+                let mut c = c;
+                if d.abs() > FRAC_PI_2 {
+                    reversed += 1;
+                    c = wrap(c + PI);
+                    d = wrap(c - expected);
+                }
+                spread.push(d);
+                c
+            }
+            None => expected,
+        };
+        let s = &samples[k].imu;
+        pose.rotation = UnitQuaternion::from_euler_angles(s.roll_rad, s.pitch_rad, heading);
+    }
+    spread.sort_by(f64::total_cmp);
+    let quantile = |q: f64| {
+        if spread.is_empty() {
+            0.0
+        } else {
+            spread[((spread.len() - 1) as f64 * q).round() as usize].to_degrees()
+        }
+    };
+    HeadingReport {
+        rows_from_course: spread.len(),
+        rows_reversed: reversed,
+        imu_offset_deg: offset.to_degrees(),
+        imu_spread_deg: [quantile(0.1), quantile(0.9)],
+    }
 }
 
 fn joints_needed(groups: &[(&str, Vec<(String, JointRef)>); 3]) -> bool {
@@ -593,6 +813,39 @@ mod tests {
         assert_eq!(s.report.rows_in_gaps, 1);
         assert_eq!(s.report.max_gap_bridged_secs, 1.0);
         assert!(s.at(-1.0, 1.5).is_none() && s.at(6.0, 1.5).is_none());
+    }
+
+    #[test]
+    fn gnss_heading_is_the_course_turned_for_reversing_and_the_imu_offset_is_removed() {
+        // 40 s north at 1 m/s facing north, then 20 s south still facing
+        // north (reversing), at 10 Hz; the IMU's yaw reads 40° less than
+        // the true heading (90°), and its roll and pitch are kept.
+        let (roll, pitch) = (0.01, -0.02);
+        let mut samples = Vec::new();
+        let mut ground_truth = Vec::new();
+        for k in 0..=600 {
+            let t = k as f64 * 0.1;
+            let y = if t <= 40.0 { t } else { 80.0 - t };
+            let mut s = ProprioceptiveSample {
+                time_secs: t,
+                ..Default::default()
+            };
+            s.imu.roll_rad = roll;
+            s.imu.pitch_rad = pitch;
+            samples.push(s);
+            let imu = UnitQuaternion::from_euler_angles(roll, pitch, 50f64.to_radians());
+            ground_truth.push(Isometry3::from_parts(Translation3::new(0.0, y, 0.0), imu));
+        }
+        let report = course_headings(&samples, &mut ground_truth);
+        assert!((report.imu_offset_deg - 40.0).abs() < 1e-9, "{report:?}");
+        // Rows within a second of the turn have too short a net track.
+        assert!(report.rows_from_course > 570, "{report:?}");
+        assert!((190..=200).contains(&report.rows_reversed), "{report:?}");
+        for pose in &ground_truth {
+            let (r, p, yaw) = pose.rotation.euler_angles();
+            assert!((r - roll).abs() < 1e-12 && (p - pitch).abs() < 1e-12);
+            assert!((yaw - FRAC_PI_2).abs() < 1e-9, "{}", yaw.to_degrees());
+        }
     }
 
     #[test]

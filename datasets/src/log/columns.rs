@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use gpodo_traits::{ImuSample, JointState, ProprioceptiveSample};
+use gpodo_traits::{BodyTwist, ImuSample, JointState, ProprioceptiveSample};
 use nalgebra::{Isometry3, Quaternion, Vector3};
 
 use super::RoverLog;
@@ -37,6 +37,16 @@ const CONTACT_PREFIX: &str = "contact_";
 const CONTACT_SUFFIX: &str = "_rad";
 const EXTRA_PREFIX: &str = "x_";
 
+/// The robot's own odometry twist (body frame), all six or none.
+pub(super) const ODOMETRY_COLUMNS: [&str; 6] = [
+    "odom_vx_mps",
+    "odom_vy_mps",
+    "odom_vz_mps",
+    "odom_wx_radps",
+    "odom_wy_radps",
+    "odom_wz_radps",
+];
+
 /// Why `name` cannot be a joint name, if it cannot.
 pub(super) fn check_joint_name(name: &str) -> Result<(), &'static str> {
     if name.is_empty() {
@@ -52,13 +62,15 @@ pub(super) fn check_joint_name(name: &str) -> Result<(), &'static str> {
 }
 
 /// The joints of a log (names per group, in order) and whether it has
-/// contact angles.
+/// contact angles and the robot's own odometry.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct LogLayout {
     /// Wheel, steering and bogie names.
     joints: [Vec<String>; 3],
     /// Whether one `contact_<w>_rad` column per wheel is present.
     contact: bool,
+    /// Whether the `odom_*` columns are present.
+    odometry: bool,
 }
 
 impl LogLayout {
@@ -74,6 +86,7 @@ impl LogLayout {
                 .samples
                 .first()
                 .is_some_and(|s| s.contact_angles_rad.is_some()),
+            odometry: log.samples.first().is_some_and(|s| s.odometry.is_some()),
         }
     }
 
@@ -83,8 +96,13 @@ impl LogLayout {
     pub fn from_header(path: &Path, header: &[String]) -> Result<Self, DatasetError> {
         let mut joints: [Vec<String>; 3] = Default::default();
         let mut contacts = Vec::new();
+        let mut odometry = false;
         for column in header {
             if FIXED_COLUMNS.contains(&column.as_str()) || column.starts_with(EXTRA_PREFIX) {
+                continue;
+            }
+            if ODOMETRY_COLUMNS.contains(&column.as_str()) {
+                odometry = true;
                 continue;
             }
             if let Some((group, name)) = joint_of_column(column) {
@@ -107,12 +125,18 @@ impl LogLayout {
         Ok(Self {
             joints,
             contact: !contacts.is_empty(),
+            odometry,
         })
     }
 
     /// Whether the log has contact angles.
     pub fn has_contact(&self) -> bool {
         self.contact
+    }
+
+    /// Whether the log has the robot's own odometry.
+    pub fn has_odometry(&self) -> bool {
+        self.odometry
     }
 
     /// Wheel, steering and bogie names.
@@ -133,6 +157,9 @@ impl LogLayout {
             for wheel in &self.joints[0] {
                 names.push(format!("{CONTACT_PREFIX}{wheel}{CONTACT_SUFFIX}"));
             }
+        }
+        if self.odometry {
+            names.extend(ODOMETRY_COLUMNS.iter().map(|c| c.to_string()));
         }
         names
     }
@@ -168,6 +195,10 @@ impl LogLayout {
         if self.contact {
             row.extend(sample.contact_angles_rad.iter().flatten());
         }
+        if self.odometry {
+            let twist = sample.odometry.unwrap_or_default();
+            row.extend(twist.linear_mps.iter().chain(twist.angular_radps.iter()));
+        }
         row
     }
 
@@ -197,6 +228,10 @@ impl LogLayout {
         let contact_angles_rad = self
             .contact
             .then(|| self.joints[0].iter().map(|_| next()).collect());
+        let odometry = self.odometry.then(|| BodyTwist {
+            linear_mps: Vector3::new(next(), next(), next()),
+            angular_radps: Vector3::new(next(), next(), next()),
+        });
         let sample = ProprioceptiveSample {
             time_secs,
             wheels,
@@ -204,6 +239,7 @@ impl LogLayout {
             bogies,
             imu,
             contact_angles_rad,
+            odometry,
         };
         (sample, translation, Quaternion::new(w, i, j, k))
     }

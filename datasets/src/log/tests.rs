@@ -35,6 +35,7 @@ fn awkward_log() -> RoverLog {
                     pitch_rad: -0.45 + k * 1e-17,
                 },
                 contact_angles_rad: Some(vec![1.0 / 3.0, -0.0]),
+                odometry: None,
             }
         })
         .collect();
@@ -587,4 +588,84 @@ fn joints_are_reordered_by_name_and_missing_ones_are_named() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("nope"), "{err}");
+}
+
+/// The awkward log with the robot's own odometry in every sample.
+fn with_odometry(mut log: RoverLog) -> RoverLog {
+    for (k, s) in log.samples.iter_mut().enumerate() {
+        s.odometry = Some(gpodo_traits::BodyTwist {
+            linear_mps: Vector3::new(0.1 + 0.2, -0.0, 1e-300 * k as f64),
+            angular_radps: Vector3::new(5e-324, 1.0 / 3.0, -(k as f64)),
+        });
+    }
+    log
+}
+
+#[test]
+fn odometry_columns_round_trip_bit_identical() {
+    let log = with_odometry(awkward_log());
+    let (_dir, path) = written(&log);
+    let header = fs::read_to_string(&path).unwrap();
+    assert!(
+        header.lines().next().unwrap().ends_with(
+            "odom_vx_mps,odom_vy_mps,odom_vz_mps,odom_wx_radps,odom_wy_radps,odom_wz_radps"
+        ),
+        "{header}"
+    );
+    let back = read_log_csv(&path).unwrap();
+    assert_eq!(fingerprint(&back), fingerprint(&log));
+    assert_eq!(back, log);
+}
+
+#[test]
+fn odometry_needs_all_six_columns_and_every_sample() {
+    let (_dir, path) = written(&with_odometry(awkward_log()));
+    drop_column(&path, "odom_wz_radps");
+    let err = read_log_csv(&path).unwrap_err();
+    assert!(
+        matches!(&err, DatasetError::MissingColumn { column, .. } if column == "odom_wz_radps"),
+        "{err}"
+    );
+    let mut log = with_odometry(awkward_log());
+    log.samples[2].odometry = None;
+    let err = log.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("odometry must be given in every sample"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_log_cut_in_time_keeps_every_sample_once_with_its_camera_frames() {
+    let mut log = awkward_log();
+    log.samples[2].time_secs = 1.5;
+    log.camera_times_secs = vec![0.1 + 0.2, 0.5, 1.5];
+    let mut longer = log.clone();
+    for k in 3..10 {
+        let mut s = log.samples[2].clone();
+        s.time_secs = 1.5 + k as f64;
+        longer.samples.push(s);
+        longer.ground_truth.push(log.ground_truth[2]);
+    }
+    // 0.3 … 10.5 s: 80 % of the duration ends at 8.46 s.
+    let (train, test) = longer.split_in_time(0.8).unwrap();
+    assert_eq!(
+        (train.name.as_str(), test.name.as_str()),
+        ("awkward-train", "awkward-test")
+    );
+    assert_eq!(
+        train.samples.len() + test.samples.len(),
+        longer.samples.len()
+    );
+    assert_eq!(train.samples.last().unwrap().time_secs, 7.5);
+    assert_eq!(test.samples[0].time_secs, 8.5);
+    assert_eq!(train.camera_times_secs, vec![0.1 + 0.2, 0.5, 1.5]);
+    assert!(test.camera_times_secs.is_empty());
+    train.validate().unwrap();
+    test.validate().unwrap();
+    // Too short a part, or a fraction that is not one, is refused.
+    let e = log.split_in_time(0.5).unwrap_err().to_string();
+    assert!(e.contains("each part needs two"), "{e}");
+    let e = log.split_in_time(1.0).unwrap_err().to_string();
+    assert!(e.contains("train_fraction"), "{e}");
 }

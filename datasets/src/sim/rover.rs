@@ -423,6 +423,7 @@ impl World<'_> {
                 pitch_rad: pitch_meas,
             },
             contact_angles_rad: Some(state.placement.contact_rad.clone()),
+            odometry: None,
         };
         let truth = errors.mocap(&body_k, rng);
         errors.step(dt, rng);

@@ -116,8 +116,14 @@ pub enum DatasetSpec {
     Bags {
         /// Training recordings.
         train: Vec<PathBuf>,
-        /// Test recordings.
+        /// Test recordings (may be empty when `train_fraction` holds out
+        /// the end of each training recording).
+        #[serde(default)]
         test: Vec<PathBuf>,
+        /// Cut every training recording in time: the first fraction of it
+        /// trains, the rest is a test run.
+        #[serde(default)]
+        train_fraction: Option<f64>,
         /// Which topic plays which role, the clock rate and the longest gap
         /// bridged.
         topics: gpodo_datasets::bags::import::TopicMap,
@@ -159,6 +165,18 @@ pub enum MotionModelSpec {
         /// Angular rate source.
         #[serde(default)]
         yaw: YawSource,
+    },
+    /// The robot's own odometry (a log's `odom_*` columns, a bag's
+    /// `odometry` topic) as the model, for a robot whose kinematics gpodo
+    /// does not model.
+    ReportedOdometry {
+        /// Rover description YAML, needed only when the logs also hold
+        /// wheel joints (for the wheel radius and the joint order).
+        #[serde(default)]
+        rover: Option<PathBuf>,
+        /// Angular rate source (default: the odometry's own).
+        #[serde(default)]
+        angular: gpodo_kinematics::AngularSource,
     },
 }
 

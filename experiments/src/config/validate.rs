@@ -65,6 +65,27 @@ impl ExperimentConfig {
                     "a fraction in (0, 1)",
                 ))
             }
+            DatasetSpec::Bags {
+                train_fraction: Some(f),
+                ..
+            } if !(*f > 0.0 && *f < 1.0) => Err(Issue::new(
+                "dataset.train_fraction",
+                format!("training fraction {f}"),
+                "a fraction in (0, 1)",
+            )),
+            DatasetSpec::Bags {
+                train,
+                train_fraction: Some(_),
+                ..
+            } if train.is_empty() => Err(Issue::new(
+                "dataset.train",
+                "no training recording",
+                "at least one recording to cut at `train_fraction`",
+            )),
+            DatasetSpec::Bags {
+                train_fraction: Some(_),
+                ..
+            } => Ok(()),
             DatasetSpec::Logs { train, test } | DatasetSpec::Bags { train, test, .. }
                 if train.is_empty() || test.is_empty() =>
             {

@@ -31,6 +31,26 @@ pub struct ResidualStatistics {
     pub corr_abs_x_abs_pitch: Option<f64>,
     /// Pearson correlation of |residual_x| with |roll|.
     pub corr_abs_x_abs_roll: Option<f64>,
+    /// Root mean square of each target.
+    #[serde(default)]
+    pub rms: Vec<f64>,
+    /// Each target's noise standard deviation estimated from successive
+    /// rows, `sqrt(mean((y[k+1] − y[k])²) / 2)`: right for noise that is
+    /// independent from row to row on top of a residual that changes slowly.
+    /// Close to [`Self::rms`], the residual is mostly noise at the rows'
+    /// rate, and no regressor can predict it from any input.
+    #[serde(default)]
+    pub noise_sd: Vec<f64>,
+}
+
+/// The successive-difference noise estimate of a series (0 for fewer than
+/// two values).
+pub fn successive_difference_sd(y: &[f64]) -> f64 {
+    if y.len() < 2 {
+        return 0.0;
+    }
+    let sum: f64 = y.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum();
+    (0.5 * sum / (y.len() - 1) as f64).sqrt()
 }
 
 fn pearson(a: &[f64], b: &[f64]) -> Option<f64> {
@@ -57,13 +77,18 @@ pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
     let p95_abs = summary.iter().map(|c| c.p95_abs).collect();
 
     let index = |name: &str| data.input_names.iter().position(|n| n == name);
-    let wheel_cols: Vec<usize> = data
+    // The wheels' translational speeds or, for a robot logged without
+    // joints, its own odometry's forward speed.
+    let mut wheel_cols: Vec<usize> = data
         .input_names
         .iter()
         .enumerate()
         .filter(|(_, n)| n.ends_with("_transl"))
         .map(|(i, _)| i)
         .collect();
+    if wheel_cols.is_empty() {
+        wheel_cols.extend(index("odom_vx"));
+    }
     let speed: Option<Vec<f64>> = (!wheel_cols.is_empty()).then(|| {
         data.inputs
             .rows()
@@ -102,12 +127,35 @@ pub fn residual_statistics(data: &ResidualDataset) -> ResidualStatistics {
         }),
         corr_abs_x_abs_pitch: abs_input("pitch").and_then(|p| pearson(&res_x, &p)),
         corr_abs_x_abs_roll: abs_input("roll").and_then(|r| pearson(&res_x, &r)),
+        rms: (0..o)
+            .map(|j| {
+                let c = data.targets.column(j);
+                (c.iter().map(|v| v * v).sum::<f64>() / c.len().max(1) as f64).sqrt()
+            })
+            .collect(),
+        noise_sd: (0..o)
+            .map(|j| successive_difference_sd(&data.targets.column(j)))
+            .collect(),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn successive_differences_see_white_noise_and_not_a_slow_trend() {
+        // Alternating ±1: independent-looking noise of standard deviation 1.
+        let noise: Vec<f64> = (0..1000)
+            .map(|k| if k % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        // sqrt(4 / 2) = √2 for a perfectly alternating series.
+        assert!((successive_difference_sd(&noise) - 2f64.sqrt()).abs() < 1e-12);
+        // A slow ramp from 0 to 1: almost no noise.
+        let ramp: Vec<f64> = (0..1000).map(|k| k as f64 / 999.0).collect();
+        assert!(successive_difference_sd(&ramp) < 1e-3);
+        assert_eq!(successive_difference_sd(&[3.0]), 0.0);
+    }
 
     #[test]
     fn pearson_of_proportional_series_is_one() {

@@ -8,7 +8,9 @@ use gpodo_datasets::log::{RoverLog, read_log_csv};
 use gpodo_datasets::residuals::residual_dataset;
 use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
-use gpodo_kinematics::{RoverDescription, SkidSteerModel, WeightedJacobianModel};
+use gpodo_kinematics::{
+    ReportedOdometryModel, RoverDescription, SkidSteerModel, WeightedJacobianModel,
+};
 use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualDataset};
 
@@ -35,11 +37,12 @@ fn summarize(log: &RoverLog) -> RunSummary {
     }
 }
 
-/// The motion model of `spec` and the rover it describes.
+/// The motion model of `spec` and the rover it describes (none for the
+/// reported odometry without a description).
 fn motion_model(
     spec: &MotionModelSpec,
     base: &Path,
-) -> Result<(Box<dyn MotionModel>, RoverDescription), PipelineError> {
+) -> Result<(Box<dyn MotionModel>, Option<RoverDescription>), PipelineError> {
     let load = |rover: &Option<PathBuf>| match rover {
         Some(p) => RoverDescription::from_path(&resolve(base, p)),
         None => Ok(RoverDescription::exoter()),
@@ -47,11 +50,24 @@ fn motion_model(
     Ok(match spec {
         MotionModelSpec::WeightedJacobian { rover, config } => {
             let d = load(rover)?;
-            (Box::new(WeightedJacobianModel::new(d.clone(), *config)?), d)
+            (
+                Box::new(WeightedJacobianModel::new(d.clone(), *config)?),
+                Some(d),
+            )
         }
         MotionModelSpec::SkidSteer { rover, yaw } => {
             let d = load(rover)?;
-            (Box::new(SkidSteerModel::from_description(&d, *yaw)?), d)
+            (
+                Box::new(SkidSteerModel::from_description(&d, *yaw)?),
+                Some(d),
+            )
+        }
+        MotionModelSpec::ReportedOdometry { rover, angular } => {
+            let d = match rover {
+                Some(p) => Some(RoverDescription::from_path(&resolve(base, p))?),
+                None => None,
+            };
+            (Box::new(ReportedOdometryModel::new(*angular)), d)
         }
     })
 }
@@ -83,8 +99,9 @@ fn from_logs(
 ) -> Result<PreparedData, PipelineError> {
     let (model, rover) = motion_model(&config.motion_model, base)?;
     // Models read joints by position: put every log in the rover's order.
-    let in_rover_order = |logs: &[RoverLog]| {
-        logs.iter()
+    let in_rover_order = |logs: &[RoverLog]| match &rover {
+        Some(rover) => logs
+            .iter()
             .map(|l| {
                 l.with_joint_order(
                     &rover.wheel_names(),
@@ -92,10 +109,22 @@ fn from_logs(
                     &rover.bogie_names(),
                 )
             })
-            .collect::<Result<Vec<_>, _>>()
+            .collect::<Result<Vec<_>, _>>(),
+        None => match logs.iter().find(|l| !l.wheel_names.is_empty()) {
+            Some(l) => Err(gpodo_datasets::DatasetError::InvalidLog {
+                log: l.name.clone(),
+                sample: None,
+                detail: format!(
+                    "the log has wheel joints {:?}: give the motion model a `rover:` \
+                     description so that their speeds can be put in m/s",
+                    l.wheel_names
+                ),
+            }),
+            None => Ok(logs.to_vec()),
+        },
     };
     let (train_logs, test_logs) = (&in_rover_order(train_logs)?, &in_rover_order(test_logs)?);
-    let radius = rover.wheel_radius_m;
+    let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
     let train = residual_dataset(&refs(train_logs), model.as_ref(), radius, &config.residuals)?;
     let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
     let dead_reckoning = test_logs
@@ -170,6 +199,7 @@ pub(crate) fn prepare(
         DatasetSpec::Bags {
             train,
             test,
+            train_fraction,
             topics,
         } => {
             let imported = std::cell::RefCell::new(Vec::new());
@@ -188,9 +218,25 @@ pub(crate) fn prepare(
                     })
                     .collect::<Result<Vec<_>, PipelineError>>()
             };
-            let (train, test) = (read(train)?, read(test)?);
+            let (mut train, mut test) = (read(train)?, read(test)?);
+            if let Some(fraction) = train_fraction {
+                let (mut kept, mut held_out) = (Vec::new(), Vec::new());
+                for log in &train {
+                    let (a, b) = log.split_in_time(*fraction)?;
+                    kept.push(a);
+                    held_out.push(b);
+                }
+                held_out.append(&mut test);
+                (train, test) = (kept, held_out);
+            }
+            let split = train_fraction.map_or_else(String::new, |f| {
+                format!(
+                    ", each training recording cut at {:.0} % of its duration (the rest tests)",
+                    100.0 * f
+                )
+            });
             let source = format!(
-                "ROS bags at {} Hz, at most {} s bridged ({})",
+                "ROS bags at {} Hz, at most {} s bridged{split} ({})",
                 topics.rate_hz,
                 topics.max_gap_secs,
                 imported.into_inner().join("; ")
@@ -293,8 +339,17 @@ fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) ->
             )
         })
         .collect();
+    let heading = r
+        .gnss_heading
+        .as_ref()
+        .map_or_else(String::new, |h| format!("; {h}"));
+    let sigma = r.gnss_sigma_m.map_or_else(String::new, |[h, v]| {
+        format!(
+            "; GNSS σ reported by the receiver (median): {h:.2} m horizontal, {v:.2} m vertical"
+        )
+    });
     format!(
-        "{name}: {} rows, {} dropped in gaps; {}",
+        "{name}: {} rows, {} dropped in gaps; {}{heading}{sigma}",
         r.rows,
         r.rows_dropped,
         streams.join(", ")

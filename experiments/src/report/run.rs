@@ -381,6 +381,46 @@ fn statistics_row(s: &mut String, label: &str, st: &ResidualStatistics) {
     );
 }
 
+/// How much of the residual is row-to-row noise: RMS against the
+/// successive-difference noise estimate, per output.
+fn noise_rows(s: &mut String, r: &ExperimentResults) {
+    let sets = [("train", &r.train_statistics), ("test", &r.test_statistics)];
+    if sets.iter().any(|(_, st)| st.rms.is_empty()) {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\nHow much of the residual is noise (per output, × 1000): RMS, and the noise standard deviation estimated from successive rows (√(mean((y[k+1] − y[k])²)/2), right for noise independent from row to row on a slowly changing residual). Where the two are close, the residual is mostly noise at the rows' rate and no regressor can predict it.\n\n| rows | RMS | noise (successive differences) | noise / RMS |\n|---|---|---|---|"
+    );
+    for (name, st) in sets {
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{:.2}", 1000.0 * x))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        };
+        let ratio: Vec<String> = st
+            .noise_sd
+            .iter()
+            .zip(&st.rms)
+            .map(|(n, r)| {
+                if *r > 0.0 {
+                    format!("{:.2}", n / r)
+                } else {
+                    "–".into()
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {} |",
+            join(&st.rms),
+            join(&st.noise_sd),
+            ratio.join(" / ")
+        );
+    }
+}
+
 fn statistics_section(s: &mut String, r: &ExperimentResults) {
     let _ = writeln!(
         s,
@@ -388,6 +428,7 @@ fn statistics_section(s: &mut String, r: &ExperimentResults) {
     );
     statistics_row(s, "train", &r.train_statistics);
     statistics_row(s, "test", &r.test_statistics);
+    noise_rows(s, r);
     if let Some((name, st)) = &r.reference_statistics {
         statistics_row(s, &format!("reference `{name}`"), st);
         let ratios: Vec<String> = r
