@@ -69,7 +69,7 @@
 
 mod columns;
 mod read;
-mod write;
+pub(crate) mod write;
 
 use gpodo_traits::{JointState, ProprioceptiveSample};
 use nalgebra::Isometry3;

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
+use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
 use gpodo_datasets::log::write_log_csv;
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_experiments::config::ExperimentConfig;
@@ -120,8 +121,12 @@ enum Command {
         #[command(subcommand)]
         command: BagCommand,
     },
-    /// Simulate the testbed and write every run as CSV (trajectory format).
+    /// Simulate the testbed and write every run as a rover-log CSV or as a
+    /// ROS 2 MCAP bag (with the topic map that imports it back).
     Simulate {
+        /// `csv` (rover-log CSV) or `mcap` (ROS 2 bag).
+        #[arg(long, value_enum, default_value_t = SimulateFormat::Csv)]
+        format: SimulateFormat,
         /// Simulator preset.
         #[arg(long, default_value = "exoter-prl")]
         preset: Preset,
@@ -138,6 +143,15 @@ enum Command {
         #[arg(long)]
         training_run_secs: Option<f64>,
     },
+}
+
+/// What `gpodo simulate` writes.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum SimulateFormat {
+    /// Rover-log CSV (the `logs` dataset).
+    Csv,
+    /// ROS 2 MCAP bags (the `bags` dataset) and `topics.yaml`.
+    Mcap,
 }
 
 #[derive(Subcommand)]
@@ -371,6 +385,7 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
 }
 
 fn simulate(
+    format: SimulateFormat,
     preset: Preset,
     seed: u64,
     out: &Path,
@@ -386,6 +401,37 @@ fn simulate(
     }
     let testbed = config.simulate()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    if format == SimulateFormat::Mcap {
+        let logs: Vec<_> = testbed.train.iter().chain(&testbed.test).collect();
+        for log in &logs {
+            let bag = write_mcap(log, out)?;
+            println!(
+                "wrote {} ({} messages, {:.1} MB, {:.1} m)",
+                bag.path.display(),
+                bag.messages,
+                bag.bytes as f64 / 1e6,
+                log.path_length_m()
+            );
+        }
+        if let Some(first) = logs.first() {
+            let mut dts: Vec<f64> = first
+                .samples
+                .windows(2)
+                .map(|w| w[1].time_secs - w[0].time_secs)
+                .collect();
+            dts.sort_by(f64::total_cmp);
+            // The sample rate, to a micro-hertz (12.5 Hz for the ExoTeR preset).
+            let rate_hz = dts
+                .get(dts.len() / 2)
+                .map_or(10.0, |dt| (1e6 / dt).round() / 1e6);
+            let map = written_topic_map(first, rate_hz);
+            let path = out.join("topics.yaml");
+            let text = serde_saphyr::to_string(&map).context("writing the topic map")?;
+            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+            println!("wrote {} (the topic map that imports them)", path.display());
+        }
+        return Ok(());
+    }
     for log in testbed.train.iter().chain(&testbed.test) {
         let (csv, camera) = write_log_csv(log, out)?;
         println!(
@@ -443,11 +489,12 @@ fn main() -> anyhow::Result<()> {
             Ok(())
         }
         Command::Simulate {
+            format,
             preset,
             seed,
             out,
             training_runs,
             training_run_secs,
-        } => simulate(preset, seed, &out, training_runs, training_run_secs),
+        } => simulate(format, preset, seed, &out, training_runs, training_run_secs),
     }
 }

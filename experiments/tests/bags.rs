@@ -125,142 +125,22 @@ fn the_husky_example_runs_from_the_mcap_and_the_ros1_bag_alike() {
 }
 
 mod synthetic {
-    //! A simulated ExoTeR run written as a ROS 2 MCAP (JointState, Imu and
-    //! Odometry in CDR, encoded here by hand) and read back through `kind:
-    //! bags` gives the parametric model the same residuals as the same run
-    //! read as a rover-log CSV.
+    //! `gpodo simulate --format mcap` writes the simulated rover as ROS 2
+    //! MCAP bags and the topic map that imports them; read back through
+    //! `kind: bags`, they give the residual rows of the same runs written
+    //! as rover-log CSV. Python's `mcap-ros2-support` decodes them too.
 
-    use super::GPODO;
-    use gpodo_datasets::log::{RoverLog, read_log_csv};
-    use nalgebra::UnitQuaternion;
-    use std::collections::BTreeMap;
+    use super::{GPODO, common};
     use std::path::Path;
     use std::process::Command;
 
-    /// Little-endian CDR, aligned from after the 4-byte header.
-    struct Cdr(Vec<u8>);
-
-    impl Cdr {
-        fn new() -> Self {
-            Self(vec![0, 1, 0, 0])
-        }
-        fn align(&mut self, n: usize) {
-            while !(self.0.len() - 4).is_multiple_of(n) {
-                self.0.push(0);
-            }
-        }
-        fn u32(&mut self, v: u32) {
-            self.align(4);
-            self.0.extend(v.to_le_bytes());
-        }
-        fn f64(&mut self, v: f64) {
-            self.align(8);
-            self.0.extend(v.to_le_bytes());
-        }
-        fn f64s(&mut self, v: &[f64]) {
-            for x in v {
-                self.f64(*x);
-            }
-        }
-        fn string(&mut self, s: &str) {
-            self.u32(s.len() as u32 + 1);
-            self.0.extend(s.as_bytes());
-            self.0.push(0);
-        }
-        fn header(&mut self, t: f64) {
-            let ns = (t * 1e9).round() as i64;
-            self.u32((ns / 1_000_000_000) as u32);
-            self.u32((ns % 1_000_000_000) as u32);
-            self.string("base_link");
-        }
-    }
-
-    const EPOCH: f64 = 1_700_000_000.0;
-
-    fn write_mcap(log: &RoverLog, path: &Path) {
-        let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-        let mut w = mcap::Writer::new(file).unwrap();
-        let none = BTreeMap::new();
-        let channel = |w: &mut mcap::Writer<_>, ty: &str, topic: &str| {
-            let schema = w.add_schema(ty, "ros2msg", b"").unwrap();
-            w.add_channel(schema, topic, "cdr", &none).unwrap()
-        };
-        let joints = channel(&mut w, "sensor_msgs/msg/JointState", "/joint_states");
-        let imu = channel(&mut w, "sensor_msgs/msg/Imu", "/imu");
-        let odom = channel(&mut w, "nav_msgs/msg/Odometry", "/gt");
-        let names: Vec<String> = log
-            .wheel_names
-            .iter()
-            .map(|n| format!("wheel_{n}"))
-            .chain(log.steer_names.iter().map(|n| format!("steer_{n}")))
-            .chain(log.bogie_names.iter().map(|n| format!("bogie_{n}")))
-            .collect();
-        for (k, (s, pose)) in log.samples.iter().zip(&log.ground_truth).enumerate() {
-            let t = EPOCH + s.time_secs;
-            let all = s.wheels.iter().chain(&s.steering).chain(&s.bogies);
-            let mut m = Cdr::new();
-            m.header(t);
-            m.u32(names.len() as u32);
-            for n in &names {
-                m.string(n);
-            }
-            let (pos, rate): (Vec<f64>, Vec<f64>) =
-                all.map(|j| (j.position_rad, j.rate_radps)).unzip();
-            m.u32(pos.len() as u32);
-            m.f64s(&pos);
-            m.u32(rate.len() as u32);
-            m.f64s(&rate);
-            m.u32(0);
-            let yaw = pose.rotation.euler_angles().2;
-            let q = UnitQuaternion::from_euler_angles(s.imu.roll_rad, s.imu.pitch_rad, yaw);
-            let mut i = Cdr::new();
-            i.header(t);
-            i.f64s(&[q.i, q.j, q.k, q.w]);
-            i.f64s(&[0.0; 9]);
-            i.f64s(s.imu.gyro_radps.as_slice());
-            i.f64s(&[0.0; 9]);
-            i.f64s(s.imu.accel_mps2.as_slice());
-            i.f64s(&[0.0; 9]);
-            let mut o = Cdr::new();
-            o.header(t);
-            o.string("base_link");
-            let r = pose.rotation;
-            o.f64s(pose.translation.vector.as_slice());
-            o.f64s(&[r.i, r.j, r.k, r.w]);
-            o.f64s(&[0.0; 36]);
-            o.f64s(&[0.0; 6]);
-            o.f64s(&[0.0; 36]);
-            let ns = (t * 1e9).round() as u64;
-            for (channel_id, data) in [(joints, m.0), (imu, i.0), (odom, o.0)] {
-                let header = mcap::records::MessageHeader {
-                    channel_id,
-                    sequence: k as u32,
-                    log_time: ns,
-                    publish_time: ns,
-                };
-                w.write_to_known_channel(&header, &data).unwrap();
-            }
-        }
-        w.finish().unwrap();
-    }
-
-    fn parametric_rmse(dir: &Path) -> f64 {
-        let m: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap())
-                .unwrap();
-        m["regressors"][0]["evaluation"]["pooled"]["rmse"]
-            .as_f64()
-            .unwrap()
-    }
-
-    #[test]
-    fn a_simulated_run_as_mcap_gives_the_residuals_of_its_csv() {
-        let tmp = tempfile::tempdir().unwrap();
-        let logs = tmp.path().join("logs");
-        let out = Command::new(GPODO)
+    fn simulate(format: &str, out: &Path) {
+        let result = Command::new(GPODO)
             .args([
                 "--quiet",
                 "simulate",
+                "--format",
+                format,
                 "--seed",
                 "3",
                 "--training-runs",
@@ -269,7 +149,98 @@ mod synthetic {
                 "60",
                 "--out",
             ])
-            .arg(&logs)
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+    }
+
+    /// The header and rows of a residual CSV written by `gpodo run`.
+    fn rows(path: &Path) -> (String, Vec<Vec<f64>>) {
+        let text = std::fs::read_to_string(path).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap().to_string();
+        let rows = lines
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        (header, rows)
+    }
+
+    #[test]
+    fn simulated_runs_as_mcap_give_the_residual_rows_of_their_csv() {
+        let tmp = tempfile::tempdir().unwrap();
+        simulate("csv", &tmp.path().join("csv"));
+        simulate("mcap", &tmp.path().join("mcap"));
+        let topics = std::fs::read_to_string(tmp.path().join("mcap/topics.yaml")).unwrap();
+        let common = "motion_model: {kind: weighted_jacobian}\nregressors:\n  - kind: zero\n";
+        let csv_yaml = format!(
+            "name: csv\ndataset: {{kind: logs, train: [csv/train_01.csv], test: [csv/test.csv]}}\n{common}"
+        );
+        let indented: String = topics.lines().map(|l| format!("    {l}\n")).collect();
+        let bag_yaml = format!(
+            "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{indented}{common}"
+        );
+        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
+            let file = tmp.path().join(format!("{name}.yaml"));
+            std::fs::write(&file, yaml).unwrap();
+            let out = common::gpodo_on("run", &file, &tmp.path().join(format!("out-{name}")), &[]);
+            assert!(
+                out.status.success(),
+                "{name}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        let report = std::fs::read_to_string(tmp.path().join("out-bag/report.md")).unwrap();
+        assert!(
+            report.contains("ROS bags at 12.5 Hz")
+                && report.contains("train_01: 750 rows, 0 dropped in gaps")
+                && report.contains("joints /joint_states: 750 msgs, 0 duplicated"),
+            "the report says what the import did:\n{report}"
+        );
+        for set in ["residuals_train.csv", "residuals_test.csv"] {
+            let (h1, a) = rows(&tmp.path().join("out-csv").join(set));
+            let (h2, b) = rows(&tmp.path().join("out-bag").join(set));
+            assert_eq!(h1, h2);
+            assert_eq!(a.len(), b.len(), "{set}");
+            // Stamps are whole nanoseconds in a bag: rows agree to rounding.
+            let mut worst: f64 = 0.0;
+            for (ra, rb) in a.iter().zip(&b) {
+                for (x, y) in ra.iter().zip(rb) {
+                    worst = worst.max((x - y).abs() / (1.0 + x.abs()));
+                }
+            }
+            assert!(worst < 1e-9, "{set}: largest difference {worst:e}");
+        }
+    }
+
+    #[test]
+    fn mcap_written_by_gpodo_is_decoded_by_mcap_ros2_support() {
+        let Some(python) = common::python() else {
+            return;
+        };
+        let has_reader = Command::new(&python)
+            .args(["-c", "import mcap_ros2.decoder"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !has_reader {
+            assert!(
+                std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
+                "GPODO_REQUIRE_PYTHON is set but `{python}` has no mcap-ros2-support"
+            );
+            eprintln!("SKIPPED: `{python}` has no mcap-ros2-support");
+            return;
+        }
+        let tmp = tempfile::tempdir().unwrap();
+        simulate("mcap", &tmp.path().join("mcap"));
+        simulate("csv", &tmp.path().join("csv"));
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scripts/read_mcap.py");
+        let out = Command::new(&python)
+            .arg(&script)
+            .arg(tmp.path().join("mcap/train_01.mcap"))
             .output()
             .unwrap();
         assert!(
@@ -277,55 +248,38 @@ mod synthetic {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        for run in ["train_01", "test"] {
-            let log = read_log_csv(&logs.join(format!("{run}.csv"))).unwrap();
-            write_mcap(&log, &tmp.path().join(format!("{run}.mcap")));
+        let decoded: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let log = gpodo_datasets::log::read_log_csv(&tmp.path().join("csv/train_01.csv")).unwrap();
+        let n = log.samples.len() as u64;
+        for topic in ["/joint_states", "/imu/data", "/ground_truth/pose", "/tf"] {
+            assert_eq!(decoded["counts"][topic].as_u64(), Some(n), "{topic}");
         }
-        let joints = |prefix: &str, names: &[&str]| {
-            names
-                .iter()
-                .map(|n| format!("{n}: {{joint: {prefix}_{n}}}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let common = "motion_model: {kind: weighted_jacobian}\nregressors:\n  - kind: zero\n";
-        let csv_yaml = format!(
-            "name: csv\ndataset: {{kind: logs, train: [logs/train_01.csv], test: [logs/test.csv]}}\n{common}"
+        // Message 10 of each topic, as Python decoded it, against the log.
+        let k = 10;
+        let (s, p) = (&log.samples[k], &log.ground_truth[k]);
+        let f = |v: &serde_json::Value| v.as_f64().unwrap();
+        let j = &decoded["joint_states"];
+        assert_eq!(j["name"][0], "fl_wheel");
+        assert_eq!(j["name"][6], "fl_steer");
+        assert_eq!(j["name"][12], "rear_bogie");
+        assert_eq!(f(&j["velocity"][0]), s.wheels[0].rate_radps);
+        assert_eq!(f(&j["position"][12]), s.bogies[2].position_rad);
+        let imu = &decoded["imu"];
+        assert_eq!(f(&imu["angular_velocity"][2]), s.imu.gyro_radps.z);
+        assert_eq!(f(&imu["linear_acceleration"][0]), s.imu.accel_mps2.x);
+        let pose = &decoded["pose"];
+        assert_eq!(pose["frame_id"], "world");
+        assert_eq!(f(&pose["position"][1]), p.translation.vector.y);
+        assert_eq!(f(&pose["orientation"][3]), p.rotation.w);
+        let tf = &decoded["tf"];
+        assert_eq!(
+            (tf["parent"].as_str(), tf["child"].as_str()),
+            (Some("world"), Some("base_link"))
         );
-        let bag_yaml = format!(
-            "name: bag\ndataset:\n  kind: bags\n  train: [train_01.mcap]\n  test: [test.mcap]\n  topics:\n    imu: /imu\n    ground_truth: /gt\n    rate_hz: 12.5\n    max_gap_secs: 0.1\n    joints: {{topic: /joint_states, wheels: {{{}}}, steering: {{{}}}, bogies: {{{}}}}}\n{common}",
-            joints("wheel", &["fl", "fr", "ml", "mr", "rl", "rr"]),
-            joints("steer", &["fl", "fr", "rl", "rr"]),
-            joints("bogie", &["left", "right", "rear"]),
-        );
-        let mut rmse = Vec::new();
-        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
-            let file = tmp.path().join(format!("{name}.yaml"));
-            std::fs::write(&file, yaml).unwrap();
-            let dir = tmp.path().join(format!("out-{name}"));
-            let out = super::gpodo_on("run", &file, &dir, &[]);
-            assert!(
-                out.status.success(),
-                "{name}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            rmse.push(parametric_rmse(&dir));
-            if name == "bag" {
-                let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
-                assert!(
-                    report.contains("ROS bags at 12.5 Hz")
-                        && report.contains("train_01: 750 rows, 0 dropped in gaps")
-                        && report.contains("joints /joint_states: 750 msgs, 0 duplicated"),
-                    "the report says what the import did"
-                );
-            }
-        }
-        eprintln!("parametric residual RMSE: CSV {} MCAP {}", rmse[0], rmse[1]);
-        assert!(
-            (rmse[0] - rmse[1]).abs() <= 1e-6 * rmse[0],
-            "the parametric model's residual RMSE: CSV {} against MCAP {}",
-            rmse[0],
-            rmse[1]
-        );
+        assert_eq!(f(&tf["translation"][0]), p.translation.vector.x);
+        // The stamp: the written epoch plus the log time, in nanoseconds.
+        let ns = decoded["imu"]["stamp_ns"].as_u64().unwrap();
+        let expected = gpodo_datasets::bags::write::EPOCH_NS + (s.time_secs * 1e9).round() as u64;
+        assert_eq!(ns, expected);
     }
 }

@@ -315,14 +315,36 @@ impl Stream {
     }
 }
 
-fn seconds(ns: i64) -> f64 {
-    ns as f64 * 1e-9
+/// Message times as seconds after a whole-second base near the recording's
+/// start, subtracted in integer nanoseconds: seconds since the Unix epoch
+/// held in an `f64` would keep only a quarter of a microsecond.
+struct Clock {
+    source: TimeSource,
+    base_ns: i64,
 }
 
-fn stamp(map: &TopicMap, s: &Stamped, header_ns: i64) -> f64 {
-    match map.time {
-        TimeSource::Header => seconds(header_ns),
-        TimeSource::Receive => s.log_time_ns as f64 * 1e-9,
+impl Clock {
+    /// The clock whose base is the whole second at or before the first
+    /// message's time.
+    fn new(source: TimeSource, first: Option<(&Stamped, i64)>) -> Self {
+        let mut clock = Self { source, base_ns: 0 };
+        if let Some((s, header_ns)) = first {
+            let ns = clock.ns(s, header_ns);
+            clock.base_ns = ns - ns.rem_euclid(1_000_000_000);
+        }
+        clock
+    }
+
+    fn ns(&self, s: &Stamped, header_ns: i64) -> i64 {
+        match self.source {
+            TimeSource::Header => header_ns,
+            TimeSource::Receive => i64::try_from(s.log_time_ns).unwrap_or(i64::MAX),
+        }
+    }
+
+    /// Seconds after the base.
+    fn at(&self, s: &Stamped, header_ns: i64) -> f64 {
+        (self.ns(s, header_ns) - self.base_ns) as f64 * 1e-9
     }
 }
 
@@ -392,6 +414,13 @@ pub fn import_bag(
     );
     let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
     let joint_messages = read.next();
+    let clock = Clock::new(
+        map.time,
+        imu_messages.first().and_then(|s| match &s.message {
+            RosMessage::Imu(m) => Some((s, m.header.stamp_ns)),
+            _ => None,
+        }),
+    );
     // IMU: orientation (4), gyro (3), specific force (3).
     let n_imu = imu_messages.len();
     let [r, p, y] = map.imu_rotation_rpy_rad;
@@ -409,7 +438,7 @@ pub fn import_bag(
                 let mut v = vec![q.i, q.j, q.k, q.w];
                 v.extend(gyro.iter());
                 v.extend(acc.iter());
-                Some((stamp(map, s, m.header.stamp_ns), v))
+                Some((clock.at(s, m.header.stamp_ns), v))
             }
             _ => None,
         })
@@ -455,7 +484,7 @@ pub fn import_bag(
             }
             _ => continue,
         };
-        gt_samples.push((stamp(map, s, header.stamp_ns), values));
+        gt_samples.push((clock.at(s, header.stamp_ns), values));
     }
     let gt_quaternions = if gnss { vec![] } else { vec![3] };
     let mut gt = Stream::new(
@@ -473,11 +502,11 @@ pub fn import_bag(
                 .iter()
                 .filter_map(|s| match &s.message {
                     RosMessage::Odometry(m) => Some((
-                        stamp(map, s, m.header.stamp_ns),
+                        clock.at(s, m.header.stamp_ns),
                         [m.twist.linear, m.twist.angular].concat(),
                     )),
                     RosMessage::TwistStamped(h, t) => {
-                        Some((stamp(map, s, h.stamp_ns), [t.linear, t.angular].concat()))
+                        Some((clock.at(s, h.stamp_ns), [t.linear, t.angular].concat()))
                     }
                     _ => None,
                 })
@@ -525,7 +554,7 @@ pub fn import_bag(
                     }
                 }
                 if ok {
-                    samples.push((stamp(map, s, m.header.stamp_ns), v));
+                    samples.push((clock.at(s, m.header.stamp_ns), v));
                 } else {
                     unusable += 1;
                 }
@@ -666,7 +695,7 @@ pub fn import_bag(
     let report = ImportReport {
         rows: log.samples.len(),
         rows_dropped: dropped,
-        start_epoch_secs: start,
+        start_epoch_secs: clock.base_ns as f64 * 1e-9 + start,
         streams: reports,
         gnss_heading,
         gnss_sigma_m: median_sigmas(&sigmas),

@@ -5,7 +5,7 @@
 //! order with its topic, recorded type and receive time; [`messages`]
 //! decodes the message types gpodo uses from either serialisation
 //! ([`wire`]); [`BagInfo`] is what `gpodo bag info` prints (what `ros2 bag
-//! info` shows).
+//! info` shows); [`write::write_mcap`] writes a rover log as a ROS 2 MCAP.
 
 pub mod enu;
 pub mod import;
@@ -13,6 +13,7 @@ mod info;
 pub mod messages;
 pub mod topic;
 pub mod wire;
+pub mod write;
 
 use std::path::{Path, PathBuf};
 

@@ -104,7 +104,7 @@ fn push_f64(text: &mut String, x: f64) {
 
 /// A file written in full under a temporary name beside its target; renamed
 /// onto the target by [`StagedFile::commit`], removed if dropped uncommitted.
-struct StagedFile {
+pub(crate) struct StagedFile {
     temp: PathBuf,
     target: PathBuf,
     committed: bool,
@@ -112,7 +112,7 @@ struct StagedFile {
 
 impl StagedFile {
     /// Writes `contents` to a new temporary file beside `target` and syncs it.
-    fn stage(target: &Path, contents: &[u8]) -> Result<Self, DatasetError> {
+    pub(crate) fn stage(target: &Path, contents: &[u8]) -> Result<Self, DatasetError> {
         let (temp, mut file) = create_temp_beside(target)?;
         let staged = Self {
             temp,
@@ -129,7 +129,7 @@ impl StagedFile {
     }
 
     /// Renames the temporary file onto the target.
-    fn commit(mut self) -> Result<PathBuf, DatasetError> {
+    pub(crate) fn commit(mut self) -> Result<PathBuf, DatasetError> {
         fs::rename(&self.temp, &self.target).map_err(|source| DatasetError::Io {
             path: self.target.clone(),
             source,

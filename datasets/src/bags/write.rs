@@ -1,0 +1,380 @@
+//! A rover log written as a ROS 2 MCAP bag (`gpodo simulate --format
+//! mcap`), with the standard message types and full `ros2msg` schemas, so
+//! that ROS tools (and Python's `mcap-ros2-support`) decode it as they
+//! decode a bag recorded by `ros2 bag record`:
+//!
+//! | topic | type | content |
+//! | --- | --- | --- |
+//! | `/joint_states` | `sensor_msgs/msg/JointState` | every joint: `<wheel>_wheel`, `<joint>_steer`, `<bogie>_bogie` (rad, rad/s) |
+//! | `/imu/data` | `sensor_msgs/msg/Imu` | gyro, specific force; orientation from the log's roll and pitch and the ground truth's yaw |
+//! | `/ground_truth/pose` | `geometry_msgs/msg/PoseStamped` | `world_from_body` in frame `world` |
+//! | `/tf` | `tf2_msgs/msg/TFMessage` | the same pose as the transform `world` → `base_link` |
+//! | `/odom` | `nav_msgs/msg/Odometry` | only when the log has the robot's own odometry: its twist in `base_link` |
+//!
+//! Stamps are [`EPOCH_NS`] plus the log's time, in whole nanoseconds, as
+//! header stamps and as log times. [`written_topic_map`] is the topic map
+//! that imports such a file back.
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use nalgebra::UnitQuaternion;
+
+use super::import::{JointMap, JointRef, TopicMap};
+use crate::DatasetError;
+use crate::log::RoverLog;
+use crate::log::write::StagedFile;
+
+/// The time the log's 0 s is written at: 2023-11-14T22:13:20Z, in
+/// nanoseconds since the Unix epoch.
+pub const EPOCH_NS: u64 = 1_700_000_000_000_000_000;
+
+/// The separator between a schema and its dependencies in `ros2msg`
+/// schemas (as `rosbag2` writes them).
+const SEPARATOR: &str =
+    "================================================================================\n";
+
+const TIME: &str = "int32 sec\nuint32 nanosec\n";
+const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
+const VECTOR3: &str = "float64 x\nfloat64 y\nfloat64 z\n";
+const POINT: &str = "float64 x\nfloat64 y\nfloat64 z\n";
+const QUATERNION: &str = "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n";
+const POSE: &str = "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n";
+const TRANSFORM: &str = "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n";
+const TWIST: &str = "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n";
+
+/// A `ros2msg` schema: the type's own definition, then each dependency
+/// under `MSG: <name>`.
+fn schema(definition: &str, dependencies: &[(&str, &str)]) -> String {
+    let mut text = definition.to_string();
+    for (name, body) in dependencies {
+        text.push_str(SEPARATOR);
+        text.push_str(&format!("MSG: {name}\n"));
+        text.push_str(body);
+    }
+    text
+}
+
+fn joint_state_schema() -> String {
+    schema(
+        "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+        ],
+    )
+}
+
+fn imu_schema() -> String {
+    schema(
+        "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\n\
+         geometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\n\
+         geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n",
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+            ("geometry_msgs/Quaternion", QUATERNION),
+            ("geometry_msgs/Vector3", VECTOR3),
+        ],
+    )
+}
+
+fn pose_stamped_schema() -> String {
+    schema(
+        "std_msgs/Header header\ngeometry_msgs/Pose pose\n",
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+            ("geometry_msgs/Pose", POSE),
+            ("geometry_msgs/Point", POINT),
+            ("geometry_msgs/Quaternion", QUATERNION),
+        ],
+    )
+}
+
+fn tf_schema() -> String {
+    schema(
+        "geometry_msgs/TransformStamped[] transforms\n",
+        &[
+            (
+                "geometry_msgs/TransformStamped",
+                "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n",
+            ),
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+            ("geometry_msgs/Transform", TRANSFORM),
+            ("geometry_msgs/Vector3", VECTOR3),
+            ("geometry_msgs/Quaternion", QUATERNION),
+        ],
+    )
+}
+
+fn odometry_schema() -> String {
+    schema(
+        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n\
+         geometry_msgs/TwistWithCovariance twist\n",
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+            (
+                "geometry_msgs/PoseWithCovariance",
+                "geometry_msgs/Pose pose\nfloat64[36] covariance\n",
+            ),
+            ("geometry_msgs/Pose", POSE),
+            ("geometry_msgs/Point", POINT),
+            ("geometry_msgs/Quaternion", QUATERNION),
+            (
+                "geometry_msgs/TwistWithCovariance",
+                "geometry_msgs/Twist twist\nfloat64[36] covariance\n",
+            ),
+            ("geometry_msgs/Twist", TWIST),
+            ("geometry_msgs/Vector3", VECTOR3),
+        ],
+    )
+}
+
+/// Little-endian CDR after the 4-byte encapsulation header; alignment
+/// counts from after that header.
+struct Cdr(Vec<u8>);
+
+impl Cdr {
+    fn new() -> Self {
+        Self(vec![0, 1, 0, 0])
+    }
+
+    fn align(&mut self, n: usize) {
+        while !(self.0.len() - 4).is_multiple_of(n) {
+            self.0.push(0);
+        }
+    }
+
+    fn u32(&mut self, v: u32) {
+        self.align(4);
+        self.0.extend(v.to_le_bytes());
+    }
+
+    fn i32(&mut self, v: i32) {
+        self.align(4);
+        self.0.extend(v.to_le_bytes());
+    }
+
+    fn f64s(&mut self, v: &[f64]) {
+        for x in v {
+            self.align(8);
+            self.0.extend(x.to_le_bytes());
+        }
+    }
+
+    fn sequence(&mut self, v: &[f64]) {
+        self.u32(v.len() as u32);
+        self.f64s(v);
+    }
+
+    fn string(&mut self, s: &str) {
+        self.u32(s.len() as u32 + 1);
+        self.0.extend(s.as_bytes());
+        self.0.push(0);
+    }
+
+    fn header(&mut self, stamp_ns: u64, frame: &str) {
+        // `sec` is an int32: fine until 2038.
+        self.i32((stamp_ns / 1_000_000_000) as i32);
+        self.u32((stamp_ns % 1_000_000_000) as u32);
+        self.string(frame);
+    }
+}
+
+/// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
+fn stamp_ns(time_secs: f64) -> u64 {
+    EPOCH_NS.saturating_add_signed((time_secs * 1e9).round() as i64)
+}
+
+fn joint_names(log: &RoverLog) -> Vec<String> {
+    log.wheel_names
+        .iter()
+        .map(|n| format!("{n}_wheel"))
+        .chain(log.steer_names.iter().map(|n| format!("{n}_steer")))
+        .chain(log.bogie_names.iter().map(|n| format!("{n}_bogie")))
+        .collect()
+}
+
+/// The topic map that imports a bag written by [`write_mcap`] back into the
+/// log's joints, at `rate_hz`.
+pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
+    let refs = |names: &[String], suffix: &str| -> BTreeMap<String, JointRef> {
+        names
+            .iter()
+            .map(|n| {
+                (
+                    n.clone(),
+                    JointRef {
+                        joint: format!("{n}_{suffix}"),
+                        position_scale: 1.0,
+                        rate_scale: 1.0,
+                    },
+                )
+            })
+            .collect()
+    };
+    let has_joints =
+        !(log.wheel_names.is_empty() && log.steer_names.is_empty() && log.bogie_names.is_empty());
+    let has_odometry = log.samples.first().is_some_and(|s| s.odometry.is_some());
+    TopicMap {
+        imu: "/imu/data".into(),
+        imu_rotation_rpy_rad: [0.0; 3],
+        ground_truth: "/ground_truth/pose".into(),
+        gnss_heading: Default::default(),
+        joints: has_joints.then(|| JointMap {
+            topic: "/joint_states".into(),
+            wheels: refs(&log.wheel_names, "wheel"),
+            steering: refs(&log.steer_names, "steer"),
+            bogies: refs(&log.bogie_names, "bogie"),
+        }),
+        odometry: has_odometry.then(|| "/odom".into()),
+        rate_hz,
+        max_gap_secs: 0.5,
+        time: Default::default(),
+    }
+}
+
+/// What [`write_mcap`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WrittenBag {
+    /// The file.
+    pub path: PathBuf,
+    /// Messages written.
+    pub messages: u64,
+    /// Its size (bytes).
+    pub bytes: u64,
+}
+
+/// Writes `log` as the ROS 2 MCAP bag `<dir>/<name>.mcap` (zstd chunks),
+/// atomically: in full under a temporary name, then renamed.
+///
+/// # Errors
+/// [`DatasetError::InvalidLog`] when the log does not validate,
+/// [`DatasetError::Io`] when the file cannot be written.
+pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError> {
+    log.validate()?;
+    let path = dir.join(format!("{}.mcap", log.name));
+    let mcap_error = |e: mcap::McapError| DatasetError::Io {
+        path: path.clone(),
+        source: std::io::Error::other(e),
+    };
+    let mut writer = mcap::WriteOptions::new()
+        .profile("ros2")
+        .create(Cursor::new(Vec::new()))
+        .map_err(mcap_error)?;
+    let none = BTreeMap::new();
+    let mut channel = |ty: &str, text: String, topic: &str| -> Result<u16, DatasetError> {
+        let schema = writer
+            .add_schema(ty, "ros2msg", text.as_bytes())
+            .map_err(mcap_error)?;
+        writer
+            .add_channel(schema, topic, "cdr", &none)
+            .map_err(mcap_error)
+    };
+    let joints = channel(
+        "sensor_msgs/msg/JointState",
+        joint_state_schema(),
+        "/joint_states",
+    )?;
+    let imu = channel("sensor_msgs/msg/Imu", imu_schema(), "/imu/data")?;
+    let pose = channel(
+        "geometry_msgs/msg/PoseStamped",
+        pose_stamped_schema(),
+        "/ground_truth/pose",
+    )?;
+    let tf = channel("tf2_msgs/msg/TFMessage", tf_schema(), "/tf")?;
+    let has_odometry = log.samples.first().is_some_and(|s| s.odometry.is_some());
+    let odom = if has_odometry {
+        Some(channel(
+            "nav_msgs/msg/Odometry",
+            odometry_schema(),
+            "/odom",
+        )?)
+    } else {
+        None
+    };
+    let names = joint_names(log);
+    let mut messages = 0u64;
+    for (k, (s, p)) in log.samples.iter().zip(&log.ground_truth).enumerate() {
+        let t = stamp_ns(s.time_secs);
+        let mut m = Cdr::new();
+        m.header(t, "base_link");
+        m.u32(names.len() as u32);
+        for n in &names {
+            m.string(n);
+        }
+        let all: Vec<_> = s
+            .wheels
+            .iter()
+            .chain(&s.steering)
+            .chain(&s.bogies)
+            .collect();
+        m.sequence(&all.iter().map(|j| j.position_rad).collect::<Vec<_>>());
+        m.sequence(&all.iter().map(|j| j.rate_radps).collect::<Vec<_>>());
+        m.sequence(&[]);
+
+        let yaw = p.rotation.euler_angles().2;
+        let q = UnitQuaternion::from_euler_angles(s.imu.roll_rad, s.imu.pitch_rad, yaw);
+        let mut i = Cdr::new();
+        i.header(t, "base_link");
+        i.f64s(&[q.i, q.j, q.k, q.w]);
+        i.f64s(&[0.0; 9]);
+        i.f64s(s.imu.gyro_radps.as_slice());
+        i.f64s(&[0.0; 9]);
+        i.f64s(s.imu.accel_mps2.as_slice());
+        i.f64s(&[0.0; 9]);
+
+        let r = p.rotation;
+        let position = p.translation.vector;
+        let mut g = Cdr::new();
+        g.header(t, "world");
+        g.f64s(position.as_slice());
+        g.f64s(&[r.i, r.j, r.k, r.w]);
+
+        let mut f = Cdr::new();
+        f.u32(1);
+        f.header(t, "world");
+        f.string("base_link");
+        f.f64s(position.as_slice());
+        f.f64s(&[r.i, r.j, r.k, r.w]);
+
+        let mut out = vec![(joints, m.0), (imu, i.0), (pose, g.0), (tf, f.0)];
+        if let (Some(channel), Some(twist)) = (odom, s.odometry) {
+            let mut o = Cdr::new();
+            o.header(t, "odom");
+            o.string("base_link");
+            o.f64s(position.as_slice());
+            o.f64s(&[r.i, r.j, r.k, r.w]);
+            o.f64s(&[0.0; 36]);
+            o.f64s(twist.linear_mps.as_slice());
+            o.f64s(twist.angular_radps.as_slice());
+            o.f64s(&[0.0; 36]);
+            out.push((channel, o.0));
+        }
+        for (channel_id, data) in out {
+            let header = mcap::records::MessageHeader {
+                channel_id,
+                sequence: k as u32,
+                log_time: t,
+                publish_time: t,
+            };
+            writer
+                .write_to_known_channel(&header, &data)
+                .map_err(mcap_error)?;
+            messages += 1;
+        }
+    }
+    writer.finish().map_err(mcap_error)?;
+    let bytes = writer.into_inner().into_inner();
+    let staged = StagedFile::stage(&path, &bytes)?;
+    let path = staged.commit()?;
+    Ok(WrittenBag {
+        path,
+        messages,
+        bytes: bytes.len() as u64,
+    })
+}
