@@ -436,3 +436,113 @@ max_gap_secs: 0.5
         assert!(lateral < 0.25 * forward, "{lateral} vs {forward}");
     }
 }
+
+mod written {
+    //! gpodo's own MCAP writer, read back: the TF ground truth equals the
+    //! PoseStamped one, and the robot's odometry survives the trip.
+
+    use gpodo_datasets::bags::import::{GroundTruthSource, import_bag};
+    use gpodo_datasets::bags::tf::TfPair;
+    use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
+    use gpodo_datasets::log::RoverLog;
+    use gpodo_traits::{BodyTwist, ProprioceptiveSample};
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+    /// A robot driving a circle of radius 2 m at 0.5 m/s, 10 Hz, 30 s,
+    /// reporting its own odometry.
+    fn circle() -> RoverLog {
+        let n = 300;
+        let mut samples = Vec::new();
+        let mut ground_truth = Vec::new();
+        for k in 0..n {
+            let t = k as f64 * 0.1;
+            let yaw = 0.25 * t;
+            let mut s = ProprioceptiveSample {
+                time_secs: t,
+                odometry: Some(BodyTwist {
+                    linear_mps: Vector3::new(0.5, 0.0, 0.0),
+                    angular_radps: Vector3::new(0.0, 0.0, 0.25),
+                }),
+                ..Default::default()
+            };
+            s.imu.accel_mps2 = Vector3::new(0.0, 0.125, 9.81);
+            s.imu.gyro_radps = Vector3::new(0.0, 0.0, 0.25);
+            samples.push(s);
+            ground_truth.push(Isometry3::from_parts(
+                Translation3::new(2.0 * yaw.sin(), 2.0 * (1.0 - yaw.cos()), 0.0),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+            ));
+        }
+        RoverLog {
+            name: "circle".into(),
+            wheel_names: vec![],
+            steer_names: vec![],
+            bogie_names: vec![],
+            samples,
+            ground_truth,
+            camera_times_secs: vec![],
+        }
+    }
+
+    #[test]
+    fn the_tf_ground_truth_equals_the_pose_topic_and_odometry_round_trips() {
+        let tmp = tempfile::tempdir().unwrap();
+        let log = circle();
+        let bag = write_mcap(&log, tmp.path()).unwrap();
+        assert_eq!(bag.messages, 5 * 300);
+        let by_pose = written_topic_map(&log, 10.0);
+        let mut by_tf = by_pose.clone();
+        by_tf.ground_truth = GroundTruthSource::Tf {
+            tf: TfPair {
+                parent: "world".into(),
+                child: "base_link".into(),
+                topics: vec!["/tf".into()],
+            },
+        };
+        let (a, ra) = import_bag(&bag.path, "circle", &by_pose).unwrap();
+        let (b, rb) = import_bag(&bag.path, "circle", &by_tf).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(ra.rows, 300);
+        assert_eq!(rb.streams[1].topic, "TF world → base_link (/tf)");
+        // The written log comes back: poses to rounding, odometry exactly.
+        for (k, (s, p)) in a.samples.iter().zip(&a.ground_truth).enumerate() {
+            assert!((s.time_secs - log.samples[k].time_secs).abs() < 1e-9);
+            assert_eq!(s.odometry, log.samples[k].odometry);
+            let d = p.inverse() * log.ground_truth[k];
+            assert!(
+                d.translation.vector.norm() < 1e-9 && d.rotation.angle() < 1e-9,
+                "{k}"
+            );
+        }
+        // Frames the tree does not link are named.
+        by_tf.ground_truth = GroundTruthSource::Tf {
+            tf: TfPair {
+                parent: "map".into(),
+                child: "base_link".into(),
+                topics: vec!["/tf".into()],
+            },
+        };
+        let e = import_bag(&bag.path, "circle", &by_tf)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no TF chain from `map` to `base_link`") && e.contains("base_link, world"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_tf_ground_truth_reads_from_yaml() {
+        let map: gpodo_datasets::bags::import::TopicMap = serde_saphyr::from_str(
+            "imu: /imu/data\nground_truth: {tf: {parent: map, child: base_link, topics: [/tf, /tf_static]}}\n",
+        )
+        .unwrap();
+        assert_eq!(
+            map.ground_truth.to_string(),
+            "TF map → base_link (/tf, /tf_static)"
+        );
+        let map: gpodo_datasets::bags::import::TopicMap =
+            serde_saphyr::from_str("imu: /imu/data\nground_truth: /odom\n").unwrap();
+        assert_eq!(map.ground_truth, GroundTruthSource::Topic("/odom".into()));
+    }
+}

@@ -16,6 +16,7 @@ use gpodo_traits::{BodyTwist, ImuSample, JointState as Joint, ProprioceptiveSamp
 
 use super::enu::LocalEnu;
 use super::messages::RosMessage;
+use super::tf::{TfPair, compose};
 use super::topic::{Stamped, TopicError, TopicRequest, read_topics};
 use crate::log::RoverLog;
 
@@ -77,6 +78,34 @@ pub struct JointMap {
     pub bogies: BTreeMap<String, JointRef>,
 }
 
+/// Where the ground-truth pose comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum GroundTruthSource {
+    /// A pose, odometry or GNSS topic.
+    Topic(String),
+    /// A transform of the TF tree, composed through intermediate frames.
+    Tf {
+        /// The frames and the TF topics.
+        tf: TfPair,
+    },
+}
+
+impl std::fmt::Display for GroundTruthSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Topic(t) => f.write_str(t),
+            Self::Tf { tf } => write!(
+                f,
+                "TF {} → {} ({})",
+                tf.parent,
+                tf.child,
+                tf.topics.join(", ")
+            ),
+        }
+    }
+}
+
 /// Where the heading of a GNSS ground truth comes from (a fix has a
 /// position, not an orientation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -113,11 +142,12 @@ pub struct TopicMap {
     /// it; gravity should then read about +9.8 on the body's z at rest).
     #[serde(default)]
     pub imu_rotation_rpy_rad: [f64; 3],
-    /// The ground-truth pose: `nav_msgs/Odometry`,
+    /// The ground-truth pose: a topic of `nav_msgs/Odometry`,
     /// `geometry_msgs/PoseStamped`, `geometry_msgs/PoseWithCovarianceStamped`,
     /// or `sensor_msgs/NavSatFix` (position in a local east-north-up frame
-    /// about the first fix, orientation from the IMU).
-    pub ground_truth: String,
+    /// about the first fix, orientation from the IMU), or a transform of
+    /// the TF tree, `{tf: {parent: world, child: base_link}}`.
+    pub ground_truth: GroundTruthSource,
     /// How a GNSS ground truth gets its heading (default: course over
     /// ground).
     #[serde(default)]
@@ -376,14 +406,14 @@ pub fn import_bag(
         ));
     }
     // Every role's topic, read in one pass over the bag.
-    let mut requests = vec![
-        TopicRequest {
-            topic: &map.imu,
-            role: "imu",
-            expected: &["sensor_msgs/Imu"],
-        },
-        TopicRequest {
-            topic: &map.ground_truth,
+    let mut requests = vec![TopicRequest {
+        topic: &map.imu,
+        role: "imu",
+        expected: &["sensor_msgs/Imu"],
+    }];
+    match &map.ground_truth {
+        GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
+            topic,
             role: "ground_truth",
             expected: &[
                 "nav_msgs/Odometry",
@@ -391,8 +421,20 @@ pub fn import_bag(
                 "geometry_msgs/PoseWithCovarianceStamped",
                 "sensor_msgs/NavSatFix",
             ],
-        },
-    ];
+        }),
+        GroundTruthSource::Tf { tf } => {
+            if tf.topics.is_empty() {
+                return Err(ImportError::Map(
+                    "`ground_truth.tf.topics` must name at least one TF topic".into(),
+                ));
+            }
+            requests.extend(tf.topics.iter().map(|topic| TopicRequest {
+                topic,
+                role: "ground_truth",
+                expected: &["tf2_msgs/TFMessage"],
+            }));
+        }
+    }
     if let Some(topic) = &map.odometry {
         requests.push(TopicRequest {
             topic,
@@ -408,10 +450,12 @@ pub fn import_bag(
         });
     }
     let mut read = read_topics(path, &requests)?.into_iter();
-    let (imu_messages, gt_messages) = (
-        read.next().unwrap_or_default(),
-        read.next().unwrap_or_default(),
-    );
+    let imu_messages = read.next().unwrap_or_default();
+    let gt_topics = match &map.ground_truth {
+        GroundTruthSource::Topic(_) => 1,
+        GroundTruthSource::Tf { tf } => tf.topics.len(),
+    };
+    let gt_by_topic: Vec<Vec<Stamped>> = read.by_ref().take(gt_topics).collect();
     let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
     let joint_messages = read.next();
     let clock = Clock::new(
@@ -445,13 +489,37 @@ pub fn import_bag(
         .collect();
     let mut imu = Stream::new("imu", &map.imu, imu_samples, n_imu, 0, vec![0]);
     // Ground truth: position (3) and, except from GNSS, orientation (4).
-    let n_gt = gt_messages.len();
+    let n_gt = gt_by_topic.iter().map(Vec::len).sum();
     let mut enu: Option<LocalEnu> = None;
     let mut unusable = 0;
     let mut gnss = false;
     let mut sigmas: Vec<[f64; 2]> = Vec::new();
     let mut gt_samples = Vec::new();
-    for s in &gt_messages {
+    if let GroundTruthSource::Tf { tf } = &map.ground_truth {
+        let clock = &clock;
+        let inputs = gt_by_topic
+            .iter()
+            .zip(&tf.topics)
+            .flat_map(|(messages, topic)| {
+                let is_static = topic.ends_with("tf_static");
+                messages.iter().map(move |s| {
+                    let received = (map.time == TimeSource::Receive).then(|| clock.at(s, 0));
+                    (received, &s.message, is_static)
+                })
+            });
+        let header_time = |ns: i64| (ns - clock.base_ns) as f64 * 1e-9;
+        let (poses, missing) = compose(tf, inputs, &header_time, map.max_gap_secs)
+            .map_err(|e| ImportError::Map(format!("{}: ground_truth: {e}", path.display())))?;
+        unusable = missing;
+        gt_samples = poses
+            .into_iter()
+            .map(|(t, p)| {
+                let (v, q) = (p.translation.vector, p.rotation);
+                (t, vec![v.x, v.y, v.z, q.i, q.j, q.k, q.w])
+            })
+            .collect();
+    }
+    for s in gt_by_topic.iter().flatten() {
         let (header, values) = match &s.message {
             RosMessage::Odometry(m) => (
                 &m.header,
@@ -489,7 +557,7 @@ pub fn import_bag(
     let gt_quaternions = if gnss { vec![] } else { vec![3] };
     let mut gt = Stream::new(
         "ground_truth",
-        &map.ground_truth,
+        &map.ground_truth.to_string(),
         gt_samples,
         n_gt,
         unusable,

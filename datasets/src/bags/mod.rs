@@ -11,6 +11,7 @@ pub mod enu;
 pub mod import;
 mod info;
 pub mod messages;
+pub mod tf;
 pub mod topic;
 pub mod wire;
 pub mod write;

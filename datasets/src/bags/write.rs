@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::UnitQuaternion;
 
-use super::import::{JointMap, JointRef, TopicMap};
+use super::import::{GroundTruthSource, JointMap, JointRef, TopicMap};
 use crate::DatasetError;
 use crate::log::RoverLog;
 use crate::log::write::StagedFile;
@@ -223,7 +223,7 @@ pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
     TopicMap {
         imu: "/imu/data".into(),
         imu_rotation_rpy_rad: [0.0; 3],
-        ground_truth: "/ground_truth/pose".into(),
+        ground_truth: GroundTruthSource::Topic("/ground_truth/pose".into()),
         gnss_heading: Default::default(),
         joints: has_joints.then(|| JointMap {
             topic: "/joint_states".into(),
