@@ -546,3 +546,88 @@ mod written {
         assert_eq!(map.ground_truth, GroundTruthSource::Topic("/odom".into()));
     }
 }
+
+mod damaged {
+    //! Damaged or empty recordings give an error naming the file, never a
+    //! panic or a silently shorter log.
+
+    use super::data;
+    use gpodo_datasets::bags::BagInfo;
+    use gpodo_datasets::bags::import::{TopicMap, import_bag};
+
+    fn map() -> TopicMap {
+        serde_saphyr::from_str(
+            "imu: /imu/data\nimu_rotation_rpy_rad: [1.5707963267948966, 0, 0]\nground_truth: /husky_velocity_controller/odom\n",
+        )
+        .unwrap()
+    }
+
+    /// `bytes` written to a file named `name` in a fresh directory.
+    fn file(name: &str, bytes: &[u8]) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        (dir, path)
+    }
+
+    /// Both the info pass and the import fail, naming the file.
+    fn both_fail(path: &std::path::Path) -> String {
+        let info = BagInfo::read(path).map(|i| i.messages);
+        let import = import_bag(path, "x", &map()).map(|(l, _)| l.samples.len());
+        let (Err(a), Err(b)) = (info, import) else {
+            panic!("{} was read without an error", path.display());
+        };
+        let (a, b) = (a.to_string(), b.to_string());
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(a.contains(&name) && b.contains(&name), "{a} / {b}");
+        b
+    }
+
+    #[test]
+    fn truncated_recordings_are_errors() {
+        for source in ["husky_test1.mcap", "husky_test1.bag"] {
+            let bytes = std::fs::read(data(source)).unwrap();
+            for cut in [bytes.len() / 2, bytes.len() - 100] {
+                let (_dir, path) = file(&format!("cut-{source}"), &bytes[..cut]);
+                let e = both_fail(&path);
+                eprintln!("{source} cut at {cut}: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_corrupt_chunk_is_an_error() {
+        for source in ["husky_test1.mcap", "husky_test1.bag"] {
+            let mut bytes = std::fs::read(data(source)).unwrap();
+            let middle = bytes.len() / 2;
+            for b in &mut bytes[middle..middle + 64] {
+                *b ^= 0x5a;
+            }
+            let (_dir, path) = file(&format!("corrupt-{source}"), &bytes);
+            let e = both_fail(&path);
+            eprintln!("{source} corrupted: {e}");
+        }
+    }
+
+    #[test]
+    fn empty_and_foreign_files_are_errors() {
+        let (_a, empty) = file("empty.mcap", b"");
+        assert!(both_fail(&empty).contains("empty.mcap"));
+        let (_b, text) = file("notes.bag", b"time,x\n0,1\n");
+        let e = both_fail(&text);
+        assert!(e.contains("notes.bag"), "{e}");
+        // A valid MCAP without a message: its topics are missing.
+        let mut buffer = std::io::Cursor::new(Vec::new());
+        {
+            let mut w = mcap::Writer::new(&mut buffer).unwrap();
+            w.finish().unwrap();
+        }
+        let (_c, no_messages) = file("no-messages.mcap", buffer.get_ref());
+        let info = BagInfo::read(&no_messages).unwrap();
+        assert_eq!(info.messages, 0);
+        let e = import_bag(&no_messages, "x", &map())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no-messages.mcap: no topic `/imu/data`"), "{e}");
+    }
+}

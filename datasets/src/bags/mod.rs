@@ -195,8 +195,59 @@ fn visit_mcap(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usiz
     Ok(index)
 }
 
+/// The `index_pos` field of a ROS 1 bag's header record: where its index
+/// section starts (0 for a recording that was never closed).
+fn ros1_index_pos(head: &[u8]) -> Option<u64> {
+    let rest = head.strip_prefix(ROSBAG_MAGIC)?;
+    let header_len = u32::from_le_bytes(rest.get(..4)?.try_into().ok()?) as usize;
+    let mut fields = rest.get(4..4 + header_len)?;
+    while fields.len() >= 4 {
+        let len = u32::from_le_bytes(fields[..4].try_into().ok()?) as usize;
+        let field = fields.get(4..4 + len)?;
+        if let Some(value) = field.strip_prefix(b"index_pos=") {
+            return Some(u64::from_le_bytes(value.get(..8)?.try_into().ok()?));
+        }
+        fields = &fields[4 + len..];
+    }
+    None
+}
+
+/// Checks what the `rosbag` crate takes on trust (it slices the file at the
+/// header's index position): the header names an index inside the file.
+fn check_ros1_layout(path: &Path) -> Result<(), BagError> {
+    use std::io::Read as _;
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    let mut head = Vec::with_capacity(4096 + 64);
+    file.by_ref()
+        .take(4096 + 64)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    let corrupt = |detail: String| BagError::Corrupt {
+        path: path.to_path_buf(),
+        index: 0,
+        detail,
+    };
+    match ros1_index_pos(&head) {
+        None => Err(corrupt("the bag header record is damaged".into())),
+        Some(0) => Err(corrupt(
+            "the bag has no index (a recording that was not closed; `rosbag reindex` repairs it)"
+                .into(),
+        )),
+        Some(pos) if pos > size || (pos as usize) < head.len().min(4096) => Err(corrupt(format!(
+            "the header puts the index at byte {pos}, but the file has {size} bytes (truncated?)"
+        ))),
+        Some(_) => Ok(()),
+    }
+}
+
 fn visit_ros1(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usize, BagError> {
     use rosbag::{ChunkRecord, MessageRecord, RosBag};
+    check_ros1_layout(path)?;
     let bag = RosBag::new(path).map_err(|source| BagError::Io {
         path: path.to_path_buf(),
         source,
@@ -243,6 +294,15 @@ fn visit_ros1(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usiz
                 }
             }
         }
+    }
+    // The index section closes a complete file: a damaged one means the
+    // file was cut or overwritten, even if every chunk read.
+    for record in bag.index_records() {
+        record.map_err(|e| BagError::Corrupt {
+            path: path.to_path_buf(),
+            index,
+            detail: format!("the index section after the messages is damaged ({e}): truncated?"),
+        })?;
     }
     Ok(index)
 }
