@@ -97,6 +97,9 @@ fn isometry(t: &TransformStamped) -> Isometry3<f64> {
 /// transform's own header stamp), and whether it came from a static topic.
 pub type TfInput<'a> = (Option<f64>, &'a RosMessage, bool);
 
+/// Poses with their times on the import clock (s).
+pub type TimedPoses = Vec<(f64, Isometry3<f64>)>;
+
 /// The tree's edges from TF messages.
 fn edges<'a>(
     messages: impl Iterator<Item = TfInput<'a>>,
@@ -146,7 +149,7 @@ pub fn compose<'a>(
     messages: impl Iterator<Item = TfInput<'a>>,
     header_time: &dyn Fn(i64) -> f64,
     max_gap_secs: f64,
-) -> Result<(Vec<(f64, Isometry3<f64>)>, usize), TfError> {
+) -> Result<(TimedPoses, usize), TfError> {
     let edges = edges(messages, header_time);
     let error = |detail: String| TfError {
         parent: pair.parent.clone(),
@@ -281,7 +284,7 @@ mod tests {
         ns as f64 * 1e-9
     }
 
-    fn run_with_gap(p: &TfPair, gap: f64) -> Result<(Vec<(f64, Isometry3<f64>)>, usize), TfError> {
+    fn run_with_gap(p: &TfPair, gap: f64) -> Result<(TimedPoses, usize), TfError> {
         let messages = tree();
         compose(
             p,
@@ -291,7 +294,7 @@ mod tests {
         )
     }
 
-    fn run(p: &TfPair) -> Result<(Vec<(f64, Isometry3<f64>)>, usize), TfError> {
+    fn run(p: &TfPair) -> Result<(TimedPoses, usize), TfError> {
         run_with_gap(p, 1.5)
     }
 
