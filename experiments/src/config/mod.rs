@@ -126,7 +126,7 @@ pub enum DatasetSpec {
         train_fraction: Option<f64>,
         /// Which topic plays which role, the clock rate and the longest gap
         /// bridged.
-        topics: gpodo_datasets::bags::import::TopicMap,
+        topics: Box<gpodo_datasets::bags::import::TopicMap>,
     },
     /// A residual table (features and targets already computed), split in
     /// time order.
