@@ -28,19 +28,30 @@ pub struct BogieSpec {
     pub axis: [f64; 3],
 }
 
-/// A wheel: carried by a bogie, optionally steerable about the bogie's
-/// vertical axis through the wheel centre, rolling about its own y axis.
+/// A wheel: carried by a bogie (or mounted rigidly on the body), optionally
+/// steerable about the vertical axis through its centre, rolling about its
+/// own y axis; a mecanum wheel's rollers let its contact point move freely
+/// in one direction of the ground plane.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WheelSpec {
     /// Wheel name (e.g. `fl`).
     pub name: String,
-    /// Name of the bogie that carries the wheel.
-    pub bogie: String,
+    /// Name of the bogie that carries the wheel; omitted, the wheel is
+    /// mounted rigidly on the body (a differential-drive, skid-steer or
+    /// mecanum chassis).
+    #[serde(default)]
+    pub bogie: Option<String>,
     /// Whether a steering joint turns the wheel.
     pub steerable: bool,
     /// Wheel centre in the body frame with all joints at zero (m).
     pub center_m: [f64; 3],
+    /// A mecanum wheel: the angle of its rollers' axes to the wheel's axle
+    /// (deg, typically ±45). Its contact point then moves freely along the
+    /// ground direction perpendicular to the roller axis, one unknown roller
+    /// rate per wheel. Omitted: an ordinary wheel.
+    #[serde(default)]
+    pub roller_angle_deg: Option<f64>,
 }
 
 /// Chassis geometry of a wheeled rover with passive bogies.
@@ -137,11 +148,21 @@ impl RoverDescription {
             if w.center_m.iter().any(|v| !v.is_finite()) {
                 return Err(bad(format!("wheels[{i}].center_m"), "three finite numbers"));
             }
-            if self.bogie_index(&w.bogie).is_none() {
+            if let Some(bogie) = &w.bogie
+                && self.bogie_index(bogie).is_none()
+            {
                 let names: Vec<&str> = self.bogies.iter().map(|b| b.name.as_str()).collect();
                 return Err(bad(
                     format!("wheels[{i}].bogie"),
-                    &format!("one of the bogie names {names:?}, found `{}`", w.bogie),
+                    &format!("one of the bogie names {names:?}, found `{bogie}`"),
+                ));
+            }
+            if let Some(angle) = w.roller_angle_deg
+                && !(angle.is_finite() && angle.abs() > 1.0 && angle.abs() < 89.0)
+            {
+                return Err(bad(
+                    format!("wheels[{i}].roller_angle_deg"),
+                    "a roller angle in degrees, between 1 and 89 in magnitude",
                 ));
             }
             if self.wheels[..i].iter().any(|o| o.name == w.name) {
@@ -184,14 +205,18 @@ impl RoverDescription {
                     steer += 1;
                     steer - 1
                 });
-                let bogie_index = self.bogie_index(&w.bogie).unwrap_or(0);
-                let b = &self.bogies[bogie_index];
+                let bogie_index = w.bogie.as_deref().and_then(|b| self.bogie_index(b));
+                // A rigidly mounted wheel: a bogie joint that never moves.
+                let (pivot, axis) = bogie_index.map_or(([0.0; 3], [0.0, 1.0, 0.0]), |k| {
+                    (self.bogies[k].pivot_m, self.bogies[k].axis)
+                });
                 WheelChain {
                     bogie_index,
                     steer_index,
-                    bogie_pivot: Point3::from(b.pivot_m),
-                    bogie_axis: Unit::new_normalize(Vector3::from(b.axis)),
+                    bogie_pivot: Point3::from(pivot),
+                    bogie_axis: Unit::new_normalize(Vector3::from(axis)),
                     center: Point3::from(w.center_m),
+                    roller_angle_rad: w.roller_angle_deg.map(f64::to_radians),
                 }
             })
             .collect()
@@ -201,8 +226,9 @@ impl RoverDescription {
 /// The resolved kinematic chain body → bogie → steer → wheel of one wheel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WheelChain {
-    /// Index of the wheel's bogie in the bogie joint vector.
-    pub bogie_index: usize,
+    /// Index of the wheel's bogie in the bogie joint vector; `None` for a
+    /// wheel mounted rigidly on the body.
+    pub bogie_index: Option<usize>,
     /// Index of the wheel's steering joint, if steerable.
     pub steer_index: Option<usize>,
     /// Bogie pivot (body frame, m).
@@ -211,6 +237,8 @@ pub struct WheelChain {
     pub bogie_axis: Unit<Vector3<f64>>,
     /// Wheel centre with all joints at zero (body frame, m).
     pub center: Point3<f64>,
+    /// A mecanum wheel's roller angle to the axle (rad).
+    pub roller_angle_rad: Option<f64>,
 }
 
 #[cfg(test)]
@@ -227,7 +255,7 @@ mod tests {
         let chains = d.chains();
         assert_eq!(chains[4].steer_index, Some(2));
         assert_eq!(chains[3].steer_index, None);
-        assert_eq!(chains[5].bogie_index, 2);
+        assert_eq!(chains[5].bogie_index, Some(2));
     }
 
     #[test]

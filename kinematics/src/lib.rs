@@ -2,7 +2,10 @@
 //! of a wheeled rover with passive bogies, and a skid-steer model, both
 //! behind [`gpodo_traits::MotionModel`].
 //!
-//! * [`description`]: rover geometry from YAML (default: ExoTeR-like);
+//! * [`description`]: rover geometry from YAML (default: ExoTeR-like;
+//!   `rovers/` also holds a differential-drive, a Husky-like skid-steer and
+//!   a mecanum platform: wheels on bogies or rigidly mounted, ordinary or
+//!   mecanum);
 //! * [`chain`]: forward kinematics body → bogie → steer → wheel → contact;
 //! * [`jacobian`]: the contact Jacobian of eq. (1);
 //! * [`loads`]: static normal forces, the weights `C` of eq. (5);

@@ -42,13 +42,23 @@ pub fn static_normal_forces(
         });
     }
     let chains = description.chains();
+    let Some(bogie_of) = chains
+        .iter()
+        .map(|c| c.bogie_index)
+        .collect::<Option<Vec<usize>>>()
+    else {
+        return Err(KinematicsError::InvalidConfig {
+            field: "weighting".into(),
+            expected: "`uniform` for a rover with a wheel mounted rigidly on the body".into(),
+        });
+    };
     let points: Vec<Point3<f64>> = contacts.iter().map(|c| c.contact_point()).collect();
     let shares = bogie_shares(&chains, contacts, &points);
 
     // Support point of each bogie: its wheels' contacts weighted by share.
     let mut support = [Vector3::zeros(); 3];
-    for ((chain, p), share) in chains.iter().zip(&points).zip(&shares) {
-        support[chain.bogie_index] += p.coords * *share;
+    for ((bogie, p), share) in bogie_of.iter().zip(&points).zip(&shares) {
+        support[*bogie] += p.coords * *share;
     }
     let ground_z = points.iter().map(|p| p.z).sum::<f64>() / points.len() as f64;
     let com = Vector3::from(description.center_of_mass_m);
@@ -73,10 +83,10 @@ pub fn static_normal_forces(
         .ok_or_else(|| KinematicsError::Solve("bogie supports are collinear".into()))?;
 
     let total = -g.z;
-    Ok(chains
+    Ok(bogie_of
         .iter()
         .zip(&shares)
-        .map(|(chain, share)| (forces[chain.bogie_index] * share).max(MIN_SHARE * total.abs()))
+        .map(|(bogie, share)| (forces[*bogie] * share).max(MIN_SHARE * total.abs()))
         .collect())
 }
 

@@ -36,17 +36,21 @@ use crate::loads::static_normal_forces;
 use crate::qp::{Bound, solve_bounded_qp};
 use crate::{KinematicsError, RoverDescription};
 
-/// Unknowns per contact: contact angle rate and three slips.
-const LOCAL: usize = 4;
+/// Unknowns per contact: contact angle rate, three slips, and the roller
+/// rate of a mecanum wheel (held at 0 for an ordinary wheel).
+const LOCAL: usize = 5;
+
+/// Offset of the roller rate among a contact's unknowns.
+const ROLLER: usize = 4;
 
 /// The non-zero block of one contact's rows of Ω: columns are the body
-/// velocity (3) and the contact's own unknowns (4).
-type ContactBlock = SMatrix<f64, 6, 7>;
+/// velocity (3) and the contact's own unknowns (5).
+type ContactBlock = SMatrix<f64, 6, 8>;
 
 /// Where the columns of contact `i`'s block sit among all unknowns.
-fn block_index(i: usize) -> [usize; 7] {
+fn block_index(i: usize) -> [usize; 8] {
     let o = 3 + LOCAL * i;
-    [0, 1, 2, o, o + 1, o + 2, o + 3]
+    [0, 1, 2, o, o + 1, o + 2, o + 3, o + 4]
 }
 
 /// How each contact's equations are weighted (the matrix `C` of eq. 5).
@@ -148,6 +152,9 @@ pub struct WeightedJacobianSolution {
     pub contact_angle_rates_radps: Vec<f64>,
     /// Slip `(δ_x, δ_y, δ_ψ)` per contact (m/s, m/s, rad/s).
     pub slips: Vec<[f64; 3]>,
+    /// Free roller speed of each mecanum wheel's contact along its free
+    /// direction (m/s; 0 for an ordinary wheel).
+    pub roller_speeds_mps: Vec<f64>,
     /// Row weight of each contact (sums to 1).
     pub weights: Vec<f64>,
     /// `eᵀ C e` at the solution.
@@ -244,7 +251,7 @@ impl WeightedJacobianModel {
             .enumerate()
             .map(|(i, chain)| {
                 let angles = ChainAngles {
-                    bogie_rad: s.bogies[chain.bogie_index].position_rad,
+                    bogie_rad: chain.bogie_index.map_or(0.0, |b| s.bogies[b].position_rad),
                     steer_rad: chain
                         .steer_index
                         .map_or(0.0, |k| s.steering[k].position_rad),
@@ -300,7 +307,7 @@ impl WeightedJacobianModel {
             let j = contact_jacobian(contact);
             let mut omega = ContactBlock::zeros();
             let mut b = Vector6::zeros();
-            let bogie_rate = s.bogies[chain.bogie_index].rate_radps;
+            let bogie_rate = chain.bogie_index.map_or(0.0, |b| s.bogies[b].rate_radps);
             let steer_rate = chain.steer_index.map_or(0.0, |k| s.steering[k].rate_radps);
             let wheel_rate = s.wheels[i].rate_radps;
             for r in 0..6 {
@@ -309,8 +316,15 @@ impl WeightedJacobianModel {
                 } else {
                     b[r] = -s.imu.gyro_radps[r - 3];
                 }
-                for k in 0..LOCAL {
+                for k in 0..ROLLER {
                     omega[(r, 3 + k)] = -j[(r, COL_CONTACT_ANGLE + k)];
+                }
+                // A mecanum contact also moves freely along the ground
+                // direction perpendicular to its roller axis,
+                // d = cos γ x_C − sin γ y_C: a column made of the slip ones.
+                if let Some(gamma) = chain.roller_angle_rad {
+                    omega[(r, 3 + ROLLER)] =
+                        gamma.cos() * omega[(r, 3 + 1)] - gamma.sin() * omega[(r, 3 + 2)];
                 }
                 b[r] += j[(r, COL_BOGIE)] * bogie_rate
                     + j[(r, COL_STEER)] * steer_rate
@@ -329,6 +343,10 @@ impl WeightedJacobianModel {
                 h[(3 + LOCAL * i + slip_axis, 3 + LOCAL * i + slip_axis)] +=
                     self.config.slip_prior * weights[i];
             }
+            if chain.roller_angle_rad.is_none() {
+                // No roller: a unit prior holds the unused rate at zero.
+                h[(3 + LOCAL * i + ROLLER, 3 + LOCAL * i + ROLLER)] += 1.0;
+            }
             systems.push((omega, b));
         }
 
@@ -346,7 +364,7 @@ impl WeightedJacobianModel {
             .zip(&weights)
             .enumerate()
             .map(|(i, ((omega, b), w))| {
-                let local = SVector::<f64, 7>::from_iterator(block_index(i).iter().map(|&k| v[k]));
+                let local = SVector::<f64, 8>::from_iterator(block_index(i).iter().map(|&k| v[k]));
                 w * (b - omega * local).norm_squared()
             })
             .sum();
@@ -359,6 +377,7 @@ impl WeightedJacobianModel {
                     [v[o + 1], v[o + 2], v[o + 3]]
                 })
                 .collect(),
+            roller_speeds_mps: (0..n_contacts).map(|i| v[3 + LOCAL * i + ROLLER]).collect(),
             weights,
             weighted_residual,
         })

@@ -147,7 +147,7 @@ impl ChassisSolver {
         let s = Suspension::from_vector(v);
         let body = world_from_body(planar.0, planar.1, planar.2, &s);
         Unknowns::from_fn(|i, _| {
-            let bogie = s.bogie_rad[self.chains[i].bogie_index];
+            let bogie = self.chains[i].bogie_index.map_or(0.0, |b| s.bogie_rad[b]);
             self.wheel_contact(terrain, &body, i, bogie, steer[i]).2
         })
     }
@@ -201,7 +201,7 @@ impl ChassisSolver {
         let body = world_from_body(planar.0, planar.1, planar.2, &suspension);
         let (mut contact_rad, mut contact_points) = (Vec::new(), Vec::new());
         for (i, (chain, steer_rad)) in self.chains.iter().zip(steer).enumerate() {
-            let bogie = suspension.bogie_rad[chain.bogie_index];
+            let bogie = chain.bogie_index.map_or(0.0, |b| suspension.bogie_rad[b]);
             let (p, gamma, _) = self.wheel_contact(terrain, &body, i, bogie, *steer_rad);
             contact_points.push(p);
             contact_rad.push(gamma);

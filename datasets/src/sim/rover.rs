@@ -165,7 +165,9 @@ impl World<'_> {
             .enumerate()
             .map(|(i, c)| {
                 let angles = ChainAngles {
-                    bogie_rad: placement.suspension.bogie_rad[c.bogie_index],
+                    bogie_rad: c
+                        .bogie_index
+                        .map_or(0.0, |b| placement.suspension.bogie_rad[b]),
                     steer_rad: steer[i],
                     contact_rad: placement.contact_rad[i],
                 };
@@ -381,7 +383,7 @@ impl World<'_> {
                 self.description.wheel_radius_m,
                 &v_cmd,
                 &w_cmd,
-                bogie_rates[chain.bogie_index],
+                chain.bogie_index.map_or(0.0, |b| bogie_rates[b]),
                 steer_rates[i],
             );
             wheels.push(JointState {
