@@ -16,6 +16,7 @@ use gpodo_experiments::plan::load_plan;
 use gpodo_experiments::report::bench::write_bench_report;
 use gpodo_experiments::report::sweep::write_sweep_report;
 use gpodo_experiments::runner::{RunOptions, Shard, results_dir, run_sweep};
+use gpodo_frontends::tum::{StampedPose, format_tum};
 
 /// Learning odometry residuals with Gaussian processes, and using them to
 /// decide when a rover must look.
@@ -350,6 +351,27 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
         );
         let (log, report) = import_bag(file, &name, &map)?;
         let (csv, _) = write_log_csv(&log, out)?;
+        if !report.vo_poses.is_empty() {
+            let poses: Vec<StampedPose> = report
+                .vo_poses
+                .iter()
+                .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
+                .collect();
+            let path = out.join(format!("{name}.vo.tum"));
+            let comment = format!(
+                "visual odometry of {} ({}), on the log's clock",
+                file.display(),
+                map.vo.as_deref().unwrap_or("vo")
+            );
+            std::fs::write(&path, format_tum(&comment, &poses))
+                .with_context(|| format!("writing {}", path.display()))?;
+            println!(
+                "wrote {} ({} poses; {} of them camera frames of the log; replay it with `frontend: {{vo: {{kind: replay, path: ...}}}}`)",
+                path.display(),
+                poses.len(),
+                log.camera_times_secs.len()
+            );
+        }
         println!(
             "wrote {} ({} rows at {} Hz, {} dropped in gaps; {:.1} s, {:.1} m of ground truth)",
             csv.display(),

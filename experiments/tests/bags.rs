@@ -282,4 +282,118 @@ mod synthetic {
         let expected = gpodo_datasets::bags::write::EPOCH_NS + (s.time_secs * 1e9).round() as u64;
         assert_eq!(ns, expected);
     }
+
+    /// The Table II rows of a run: label, frames and RMSE.
+    fn table_two(out: &Path) -> Vec<(String, u64, f64)> {
+        let text = std::fs::read_to_string(out.join("metrics.json")).unwrap();
+        let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+        m["schemes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["label"].as_str().unwrap().to_string(),
+                    s["run"]["frames"].as_u64().unwrap(),
+                    s["run"]["metrics"]["rmse_m"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_recorded_vo_topic_is_replayed_in_table_two_as_its_tum_file_is() {
+        use gpodo_datasets::bags::write::{write_mcap_with_vo, written_topic_map};
+        use gpodo_frontends::tum::{StampedPose, format_tum};
+        use nalgebra::{Isometry3, Translation3};
+
+        let tmp = tempfile::tempdir().unwrap();
+        simulate("csv", &tmp.path().join("csv"));
+        let read = |run: &str| {
+            gpodo_datasets::log::read_log_csv(&tmp.path().join(format!("csv/{run}.csv"))).unwrap()
+        };
+        let (train, test) = (read("train_01"), read("test"));
+        // A drifting visual odometry: the ground truth at the camera
+        // frames, off by 1 mm more per frame.
+        let vo: Vec<(f64, Isometry3<f64>)> = test
+            .camera_times_secs
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| {
+                let i = test
+                    .samples
+                    .partition_point(|s| s.time_secs < t)
+                    .min(test.samples.len() - 1);
+                let drift = Translation3::new(1e-3 * k as f64, 0.0, 0.0);
+                (
+                    t,
+                    Isometry3::from_parts(drift, Default::default()) * test.ground_truth[i],
+                )
+            })
+            .collect();
+        let bags = tmp.path().join("mcap");
+        std::fs::create_dir_all(&bags).unwrap();
+        write_mcap_with_vo(&train, &bags, &[]).unwrap();
+        write_mcap_with_vo(&test, &bags, &vo).unwrap();
+        let poses: Vec<StampedPose> = vo
+            .iter()
+            .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
+            .collect();
+        std::fs::write(tmp.path().join("test.vo.tum"), format_tum("vo", &poses)).unwrap();
+        let mut map = written_topic_map(&train, 12.5);
+        map.vo = Some("/vo/pose".into());
+        let topics: String = serde_saphyr::to_string(&map)
+            .unwrap()
+            .lines()
+            .map(|l| format!("    {l}\n"))
+            .collect();
+        let rest = "motion_model: {kind: weighted_jacobian}
+regressors:
+  - kind: zero
+schemes:
+  - label: 1 fps
+    selector: { kind: fixed_rate, fps: 1.0 }
+  - label: 0.5 fps
+    selector: { kind: fixed_rate, fps: 0.5 }
+";
+        let csv_yaml = format!(
+            "name: csv\ndataset: {{kind: logs, train: [csv/train_01.csv], test: [csv/test.csv]}}\nfrontend: {{vo: {{kind: replay, path: test.vo.tum}}}}\n{rest}"
+        );
+        let bag_yaml = format!(
+            "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{topics}frontend: {{vo: {{kind: replay}}}}\n{rest}"
+        );
+        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
+            let file = tmp.path().join(format!("{name}.yaml"));
+            std::fs::write(&file, yaml).unwrap();
+            let out = common::gpodo_on("run", &file, &tmp.path().join(format!("out-{name}")), &[]);
+            assert!(
+                out.status.success(),
+                "{name}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        let (a, b) = (
+            table_two(&tmp.path().join("out-csv")),
+            table_two(&tmp.path().join("out-bag")),
+        );
+        assert_eq!(a.len(), 2);
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!((&x.0, x.1), (&y.0, y.1));
+            assert!((x.2 - y.2).abs() < 1e-9 * x.2, "{x:?} against {y:?}");
+        }
+        // Without a `vo` topic, a replay needs its file: said before running.
+        let file = tmp.path().join("no-vo.yaml");
+        let text = std::fs::read_to_string(tmp.path().join("bag.yaml"))
+            .unwrap()
+            .replace("vo: /vo/pose", "vo: null");
+        std::fs::write(&file, text).unwrap();
+        let out = common::gpodo_on("run", &file, &tmp.path().join("out-no-vo"), &[]);
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success()
+                && e.contains("a replayed VO without a `path` at")
+                && e.contains("no-vo.yaml:"),
+            "{e}"
+        );
+    }
 }

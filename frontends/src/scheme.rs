@@ -18,7 +18,7 @@ use crate::oracle::plan_frames;
 use crate::params::{FrontendParams, MotionPrior, VoSpec};
 use crate::prediction::{Precomputed, ResidualPrediction, ResidualSource};
 use crate::traverse::Traverse;
-use crate::tum::parse_tum;
+use crate::tum::{StampedPose, parse_tum};
 use crate::vo::{ReplayVo, SimulatedVo, VisualOdometry};
 use crate::{FrontendError, FrontendRun, SelectorSpec, run_frontend};
 
@@ -104,22 +104,39 @@ pub struct SchemeContext<'a> {
     /// And the times of those frames (s), where the hindsight search
     /// starts.
     pub matched_times: Option<&'a [f64]>,
+    /// The visual odometry recorded with this traverse (a bag's `vo`
+    /// topic), which a replay without a `path` replays.
+    pub recorded_vo: Option<&'a [StampedPose]>,
 }
 
 impl VoSpec {
     /// The visual odometry this specification describes over `traverse`;
-    /// a replayed log's relative path starts at `base`.
+    /// a replayed log's relative path starts at `base`, and a replay
+    /// without a path replays `recorded` (the traverse's own VO).
     ///
     /// # Errors
     /// [`FrontendError::Parse`] naming a VO log that cannot be read or
-    /// parsed; what the VO's constructor reports.
+    /// parsed; [`FrontendError::InvalidConfig`] for a replay without a
+    /// path on a traverse recorded without VO; what the VO's constructor
+    /// reports.
     pub fn build(
         &self,
         traverse: &Traverse,
         base: &Path,
+        recorded: Option<&[StampedPose]>,
     ) -> Result<Box<dyn VisualOdometry>, FrontendError> {
         Ok(match self {
             Self::Simulated(p) => Box::new(SimulatedVo::new(*p, traverse)?),
+            Self::Replay(p) if p.path.as_os_str().is_empty() => {
+                let log = recorded.ok_or_else(|| FrontendError::InvalidConfig {
+                    field: "vo.path".into(),
+                    expected: format!(
+                        "a TUM trajectory file: test run `{}` was recorded without a `vo` topic",
+                        traverse.name()
+                    ),
+                })?;
+                Box::new(ReplayVo::new(p.clone(), traverse, log)?)
+            }
             Self::Replay(p) => {
                 let path = if p.path.is_absolute() {
                     p.path.clone()
@@ -191,7 +208,7 @@ pub fn run_scheme(
         None => {
             let mut selector = scheme.selector.build()?;
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
-            let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
+            let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
             let run = run_frontend(
                 traverse,
                 &frontend,
@@ -217,7 +234,7 @@ pub fn run_scheme(
                     "a trained regressor's predictions (an oracle cannot learn online)".into(),
                 ));
             };
-            let vo = ctx.params.vo.build(traverse, ctx.base)?;
+            let vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
             let plan = plan_frames(
                 traverse,
                 &predictions,
@@ -229,7 +246,7 @@ pub fn run_scheme(
             let evaluate = |times: &[f64]| {
                 let mut selector = Planned::new("oracle", times.to_vec());
                 let mut source = Precomputed::new(label.clone(), predictions.clone());
-                let mut vo = ctx.params.vo.build(traverse, ctx.base)?;
+                let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
                 run_frontend(traverse, &frontend, &mut selector, &mut source, vo.as_mut())
             };
             let mut summary = OraclePlanSummary {

@@ -371,6 +371,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
             base: std::path::Path::new("."),
             matched_frames: None,
             matched_times: None,
+            recorded_vo: None,
         };
         for budget_m2 in [2e-5, 1e-4] {
             let causal_spec = SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
@@ -408,6 +409,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
                 &SchemeContext {
                     matched_frames: Some(causal.run.frames),
                     matched_times: Some(&times),
+                    recorded_vo: None,
                     ..ctx
                 },
             )
@@ -467,6 +469,7 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
         base: &dir,
         matched_frames: None,
         matched_times: None,
+        recorded_vo: None,
     };
     let n = t.windows().len();
     let gp = || SchemeResiduals::Trained {
@@ -538,6 +541,7 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
         &SchemeContext {
             matched_frames: Some(policy.run.frames),
             matched_times: Some(&times),
+            recorded_vo: None,
             ..ctx
         },
     );

@@ -155,6 +155,13 @@ pub struct TopicMap {
     /// Joint encoders (optional).
     #[serde(default)]
     pub joints: Option<JointMap>,
+    /// Visual odometry (optional): `nav_msgs/Odometry`,
+    /// `geometry_msgs/PoseStamped` or `PoseWithCovarianceStamped`, the
+    /// trajectory a SLAM or VO system computed on the camera frames. Its
+    /// stamps become the log's camera frames and Table II replays it
+    /// (`frontend: {vo: {kind: replay}}` without a `path`).
+    #[serde(default)]
+    pub vo: Option<String>,
     /// The robot's own odometry (optional): `nav_msgs/Odometry` (its twist,
     /// in the child frame as ROS defines it) or `geometry_msgs/TwistStamped`
     /// (body frame); the `reported_odometry` motion model uses it as `g`.
@@ -209,6 +216,9 @@ pub struct ImportReport {
     /// Median horizontal and vertical position standard deviations the
     /// GNSS receiver reported (m), when its fixes carry a covariance.
     pub gnss_sigma_m: Option<[f64; 2]>,
+    /// The `vo` role's poses, on the log's clock (s), in time order.
+    #[serde(skip)]
+    pub vo_poses: Vec<(f64, Isometry3<f64>)>,
 }
 
 /// How the heading of a GNSS ground truth was made ([`GnssHeading::Course`]).
@@ -410,6 +420,7 @@ pub fn import_bag(
         topic: &map.imu,
         role: "imu",
         expected: &["sensor_msgs/Imu"],
+        optional: false,
     }];
     match &map.ground_truth {
         GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
@@ -421,6 +432,7 @@ pub fn import_bag(
                 "geometry_msgs/PoseWithCovarianceStamped",
                 "sensor_msgs/NavSatFix",
             ],
+            optional: false,
         }),
         GroundTruthSource::Tf { tf } => {
             if tf.topics.is_empty() {
@@ -432,6 +444,7 @@ pub fn import_bag(
                 topic,
                 role: "ground_truth",
                 expected: &["tf2_msgs/TFMessage"],
+                optional: false,
             }));
         }
     }
@@ -440,6 +453,19 @@ pub fn import_bag(
             topic,
             role: "odometry",
             expected: &["nav_msgs/Odometry", "geometry_msgs/TwistStamped"],
+            optional: false,
+        });
+    }
+    if let Some(topic) = &map.vo {
+        requests.push(TopicRequest {
+            topic,
+            role: "vo",
+            expected: &[
+                "nav_msgs/Odometry",
+                "geometry_msgs/PoseStamped",
+                "geometry_msgs/PoseWithCovarianceStamped",
+            ],
+            optional: true,
         });
     }
     if let Some(j) = &map.joints {
@@ -447,6 +473,7 @@ pub fn import_bag(
             topic: &j.topic,
             role: "joints",
             expected: &["sensor_msgs/JointState"],
+            optional: false,
         });
     }
     let mut read = read_topics(path, &requests)?.into_iter();
@@ -457,6 +484,7 @@ pub fn import_bag(
     };
     let gt_by_topic: Vec<Vec<Stamped>> = read.by_ref().take(gt_topics).collect();
     let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
+    let vo_messages = map.vo.as_ref().and_then(|_| read.next());
     let joint_messages = read.next();
     let clock = Clock::new(
         map.time,
@@ -725,6 +753,50 @@ pub fn import_bag(
         ));
     }
     let reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
+    // Visual odometry: its poses on the log's clock, and its stamps within
+    // the log as the camera frames.
+    let mut vo_poses: Vec<(f64, Isometry3<f64>)> = vo_messages
+        .iter()
+        .flatten()
+        .filter_map(|s| {
+            let (h, p) = match &s.message {
+                RosMessage::Odometry(m) => (&m.header, &m.pose),
+                RosMessage::PoseStamped(h, p) | RosMessage::PoseWithCovarianceStamped(h, p, _) => {
+                    (h, p)
+                }
+                _ => return None,
+            };
+            let [x, y, z, w] = p.orientation;
+            let pose = Isometry3::from_parts(
+                Translation3::from(Vector3::from(p.position)),
+                UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+            );
+            Some((clock.at(s, h.stamp_ns) - start, pose))
+        })
+        .collect();
+    let vo_messages_read = vo_poses.len();
+    let vo_out_of_order = vo_poses.windows(2).filter(|w| w[1].0 < w[0].0).count();
+    vo_poses.sort_by(|a, b| a.0.total_cmp(&b.0));
+    vo_poses.dedup_by(|b, a| a.0 == b.0);
+    let mut reports = reports;
+    if let Some(topic) = &map.vo {
+        reports.push(StreamReport {
+            role: "vo".into(),
+            topic: topic.clone(),
+            messages: vo_messages_read,
+            duplicates: vo_messages_read - vo_poses.len(),
+            out_of_order: vo_out_of_order,
+            ..StreamReport::default()
+        });
+    }
+    let camera_times_secs: Vec<f64> = match (samples.first(), samples.last()) {
+        (Some(first), Some(last)) => vo_poses
+            .iter()
+            .map(|p| p.0)
+            .filter(|t| *t >= first.time_secs && *t <= last.time_secs)
+            .collect(),
+        _ => Vec::new(),
+    };
     let gnss_heading = (gnss && map.gnss_heading == GnssHeading::Course)
         .then(|| course_headings(&samples, &mut ground_truth));
     if samples.is_empty() {
@@ -758,7 +830,7 @@ pub fn import_bag(
         bogie_names: names(2),
         samples,
         ground_truth,
-        camera_times_secs: Vec::new(),
+        camera_times_secs,
     };
     let report = ImportReport {
         rows: log.samples.len(),
@@ -767,6 +839,7 @@ pub fn import_bag(
         streams: reports,
         gnss_heading,
         gnss_sigma_m: median_sigmas(&sigmas),
+        vo_poses,
     };
     Ok((log, report))
 }

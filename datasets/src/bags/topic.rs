@@ -73,6 +73,8 @@ pub struct TopicRequest<'a> {
     pub role: &'a str,
     /// The types the role reads.
     pub expected: &'a [&'a str],
+    /// Whether a bag may lack the topic (then it reads as no messages).
+    pub optional: bool,
 }
 
 /// Every message of each requested topic in the bag at `path`, decoded, in
@@ -133,7 +135,7 @@ pub fn read_topics(
     if let Some(r) = requests
         .iter()
         .zip(&out)
-        .find_map(|(r, m)| m.is_empty().then_some(r))
+        .find_map(|(r, m)| (m.is_empty() && !r.optional).then_some(r))
     {
         return Err(TopicError::UnknownTopic {
             file,
@@ -159,6 +161,7 @@ pub fn read_topic(
         topic,
         role,
         expected,
+        optional: false,
     };
     Ok(read_topics(path, &[request])?.remove(0))
 }

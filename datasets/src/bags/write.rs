@@ -10,6 +10,7 @@
 //! | `/ground_truth/pose` | `geometry_msgs/msg/PoseStamped` | `world_from_body` in frame `world` |
 //! | `/tf` | `tf2_msgs/msg/TFMessage` | the same pose as the transform `world` → `base_link` |
 //! | `/odom` | `nav_msgs/msg/Odometry` | only when the log has the robot's own odometry: its twist in `base_link` |
+//! | `/vo/pose` | `geometry_msgs/msg/PoseStamped` | only from [`write_mcap_with_vo`]: a visual-odometry trajectory in frame `vo` |
 //!
 //! Stamps are [`EPOCH_NS`] plus the log's time, in whole nanoseconds, as
 //! header stamps and as log times. [`written_topic_map`] is the topic map
@@ -232,6 +233,7 @@ pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
             bogies: refs(&log.bogie_names, "bogie"),
         }),
         odometry: has_odometry.then(|| "/odom".into()),
+        vo: None,
         rate_hz,
         max_gap_secs: 0.5,
         time: Default::default(),
@@ -256,6 +258,20 @@ pub struct WrittenBag {
 /// [`DatasetError::InvalidLog`] when the log does not validate,
 /// [`DatasetError::Io`] when the file cannot be written.
 pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError> {
+    write_mcap_with_vo(log, dir, &[])
+}
+
+/// [`write_mcap`], plus a visual-odometry trajectory `(log time, pose)` on
+/// `/vo/pose` (each pose written before the first sample not earlier than
+/// it).
+///
+/// # Errors
+/// As [`write_mcap`].
+pub fn write_mcap_with_vo(
+    log: &RoverLog,
+    dir: &Path,
+    vo: &[(f64, nalgebra::Isometry3<f64>)],
+) -> Result<WrittenBag, DatasetError> {
     log.validate()?;
     let path = dir.join(format!("{}.mcap", log.name));
     let mcap_error = |e: mcap::McapError| DatasetError::Io {
@@ -297,8 +313,18 @@ pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError
     } else {
         None
     };
+    let vo_channel = if vo.is_empty() {
+        None
+    } else {
+        Some(channel(
+            "geometry_msgs/msg/PoseStamped",
+            pose_stamped_schema(),
+            "/vo/pose",
+        )?)
+    };
     let names = joint_names(log);
     let mut messages = 0u64;
+    let mut vo_next = 0;
     for (k, (s, p)) in log.samples.iter().zip(&log.ground_truth).enumerate() {
         let t = stamp_ns(s.time_secs);
         let mut m = Cdr::new();
@@ -342,7 +368,24 @@ pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError
         f.f64s(position.as_slice());
         f.f64s(&[r.i, r.j, r.k, r.w]);
 
-        let mut out = vec![(joints, m.0), (imu, i.0), (pose, g.0), (tf, f.0)];
+        let mut out = Vec::new();
+        if let Some(channel) = vo_channel {
+            while let Some((time, p)) = vo.get(vo_next).filter(|v| v.0 <= s.time_secs) {
+                let r = p.rotation;
+                let mut v = Cdr::new();
+                v.header(stamp_ns(*time), "vo");
+                v.f64s(p.translation.vector.as_slice());
+                v.f64s(&[r.i, r.j, r.k, r.w]);
+                out.push((channel, v.0, stamp_ns(*time)));
+                vo_next += 1;
+            }
+        }
+        out.extend([
+            (joints, m.0, t),
+            (imu, i.0, t),
+            (pose, g.0, t),
+            (tf, f.0, t),
+        ]);
         if let (Some(channel), Some(twist)) = (odom, s.odometry) {
             let mut o = Cdr::new();
             o.header(t, "odom");
@@ -353,14 +396,14 @@ pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError
             o.f64s(twist.linear_mps.as_slice());
             o.f64s(twist.angular_radps.as_slice());
             o.f64s(&[0.0; 36]);
-            out.push((channel, o.0));
+            out.push((channel, o.0, t));
         }
-        for (channel_id, data) in out {
+        for (channel_id, data, time) in out {
             let header = mcap::records::MessageHeader {
                 channel_id,
                 sequence: k as u32,
-                log_time: t,
-                publish_time: t,
+                log_time: time,
+                publish_time: time,
             };
             writer
                 .write_to_known_channel(&header, &data)

@@ -55,6 +55,17 @@ impl ExperimentConfig {
             })?;
         }
         self.validate_schemes()?;
+        if let gpodo_frontends::params::VoSpec::Replay(p) = &self.frontend.vo {
+            let recorded =
+                matches!(&self.dataset, DatasetSpec::Bags { topics, .. } if topics.vo.is_some());
+            if p.path.as_os_str().is_empty() && !recorded && !self.schemes.is_empty() {
+                return Err(Issue::new(
+                    "frontend.vo.path",
+                    "a replayed VO without a `path`",
+                    "a TUM trajectory file, or a `bags` dataset whose topic map has a `vo` topic",
+                ));
+            }
+        }
         match &self.dataset {
             DatasetSpec::ResidualTable { train_fraction, .. }
                 if !(*train_fraction > 0.0 && *train_fraction < 1.0) =>

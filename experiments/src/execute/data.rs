@@ -2,7 +2,10 @@
 //! runs, the motion model, dead reckoning on the test runs, the residual
 //! rows, and the rows standardised as the regressors see them.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+use gpodo_frontends::tum::StampedPose;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
 use gpodo_datasets::residuals::residual_dataset;
@@ -83,6 +86,9 @@ pub(crate) struct PreparedData {
     /// wheel radius, for the front end.
     pub(crate) test_logs: Vec<RoverLog>,
     pub(crate) model: Option<(Box<dyn MotionModel>, f64)>,
+    /// Visual odometry recorded with the test runs (a bag's `vo` topic),
+    /// by test run name.
+    pub(crate) recorded_vo: BTreeMap<String, Vec<StampedPose>>,
 }
 
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
@@ -149,6 +155,7 @@ fn from_logs(
         dead_reckoning,
         test_logs,
         model: Some((model, radius)),
+        recorded_vo: BTreeMap::new(),
     })
 }
 
@@ -203,6 +210,7 @@ pub(crate) fn prepare(
             topics,
         } => {
             let imported = std::cell::RefCell::new(Vec::new());
+            let vo = std::cell::RefCell::new(BTreeMap::new());
             let read = |paths: &[PathBuf]| {
                 paths
                     .iter()
@@ -214,12 +222,27 @@ pub(crate) fn prepare(
                         let (log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
                         tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
                         imported.borrow_mut().push(import_summary(&name, &report));
+                        if !report.vo_poses.is_empty() {
+                            let poses = report
+                                .vo_poses
+                                .iter()
+                                .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
+                                .collect();
+                            vo.borrow_mut().insert(name.clone(), poses);
+                        }
                         Ok(log)
                     })
                     .collect::<Result<Vec<_>, PipelineError>>()
             };
             let (mut train, mut test) = (read(train)?, read(test)?);
+            let mut vo = vo.into_inner();
             if let Some(fraction) = train_fraction {
+                // A held-out part replays its recording's VO.
+                for log in &train {
+                    if let Some(poses) = vo.get(&log.name).cloned() {
+                        vo.insert(format!("{}-test", log.name), poses);
+                    }
+                }
                 let (mut kept, mut held_out) = (Vec::new(), Vec::new());
                 for log in &train {
                     let (a, b) = log.split_in_time(*fraction)?;
@@ -241,7 +264,9 @@ pub(crate) fn prepare(
                 topics.max_gap_secs,
                 imported.into_inner().join("; ")
             );
-            from_logs(config, base, &train, &test, source, None)
+            let mut prepared = from_logs(config, base, &train, &test, source, None)?;
+            prepared.recorded_vo = vo;
+            Ok(prepared)
         }
         DatasetSpec::ResidualTable {
             path,
@@ -272,6 +297,7 @@ pub(crate) fn prepare(
                 dead_reckoning: Vec::new(),
                 test_logs: Vec::new(),
                 model: None,
+                recorded_vo: BTreeMap::new(),
             })
         }
     }

@@ -30,6 +30,8 @@ pub struct SchemeInputs<'a> {
     pub predictions: &'a [Option<Vec<Vec<ResidualPrediction>>>],
     /// The trained regressors' labels.
     pub regressor_labels: &'a [String],
+    /// Visual odometry recorded with the test runs, by run name.
+    pub recorded_vo: &'a std::collections::BTreeMap<String, Vec<gpodo_frontends::tum::StampedPose>>,
 }
 
 impl SchemeInputs<'_> {
@@ -85,6 +87,7 @@ impl SchemeInputs<'_> {
             base: self.base,
             matched_frames: matched.map(|r| r.run.frames),
             matched_times: matched_times.as_deref(),
+            recorded_vo: self.recorded_vo.get(traverse.name()).map(Vec::as_slice),
         };
         let spec = SchemeSpecRef {
             label: &scheme.label,

@@ -293,6 +293,7 @@ impl SharedWork {
                 traverses: &p.traverses,
                 predictions: &predictions,
                 regressor_labels: &labels,
+                recorded_vo: &p.data.recorded_vo,
             })?
         };
         let data = &p.data;

@@ -35,7 +35,9 @@ pub enum LoggedFrame {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ReplayVoParams {
-    /// The TUM trajectory file (relative to the experiment file).
+    /// The TUM trajectory file (relative to the experiment file); omitted,
+    /// the visual odometry recorded with each test run (a bag's `vo`
+    /// topic).
     pub path: std::path::PathBuf,
     /// Largest difference between a camera frame's time and a logged time
     /// stamp for them to match (s; default 0.02).
@@ -99,9 +101,6 @@ impl ReplayVoParams {
                 expected: expected.into(),
             })
         };
-        if self.path.as_os_str().is_empty() {
-            return bad("path", "the VO log's TUM trajectory file");
-        }
         if !(self.time_tolerance_secs.is_finite() && self.time_tolerance_secs > 0.0) {
             return bad("time_tolerance_secs", "a positive duration");
         }
