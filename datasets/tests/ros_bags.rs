@@ -391,6 +391,13 @@ max_gap_secs: 0.5
         let roles: Vec<&str> = ra.streams.iter().map(|s| s.role.as_str()).collect();
         assert_eq!(roles, ["imu", "ground_truth", "odometry"]);
         assert_eq!(ra.streams[2].messages, 3952);
+        // Every stream spans the drive: none starts late or stops early.
+        for s in &ra.streams {
+            assert!(
+                s.starts_late_secs < 1.0 && s.stops_early_secs < 1.0,
+                "{s:?}"
+            );
+        }
         // The receiver's own σ (SBAS fixes): under 2 m horizontally.
         let [h, v] = ra.gnss_sigma_m.unwrap();
         assert!(h > 0.1 && h < 2.0 && v > h, "{h} {v}");

@@ -394,6 +394,14 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
                 s.max_gap_bridged_secs
             );
         }
+        for s in &report.streams {
+            if s.starts_late_secs > 1.0 || s.stops_early_secs > 1.0 {
+                println!(
+                    "  {} starts {:.1} s after the first stream and stops {:.1} s before the last: the log covers only the span every stream covers",
+                    s.topic, s.starts_late_secs, s.stops_early_secs
+                );
+            }
+        }
         if let Some(h) = &report.gnss_heading {
             println!("  {h}");
         }

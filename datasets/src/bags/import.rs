@@ -198,6 +198,12 @@ pub struct StreamReport {
     pub rows_in_gaps: usize,
     /// The longest interval interpolated across (s).
     pub max_gap_bridged_secs: f64,
+    /// How much later than the earliest stream this one starts (s): the
+    /// log starts with the latest stream.
+    pub starts_late_secs: f64,
+    /// How much earlier than the latest stream this one stops (s): a topic
+    /// that stops part-way ends the log there.
+    pub stops_early_secs: f64,
 }
 
 /// What an import wrote.
@@ -676,16 +682,7 @@ pub fn import_bag(
     if let Some(j) = joints.as_mut() {
         streams.push(j);
     }
-    let start = streams
-        .iter()
-        .filter_map(|s| s.times.first())
-        .cloned()
-        .fold(f64::MIN, f64::max);
-    let end = streams
-        .iter()
-        .filter_map(|s| s.times.last())
-        .cloned()
-        .fold(f64::MAX, f64::min);
+    let (start, end) = common_span(&mut streams);
     let dt = 1.0 / map.rate_hz;
     let steps = if end > start {
         ((end - start) / dt).floor() as usize + 1
@@ -842,6 +839,31 @@ pub fn import_bag(
         vo_poses,
     };
     Ok((log, report))
+}
+
+/// The span every stream covers, `(latest first time, earliest last
+/// time)`; each stream's report says how late it starts and how early it
+/// stops against the others.
+fn common_span(streams: &mut [&mut Stream]) -> (f64, f64) {
+    let firsts: Vec<f64> = streams
+        .iter()
+        .filter_map(|s| s.times.first().copied())
+        .collect();
+    let lasts: Vec<f64> = streams
+        .iter()
+        .filter_map(|s| s.times.last().copied())
+        .collect();
+    let start = firsts.iter().copied().fold(f64::MIN, f64::max);
+    let end = lasts.iter().copied().fold(f64::MAX, f64::min);
+    let earliest = firsts.iter().copied().fold(f64::MAX, f64::min);
+    let latest = lasts.iter().copied().fold(f64::MIN, f64::max);
+    for s in streams.iter_mut() {
+        if let (Some(first), Some(last)) = (s.times.first(), s.times.last()) {
+            s.report.starts_late_secs = first - earliest;
+            s.report.stops_early_secs = latest - last;
+        }
+    }
+    (start, end)
 }
 
 /// Medians of the horizontal and vertical standard deviations.
@@ -1016,6 +1038,29 @@ mod tests {
             assert!((r - roll).abs() < 1e-12 && (p - pitch).abs() < 1e-12);
             assert!((yaw - FRAC_PI_2).abs() < 1e-9, "{}", yaw.to_degrees());
         }
+    }
+
+    #[test]
+    fn a_stream_that_stops_part_way_ends_the_log_and_says_so() {
+        let stream = |role: &str, from: f64, to: f64| {
+            let samples = (0..=((to - from) * 10.0).round() as usize)
+                .map(|k| (from + k as f64 * 0.1, vec![0.0]))
+                .collect();
+            Stream::new(role, "/t", samples, 0, 0, vec![])
+        };
+        let (mut imu, mut gt, mut odom) = (
+            stream("imu", 0.0, 100.0),
+            stream("ground_truth", 2.0, 100.0),
+            stream("odometry", 0.0, 40.0),
+        );
+        let (start, end) = common_span(&mut [&mut imu, &mut gt, &mut odom]);
+        assert_eq!((start, end), (2.0, 40.0));
+        assert_eq!(odom.report.stops_early_secs, 60.0);
+        assert_eq!(gt.report.starts_late_secs, 2.0);
+        assert_eq!(
+            (imu.report.starts_late_secs, imu.report.stops_early_secs),
+            (0.0, 0.0)
+        );
     }
 
     #[test]

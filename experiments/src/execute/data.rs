@@ -353,7 +353,7 @@ fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) ->
         .streams
         .iter()
         .map(|s| {
-            format!(
+            let mut line = format!(
                 "{} {}: {} msgs, {} duplicated, {} out of order, {} unusable, longest gap {:.3} s",
                 s.role,
                 s.topic,
@@ -362,7 +362,20 @@ fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) ->
                 s.out_of_order,
                 s.unusable,
                 s.max_gap_bridged_secs
-            )
+            );
+            if s.starts_late_secs > 1.0 {
+                line += &format!(
+                    ", starts {:.1} s after the first stream",
+                    s.starts_late_secs
+                );
+            }
+            if s.stops_early_secs > 1.0 {
+                line += &format!(
+                    ", stops {:.1} s before the last stream (the log ends there)",
+                    s.stops_early_secs
+                );
+            }
+            line
         })
         .collect();
     let heading = r
