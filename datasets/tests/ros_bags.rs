@@ -539,6 +539,32 @@ mod written {
     }
 
     #[test]
+    fn a_vo_topic_gives_camera_frames_within_the_log_and_every_pose() {
+        let tmp = tempfile::tempdir().unwrap();
+        let log = circle();
+        // Every second, and two poses beyond the last sample (29.9 s).
+        let vo: Vec<_> = (0..32)
+            .map(|k| {
+                let t = k as f64 + 0.05;
+                (t, log.ground_truth[(10 * k).min(299)])
+            })
+            .collect();
+        let bag = gpodo_datasets::bags::write::write_mcap_with_vo(&log, tmp.path(), &vo).unwrap();
+        assert_eq!(bag.messages, 5 * 300 + 32);
+        let mut map = written_topic_map(&log, 10.0);
+        map.vo = Some("/vo/pose".into());
+        let (imported, report) = import_bag(&bag.path, "circle", &map).unwrap();
+        assert_eq!(report.vo_poses.len(), 32);
+        assert_eq!(report.streams.last().unwrap().role, "vo");
+        // Camera frames: the VO stamps inside the log (0.05 … 29.05 s).
+        assert_eq!(imported.camera_times_secs.len(), 30);
+        for (k, (t, pose)) in report.vo_poses.iter().enumerate() {
+            assert!((t - vo[k].0).abs() < 1e-9);
+            assert!((pose.translation.vector - vo[k].1.translation.vector).norm() < 1e-12);
+        }
+    }
+
+    #[test]
     fn a_tf_ground_truth_reads_from_yaml() {
         let map: gpodo_datasets::bags::import::TopicMap = serde_saphyr::from_str(
             "imu: /imu/data\nground_truth: {tf: {parent: map, child: base_link, topics: [/tf, /tf_static]}}\n",

@@ -186,6 +186,16 @@ impl Cdr {
     }
 }
 
+/// A `geometry_msgs/PoseStamped` in `frame`, stamped `stamp_ns`.
+fn pose_stamped(stamp_ns: u64, frame: &str, pose: &nalgebra::Isometry3<f64>) -> Vec<u8> {
+    let r = pose.rotation;
+    let mut m = Cdr::new();
+    m.header(stamp_ns, frame);
+    m.f64s(pose.translation.vector.as_slice());
+    m.f64s(&[r.i, r.j, r.k, r.w]);
+    m.0
+}
+
 /// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
 fn stamp_ns(time_secs: f64) -> u64 {
     EPOCH_NS.saturating_add_signed((time_secs * 1e9).round() as i64)
@@ -261,9 +271,9 @@ pub fn write_mcap(log: &RoverLog, dir: &Path) -> Result<WrittenBag, DatasetError
     write_mcap_with_vo(log, dir, &[])
 }
 
-/// [`write_mcap`], plus a visual-odometry trajectory `(log time, pose)` on
-/// `/vo/pose` (each pose written before the first sample not earlier than
-/// it).
+/// [`write_mcap`], plus a visual-odometry trajectory `(log time, pose)`,
+/// in time order, on `/vo/pose` (each pose written before the first sample
+/// not earlier than it; those after the last sample at the end).
 ///
 /// # Errors
 /// As [`write_mcap`].
@@ -356,10 +366,7 @@ pub fn write_mcap_with_vo(
 
         let r = p.rotation;
         let position = p.translation.vector;
-        let mut g = Cdr::new();
-        g.header(t, "world");
-        g.f64s(position.as_slice());
-        g.f64s(&[r.i, r.j, r.k, r.w]);
+        let g = pose_stamped(t, "world", p);
 
         let mut f = Cdr::new();
         f.u32(1);
@@ -371,21 +378,12 @@ pub fn write_mcap_with_vo(
         let mut out = Vec::new();
         if let Some(channel) = vo_channel {
             while let Some((time, p)) = vo.get(vo_next).filter(|v| v.0 <= s.time_secs) {
-                let r = p.rotation;
-                let mut v = Cdr::new();
-                v.header(stamp_ns(*time), "vo");
-                v.f64s(p.translation.vector.as_slice());
-                v.f64s(&[r.i, r.j, r.k, r.w]);
-                out.push((channel, v.0, stamp_ns(*time)));
+                let at = stamp_ns(*time);
+                out.push((channel, pose_stamped(at, "vo", p), at));
                 vo_next += 1;
             }
         }
-        out.extend([
-            (joints, m.0, t),
-            (imu, i.0, t),
-            (pose, g.0, t),
-            (tf, f.0, t),
-        ]);
+        out.extend([(joints, m.0, t), (imu, i.0, t), (pose, g, t), (tf, f.0, t)]);
         if let (Some(channel), Some(twist)) = (odom, s.odometry) {
             let mut o = Cdr::new();
             o.header(t, "odom");
@@ -407,6 +405,22 @@ pub fn write_mcap_with_vo(
             };
             writer
                 .write_to_known_channel(&header, &data)
+                .map_err(mcap_error)?;
+            messages += 1;
+        }
+    }
+    // VO poses after the last sample close the file, in order.
+    if let Some(channel_id) = vo_channel {
+        for (k, (time, p)) in vo.iter().enumerate().skip(vo_next) {
+            let at = stamp_ns(*time);
+            let header = mcap::records::MessageHeader {
+                channel_id,
+                sequence: k as u32,
+                log_time: at,
+                publish_time: at,
+            };
+            writer
+                .write_to_known_channel(&header, &pose_stamped(at, "vo", p))
                 .map_err(mcap_error)?;
             messages += 1;
         }
