@@ -814,9 +814,35 @@ mod fixtures {
         ]
     }
 
+    /// The fixtures this build reads.
+    fn files() -> Vec<&'static str> {
+        let mut files = vec!["messages.bag", "messages.mcap"];
+        if cfg!(feature = "db3") {
+            files.push("messages.db3");
+        }
+        files
+    }
+
+    #[test]
+    fn a_db3_bag_is_read_with_the_feature_and_refused_with_advice_without() {
+        let path = fixture("messages.db3");
+        let info = gpodo_datasets::bags::BagInfo::read(&path);
+        if cfg!(feature = "db3") {
+            let info = info.unwrap();
+            assert_eq!(info.format, gpodo_datasets::bags::BagFormat::Db3);
+            assert_eq!(info.messages, 8);
+        } else {
+            let e = info.unwrap_err().to_string();
+            assert!(
+                e.contains("messages.db3") && e.contains("--features db3"),
+                "{e}"
+            );
+        }
+    }
+
     #[test]
     fn every_message_type_decodes_to_what_an_independent_encoder_wrote() {
-        for file in ["messages.bag", "messages.mcap"] {
+        for file in files() {
             for (topic, ty, want) in expected() {
                 let got = read_topic(&fixture(file), topic, "test", &[ty]).unwrap();
                 assert_eq!(got.len(), 1, "{file} {topic}");
