@@ -1,0 +1,146 @@
+//! The topic map: which topic plays which role in an import, and how the
+//! streams are put on one clock (the `topics:` of a `kind: bags` dataset,
+//! the file `gpodo import --topics` reads).
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::heading::GnssHeading;
+use crate::bags::tf::TfPair;
+
+fn default_rate() -> f64 {
+    10.0
+}
+
+fn default_gap() -> f64 {
+    0.5
+}
+
+/// Which time a message is placed at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeSource {
+    /// The message's header stamp (when the sensor measured).
+    #[default]
+    Header,
+    /// When the recorder received it.
+    Receive,
+}
+
+/// One joint of the bag's `JointState` feeding one joint of the rover.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointRef {
+    /// The joint's name in the bag.
+    pub joint: String,
+    /// Radians per unit of the recorded position (e.g. 2π/ticks per turn
+    /// over a gear ratio; default 1).
+    #[serde(default = "one")]
+    pub position_scale: f64,
+    /// Radians per second per unit of the recorded velocity (e.g. 2π/60
+    /// for rpm; default 1).
+    #[serde(default = "one")]
+    pub rate_scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The joints role: a `sensor_msgs/JointState` topic and which of its
+/// joints are the rover's wheels, steering joints and bogies (by the
+/// rover's names, e.g. `fl`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointMap {
+    /// The topic.
+    pub topic: String,
+    /// Wheels: rover name → bag joint.
+    #[serde(default)]
+    pub wheels: BTreeMap<String, JointRef>,
+    /// Steering joints.
+    #[serde(default)]
+    pub steering: BTreeMap<String, JointRef>,
+    /// Passive bogies.
+    #[serde(default)]
+    pub bogies: BTreeMap<String, JointRef>,
+}
+
+/// Where the ground-truth pose comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum GroundTruthSource {
+    /// A pose, odometry or GNSS topic.
+    Topic(String),
+    /// A transform of the TF tree, composed through intermediate frames.
+    Tf {
+        /// The frames and the TF topics.
+        tf: TfPair,
+    },
+}
+
+impl std::fmt::Display for GroundTruthSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Topic(t) => f.write_str(t),
+            Self::Tf { tf } => write!(
+                f,
+                "TF {} → {} ({})",
+                tf.parent,
+                tf.child,
+                tf.topics.join(", ")
+            ),
+        }
+    }
+}
+
+/// Which topic plays which role, and how streams are put on one clock.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TopicMap {
+    /// `sensor_msgs/Imu`: gyro, specific force, and roll and pitch from its
+    /// orientation.
+    pub imu: String,
+    /// How the IMU is mounted: `body_from_imu` as roll, pitch and yaw
+    /// (rad, default 0), applied to its rates, forces and orientation
+    /// (without a TF tree in the recording, this is the only place to say
+    /// it; gravity should then read about +9.8 on the body's z at rest).
+    #[serde(default)]
+    pub imu_rotation_rpy_rad: [f64; 3],
+    /// The ground-truth pose: a topic of `nav_msgs/Odometry`,
+    /// `geometry_msgs/PoseStamped`, `geometry_msgs/PoseWithCovarianceStamped`,
+    /// or `sensor_msgs/NavSatFix` (position in a local east-north-up frame
+    /// about the first fix, orientation from the IMU), or a transform of
+    /// the TF tree, `{tf: {parent: world, child: base_link}}`.
+    pub ground_truth: GroundTruthSource,
+    /// How a GNSS ground truth gets its heading (default: course over
+    /// ground).
+    #[serde(default)]
+    pub gnss_heading: GnssHeading,
+    /// Joint encoders (optional).
+    #[serde(default)]
+    pub joints: Option<JointMap>,
+    /// Visual odometry (optional): `nav_msgs/Odometry`,
+    /// `geometry_msgs/PoseStamped` or `PoseWithCovarianceStamped`, the
+    /// trajectory a SLAM or VO system computed on the camera frames. Its
+    /// stamps become the log's camera frames and Table II replays it
+    /// (`frontend: {vo: {kind: replay}}` without a `path`).
+    #[serde(default)]
+    pub vo: Option<String>,
+    /// The robot's own odometry (optional): `nav_msgs/Odometry` (its twist,
+    /// in the child frame as ROS defines it) or `geometry_msgs/TwistStamped`
+    /// (body frame); the `reported_odometry` motion model uses it as `g`.
+    #[serde(default)]
+    pub odometry: Option<String>,
+    /// Rate of the common clock (Hz, default 10).
+    #[serde(default = "default_rate")]
+    pub rate_hz: f64,
+    /// Longest interval between two messages of a stream that is
+    /// interpolated across (s, default 0.5).
+    #[serde(default = "default_gap")]
+    pub max_gap_secs: f64,
+    /// Header stamps (default) or receive times.
+    #[serde(default)]
+    pub time: TimeSource,
+}

@@ -1,0 +1,418 @@
+//! A recording turned into the rover-log CSV that `dataset: {kind: logs}`
+//! reads (`gpodo import`): each role's topic read and checked
+//! (in one pass, [`read_topics`]), every stream put on one clock at `rate_hz` by linear
+//! interpolation (quaternions normalised after aligning their signs), and
+//! never across a gap longer than `max_gap_secs`: rows that would need it
+//! are dropped and counted, as are duplicated and out-of-order stamps.
+//!
+//! * [`map`]: the topic map;
+//! * [`heading`]: the heading of a GNSS ground truth;
+//! * `stream`: streams on their own clocks, and the common clock.
+
+pub mod heading;
+pub mod map;
+mod roles;
+mod stream;
+
+pub use heading::{COURSE_MIN_SPEED_MPS, COURSE_WINDOW_SECS, GnssHeading, HeadingReport};
+pub use map::{GroundTruthSource, JointMap, JointRef, TimeSource, TopicMap};
+
+use std::path::Path;
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+use gpodo_traits::{BodyTwist, ImuSample, JointState as Joint, ProprioceptiveSample};
+
+use super::messages::RosMessage;
+use super::topic::{Stamped, TopicError, TopicRequest, read_topics};
+use crate::log::RoverLog;
+use heading::course_headings;
+use roles::{
+    GroundTruth, JointGroups, ground_truth_stream, imu_stream, joint_groups, joint_stream,
+    odometry_stream,
+};
+use stream::{Clock, Stream, common_span};
+
+/// What an import did with each stream.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct StreamReport {
+    /// The role (`imu`, `ground_truth`, `odometry`, `joints`).
+    pub role: String,
+    /// The topic.
+    pub topic: String,
+    /// Messages read.
+    pub messages: usize,
+    /// Messages whose stamp repeated the previous one (dropped).
+    pub duplicates: usize,
+    /// Messages stamped before the previous one (sorted into place).
+    pub out_of_order: usize,
+    /// Messages that carried nothing usable (e.g. a GNSS fix with no fix).
+    pub unusable: usize,
+    /// Clock rows dropped because this stream had a longer gap there.
+    pub rows_in_gaps: usize,
+    /// The longest interval interpolated across (s).
+    pub max_gap_bridged_secs: f64,
+    /// How much later than the earliest stream this one starts (s): the
+    /// log starts with the latest stream.
+    pub starts_late_secs: f64,
+    /// How much earlier than the latest stream this one stops (s): a topic
+    /// that stops part-way ends the log there.
+    pub stops_early_secs: f64,
+}
+
+/// What an import wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImportReport {
+    /// Rows of the log.
+    pub rows: usize,
+    /// Clock rows dropped (in a gap of some stream).
+    pub rows_dropped: usize,
+    /// The log's time 0, seconds since the epoch.
+    pub start_epoch_secs: f64,
+    /// One entry per stream.
+    pub streams: Vec<StreamReport>,
+    /// How a GNSS ground truth got its heading, when it has one.
+    pub gnss_heading: Option<HeadingReport>,
+    /// Median horizontal and vertical position standard deviations the
+    /// GNSS receiver reported (m), when its fixes carry a covariance.
+    pub gnss_sigma_m: Option<[f64; 2]>,
+    /// The `vo` role's poses, on the log's clock (s), in time order.
+    #[serde(skip)]
+    pub vo_poses: Vec<(f64, Isometry3<f64>)>,
+}
+
+/// Why a recording could not be imported.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// A topic could not be read for its role.
+    #[error(transparent)]
+    Topic(#[from] TopicError),
+    /// The topic map is unusable.
+    #[error("topic map: {0}")]
+    Map(String),
+    /// Nothing was left on the common clock.
+    #[error(
+        "{file}: no row of the common clock has every stream within max_gap_secs ({gap} s): {detail}"
+    )]
+    Empty {
+        /// The bag.
+        file: String,
+        /// The gap allowed.
+        gap: f64,
+        /// Per stream: messages and rows lost in gaps.
+        detail: String,
+    },
+}
+
+/// Roll and pitch (rad) of a `[x, y, z, w]` orientation (ZYX Euler angles).
+fn roll_pitch(q: &[f64]) -> (f64, f64) {
+    let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    (roll, pitch)
+}
+
+/// Imports the bag at `path` as the rover log `name`.
+///
+/// # Errors
+/// [`ImportError`] naming the file, topic and what is wrong.
+pub fn import_bag(
+    path: &Path,
+    name: &str,
+    map: &TopicMap,
+) -> Result<(RoverLog, ImportReport), ImportError> {
+    if !(map.rate_hz.is_finite() && map.rate_hz > 0.0) {
+        return Err(ImportError::Map(
+            "`rate_hz` must be a positive number".into(),
+        ));
+    }
+    if !(map.max_gap_secs.is_finite() && map.max_gap_secs > 0.0) {
+        return Err(ImportError::Map(
+            "`max_gap_secs` must be a positive number of seconds".into(),
+        ));
+    }
+    // Every role's topic, read in one pass over the bag.
+    let mut requests = vec![TopicRequest {
+        topic: &map.imu,
+        role: "imu",
+        expected: &["sensor_msgs/Imu"],
+        optional: false,
+    }];
+    match &map.ground_truth {
+        GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
+            topic,
+            role: "ground_truth",
+            expected: &[
+                "nav_msgs/Odometry",
+                "geometry_msgs/PoseStamped",
+                "geometry_msgs/PoseWithCovarianceStamped",
+                "sensor_msgs/NavSatFix",
+            ],
+            optional: false,
+        }),
+        GroundTruthSource::Tf { tf } => {
+            if tf.topics.is_empty() {
+                return Err(ImportError::Map(
+                    "`ground_truth.tf.topics` must name at least one TF topic".into(),
+                ));
+            }
+            requests.extend(tf.topics.iter().map(|topic| TopicRequest {
+                topic,
+                role: "ground_truth",
+                expected: &["tf2_msgs/TFMessage"],
+                optional: false,
+            }));
+        }
+    }
+    if let Some(topic) = &map.odometry {
+        requests.push(TopicRequest {
+            topic,
+            role: "odometry",
+            expected: &["nav_msgs/Odometry", "geometry_msgs/TwistStamped"],
+            optional: false,
+        });
+    }
+    if let Some(topic) = &map.vo {
+        requests.push(TopicRequest {
+            topic,
+            role: "vo",
+            expected: &[
+                "nav_msgs/Odometry",
+                "geometry_msgs/PoseStamped",
+                "geometry_msgs/PoseWithCovarianceStamped",
+            ],
+            optional: true,
+        });
+    }
+    if let Some(j) = &map.joints {
+        requests.push(TopicRequest {
+            topic: &j.topic,
+            role: "joints",
+            expected: &["sensor_msgs/JointState"],
+            optional: false,
+        });
+    }
+    let mut read = read_topics(path, &requests)?.into_iter();
+    let imu_messages = read.next().unwrap_or_default();
+    let gt_topics = match &map.ground_truth {
+        GroundTruthSource::Topic(_) => 1,
+        GroundTruthSource::Tf { tf } => tf.topics.len(),
+    };
+    let gt_by_topic: Vec<Vec<Stamped>> = read.by_ref().take(gt_topics).collect();
+    let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
+    let vo_messages = map.vo.as_ref().and_then(|_| read.next());
+    let joint_messages = read.next();
+    let clock = Clock::new(
+        map.time,
+        imu_messages.first().and_then(|s| match &s.message {
+            RosMessage::Imu(m) => Some((s, m.header.stamp_ns)),
+            _ => None,
+        }),
+    );
+    let mut imu = imu_stream(map, &imu_messages, &clock);
+    let GroundTruth {
+        stream: mut gt,
+        gnss,
+        sigmas,
+    } = ground_truth_stream(path, map, &gt_by_topic, &clock)?;
+    let mut odometry = odometry_stream(map, odometry_messages, &clock);
+    let groups = joint_groups(map);
+    let mut joints = joint_stream(map, &groups, joint_messages, &clock);
+    // The common clock, over the span every stream covers.
+    let mut streams: Vec<&mut Stream> = vec![&mut imu, &mut gt];
+    let odometry_at = odometry.as_ref().map(|_| streams.len());
+    if let Some(o) = odometry.as_mut() {
+        streams.push(o);
+    }
+    let joints_at = joints.as_ref().map(|_| streams.len());
+    if let Some(j) = joints.as_mut() {
+        streams.push(j);
+    }
+    let (start, end) = common_span(&mut streams);
+    let dt = 1.0 / map.rate_hz;
+    let steps = if end > start {
+        ((end - start) / dt).floor() as usize + 1
+    } else {
+        0
+    };
+    let mut samples = Vec::new();
+    let mut ground_truth = Vec::new();
+    let mut dropped = 0;
+    for k in 0..steps {
+        let t = start + k as f64 * dt;
+        let values: Vec<Option<Vec<f64>>> = streams
+            .iter_mut()
+            .map(|s| s.at(t, map.max_gap_secs))
+            .collect();
+        let (Some(Some(i)), Some(Some(g))) = (values.first(), values.get(1)) else {
+            dropped += 1;
+            continue;
+        };
+        let ov = odometry_at.and_then(|k| values[k].clone());
+        let jv = joints_at.and_then(|k| values[k].clone());
+        if (joints_needed(&groups) && jv.is_none()) || (odometry_at.is_some() && ov.is_none()) {
+            dropped += 1;
+            continue;
+        }
+        let (roll, pitch) = roll_pitch(&i[0..4]);
+        let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
+        let mut at = 0;
+        for (g, (_, refs)) in groups.iter().enumerate() {
+            for _ in refs {
+                let v = jv.as_deref().unwrap_or(&[]);
+                group_joints[g].push(Joint {
+                    position_rad: v.get(at).copied().unwrap_or(0.0),
+                    rate_radps: v.get(at + 1).copied().unwrap_or(0.0),
+                });
+                at += 2;
+            }
+        }
+        let [wheels, steering, bogies] = group_joints;
+        samples.push(ProprioceptiveSample {
+            time_secs: t - start,
+            wheels,
+            steering,
+            bogies,
+            imu: ImuSample {
+                gyro_radps: Vector3::new(i[4], i[5], i[6]),
+                accel_mps2: Vector3::new(i[7], i[8], i[9]),
+                roll_rad: roll,
+                pitch_rad: pitch,
+            },
+            contact_angles_rad: None,
+            odometry: ov.map(|o| BodyTwist {
+                linear_mps: Vector3::new(o[0], o[1], o[2]),
+                angular_radps: Vector3::new(o[3], o[4], o[5]),
+            }),
+        });
+        let q = if gnss {
+            [i[0], i[1], i[2], i[3]]
+        } else {
+            [g[3], g[4], g[5], g[6]]
+        };
+        ground_truth.push(Isometry3::from_parts(
+            Translation3::new(g[0], g[1], g[2]),
+            UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2])),
+        ));
+    }
+    let reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
+    // Visual odometry: its poses on the log's clock, and its stamps within
+    // the log as the camera frames.
+    let mut vo_poses: Vec<(f64, Isometry3<f64>)> = vo_messages
+        .iter()
+        .flatten()
+        .filter_map(|s| {
+            let (h, p) = match &s.message {
+                RosMessage::Odometry(m) => (&m.header, &m.pose),
+                RosMessage::PoseStamped(h, p) | RosMessage::PoseWithCovarianceStamped(h, p, _) => {
+                    (h, p)
+                }
+                _ => return None,
+            };
+            let [x, y, z, w] = p.orientation;
+            let pose = Isometry3::from_parts(
+                Translation3::from(Vector3::from(p.position)),
+                UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+            );
+            Some((clock.at(s, h.stamp_ns) - start, pose))
+        })
+        .collect();
+    let vo_messages_read = vo_poses.len();
+    let vo_out_of_order = vo_poses.windows(2).filter(|w| w[1].0 < w[0].0).count();
+    vo_poses.sort_by(|a, b| a.0.total_cmp(&b.0));
+    vo_poses.dedup_by(|b, a| a.0 == b.0);
+    let mut reports = reports;
+    if let Some(topic) = &map.vo {
+        reports.push(StreamReport {
+            role: "vo".into(),
+            topic: topic.clone(),
+            messages: vo_messages_read,
+            duplicates: vo_messages_read - vo_poses.len(),
+            out_of_order: vo_out_of_order,
+            ..StreamReport::default()
+        });
+    }
+    let camera_times_secs: Vec<f64> = match (samples.first(), samples.last()) {
+        (Some(first), Some(last)) => vo_poses
+            .iter()
+            .map(|p| p.0)
+            .filter(|t| *t >= first.time_secs && *t <= last.time_secs)
+            .collect(),
+        _ => Vec::new(),
+    };
+    let gnss_heading = (gnss && map.gnss_heading == GnssHeading::Course)
+        .then(|| course_headings(&samples, &mut ground_truth));
+    if samples.is_empty() {
+        let detail = reports
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} `{}`: {} messages, {} rows in gaps",
+                    r.role, r.topic, r.messages, r.rows_in_gaps
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(ImportError::Empty {
+            file: path.display().to_string(),
+            gap: map.max_gap_secs,
+            detail,
+        });
+    }
+    let names = |g: usize| {
+        groups[g]
+            .1
+            .iter()
+            .map(|(n, _)| n.clone())
+            .collect::<Vec<_>>()
+    };
+    let log = RoverLog {
+        name: name.into(),
+        wheel_names: names(0),
+        steer_names: names(1),
+        bogie_names: names(2),
+        samples,
+        ground_truth,
+        camera_times_secs,
+    };
+    let report = ImportReport {
+        rows: log.samples.len(),
+        rows_dropped: dropped,
+        start_epoch_secs: clock.base_ns as f64 * 1e-9 + start,
+        streams: reports,
+        gnss_heading,
+        gnss_sigma_m: median_sigmas(&sigmas),
+        vo_poses,
+    };
+    Ok((log, report))
+}
+
+/// Medians of the horizontal and vertical standard deviations.
+fn median_sigmas(sigmas: &[[f64; 2]]) -> Option<[f64; 2]> {
+    if sigmas.is_empty() {
+        return None;
+    }
+    let median = |k: usize| {
+        let mut v: Vec<f64> = sigmas.iter().map(|s| s[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Some([median(0), median(1)])
+}
+
+fn joints_needed(groups: &JointGroups) -> bool {
+    groups.iter().any(|(_, refs)| !refs.is_empty())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roll_and_pitch_of_known_rotations() {
+        let q = UnitQuaternion::from_euler_angles(0.1, -0.2, 0.7);
+        let (r, p) = roll_pitch(&[q.i, q.j, q.k, q.w]);
+        assert!((r - 0.1).abs() < 1e-12 && (p + 0.2).abs() < 1e-12);
+    }
+}
