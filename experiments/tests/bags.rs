@@ -159,6 +159,21 @@ mod synthetic {
         );
     }
 
+    /// Writes `csv.yaml` and `bag.yaml` in `dir` and runs both, into
+    /// `out-csv` and `out-bag`.
+    fn run_csv_and_bag(dir: &Path, csv_yaml: String, bag_yaml: String) {
+        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
+            let file = dir.join(format!("{name}.yaml"));
+            std::fs::write(&file, yaml).unwrap();
+            let out = common::gpodo_on("run", &file, &dir.join(format!("out-{name}")), &[]);
+            assert!(
+                out.status.success(),
+                "{name}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+
     /// The header and rows of a residual CSV written by `gpodo run`.
     fn rows(path: &Path) -> (String, Vec<Vec<f64>>) {
         let text = std::fs::read_to_string(path).unwrap();
@@ -184,16 +199,7 @@ mod synthetic {
         let bag_yaml = format!(
             "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{indented}{common}"
         );
-        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
-            let file = tmp.path().join(format!("{name}.yaml"));
-            std::fs::write(&file, yaml).unwrap();
-            let out = common::gpodo_on("run", &file, &tmp.path().join(format!("out-{name}")), &[]);
-            assert!(
-                out.status.success(),
-                "{name}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
+        run_csv_and_bag(tmp.path(), csv_yaml, bag_yaml);
         let report = std::fs::read_to_string(tmp.path().join("out-bag/report.md")).unwrap();
         assert!(
             report.contains("ROS bags at 12.5 Hz")
@@ -362,16 +368,7 @@ schemes:
         let bag_yaml = format!(
             "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{topics}frontend: {{vo: {{kind: replay}}}}\n{rest}"
         );
-        for (name, yaml) in [("csv", csv_yaml), ("bag", bag_yaml)] {
-            let file = tmp.path().join(format!("{name}.yaml"));
-            std::fs::write(&file, yaml).unwrap();
-            let out = common::gpodo_on("run", &file, &tmp.path().join(format!("out-{name}")), &[]);
-            assert!(
-                out.status.success(),
-                "{name}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
+        run_csv_and_bag(tmp.path(), csv_yaml, bag_yaml);
         let (a, b) = (
             table_two(&tmp.path().join("out-csv")),
             table_two(&tmp.path().join("out-bag")),
