@@ -382,33 +382,10 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
             log.path_length_m()
         );
         for s in &report.streams {
-            println!(
-                "  {:12} {:32} {:6} msgs, {} duplicated, {} out of order, {} unusable, {} rows in gaps, longest gap bridged {:.3} s",
-                s.role,
-                s.topic,
-                s.messages,
-                s.duplicates,
-                s.out_of_order,
-                s.unusable,
-                s.rows_in_gaps,
-                s.max_gap_bridged_secs
-            );
+            println!("  {s}");
         }
-        for s in &report.streams {
-            if s.starts_late_secs > 1.0 || s.stops_early_secs > 1.0 {
-                println!(
-                    "  {} starts {:.1} s after the first stream and stops {:.1} s before the last: the log covers only the span every stream covers",
-                    s.topic, s.starts_late_secs, s.stops_early_secs
-                );
-            }
-        }
-        if let Some(h) = &report.gnss_heading {
-            println!("  {h}");
-        }
-        if let Some([h, v]) = report.gnss_sigma_m {
-            println!(
-                "  GNSS σ reported by the receiver (median): {h:.2} m horizontal, {v:.2} m vertical"
-            );
+        for note in report.gnss_notes() {
+            println!("  {note}");
         }
     }
     Ok(())

@@ -76,11 +76,7 @@ fn the_husky_example_runs_from_the_mcap_and_the_ros1_bag_alike() {
     let tmp = tempfile::tempdir().unwrap();
     let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("husky-bags.yaml");
     let out = gpodo_on("run", &example, &tmp.path().join("mcap"), &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     // The same experiment on the ROS 1 copy of the recording.
     let ros1 = std::fs::read_to_string(&example)
         .unwrap()
@@ -89,11 +85,7 @@ fn the_husky_example_runs_from_the_mcap_and_the_ros1_bag_alike() {
     let copy = tmp.path().join("husky-bags.yaml");
     std::fs::write(&copy, ros1.replace("../../shared", &shared)).unwrap();
     let out = gpodo_on("run", &copy, &tmp.path().join("ros1"), &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let (a, b) = (
         table_one(&tmp.path().join("mcap")),
         table_one(&tmp.path().join("ros1")),
@@ -152,11 +144,7 @@ mod synthetic {
             .arg(out)
             .output()
             .unwrap();
-        assert!(
-            result.status.success(),
-            "{}",
-            String::from_utf8_lossy(&result.stderr)
-        );
+        common::assert_succeeded(&result, "");
     }
 
     /// Writes `csv.yaml` and `bag.yaml` in `dir` and runs both, into
@@ -166,11 +154,7 @@ mod synthetic {
             let file = dir.join(format!("{name}.yaml"));
             std::fs::write(&file, yaml).unwrap();
             let out = common::gpodo_on("run", &file, &dir.join(format!("out-{name}")), &[]);
-            assert!(
-                out.status.success(),
-                "{name}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+            common::assert_succeeded(&out, &format!("{name}: "));
         }
     }
 
@@ -249,11 +233,7 @@ mod synthetic {
             .arg(tmp.path().join("mcap/train_01.mcap"))
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_succeeded(&out, "");
         let decoded: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let log = gpodo_datasets::log::read_log_csv(&tmp.path().join("csv/train_01.csv")).unwrap();
         let n = log.samples.len() as u64;

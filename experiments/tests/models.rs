@@ -98,20 +98,12 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
         .arg(&model)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     assert!(String::from_utf8_lossy(&out.stdout).contains("held-out RMSE"));
     // The rows `gpodo run` writes (raw inputs and the residual targets).
     let results = tmp.path().join("results");
     let out = gpodo_on("run", &file, &results, &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let predictions = tmp.path().join("predictions.csv");
     let out = Command::new(GPODO)
         .args(["--quiet", "predict", "--model"])
@@ -122,11 +114,7 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
         .arg(&predictions)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let (header, values) = read_rows(&predictions).unwrap();
     assert_eq!(
         header,

@@ -345,53 +345,22 @@ pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer
     Ok((ModelRows { train, test }, scaler))
 }
 
-/// One line on what importing a bag did: rows kept and dropped, and per
-/// stream the duplicates, out-of-order stamps, unusable messages and the
-/// longest gap bridged.
+/// One line on what importing a bag did: rows kept and dropped, each
+/// stream's counts, and what a GNSS ground truth was made into.
 fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) -> String {
-    let streams: Vec<String> = r
-        .streams
-        .iter()
-        .map(|s| {
-            let mut line = format!(
-                "{} {}: {} msgs, {} duplicated, {} out of order, {} unusable, longest gap {:.3} s",
-                s.role,
-                s.topic,
-                s.messages,
-                s.duplicates,
-                s.out_of_order,
-                s.unusable,
-                s.max_gap_bridged_secs
-            );
-            if s.starts_late_secs > 1.0 {
-                line += &format!(
-                    ", starts {:.1} s after the first stream",
-                    s.starts_late_secs
-                );
-            }
-            if s.stops_early_secs > 1.0 {
-                line += &format!(
-                    ", stops {:.1} s before the last stream (the log ends there)",
-                    s.stops_early_secs
-                );
-            }
-            line
-        })
-        .collect();
-    let heading = r
-        .gnss_heading
-        .as_ref()
-        .map_or_else(String::new, |h| format!("; {h}"));
-    let sigma = r.gnss_sigma_m.map_or_else(String::new, |[h, v]| {
-        format!(
-            "; GNSS σ reported by the receiver (median): {h:.2} m horizontal, {v:.2} m vertical"
-        )
-    });
+    let mut parts = vec![
+        r.streams
+            .iter()
+            .map(|s| s.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    ];
+    parts.extend(r.gnss_notes());
     format!(
-        "{name}: {} rows, {} dropped in gaps; {}{heading}{sigma}",
+        "{name}: {} rows, {} dropped in gaps; {}",
         r.rows,
         r.rows_dropped,
-        streams.join(", ")
+        parts.join("; ")
     )
 }
 

@@ -20,6 +20,16 @@ pub fn gpodo_on(command: &str, file: &Path, out: &Path, extra: &[&str]) -> Outpu
         .expect("the gpodo binary runs")
 }
 
+/// Fails the test with the command's stderr (prefixed by `what`) unless it
+/// succeeded.
+pub fn assert_succeeded(out: &Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The Python with NumPy the plugin tests run (`GPODO_PYTHON`, else
 /// `python3`), or `None` after saying why, unless `GPODO_REQUIRE_PYTHON` is
 /// set (as CI sets it), which makes its absence a failure.

@@ -82,6 +82,54 @@ pub struct ImportReport {
     pub vo_poses: Vec<(f64, Isometry3<f64>)>,
 }
 
+impl std::fmt::Display for StreamReport {
+    /// One line: counts, the longest gap bridged, and a late start or an
+    /// early stop (over 1 s) against the other streams.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {}: {} msgs, {} duplicated, {} out of order, {} unusable, {} rows in gaps, longest gap bridged {:.3} s",
+            self.role,
+            self.topic,
+            self.messages,
+            self.duplicates,
+            self.out_of_order,
+            self.unusable,
+            self.rows_in_gaps,
+            self.max_gap_bridged_secs
+        )?;
+        if self.starts_late_secs > 1.0 {
+            write!(
+                f,
+                ", starts {:.1} s after the first stream",
+                self.starts_late_secs
+            )?;
+        }
+        if self.stops_early_secs > 1.0 {
+            write!(
+                f,
+                ", stops {:.1} s before the last stream (the log ends there)",
+                self.stops_early_secs
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl ImportReport {
+    /// What the import made of a GNSS ground truth (its heading, the
+    /// receiver's σ), one line each; empty for other ground truths.
+    pub fn gnss_notes(&self) -> Vec<String> {
+        let mut notes: Vec<String> = self.gnss_heading.iter().map(|h| h.to_string()).collect();
+        notes.extend(self.gnss_sigma_m.map(|[h, v]| {
+            format!(
+                "GNSS σ reported by the receiver (median): {h:.2} m horizontal, {v:.2} m vertical"
+            )
+        }));
+        notes
+    }
+}
+
 /// Why a recording could not be imported.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
