@@ -125,6 +125,17 @@ fn edges<'a>(
     edges
 }
 
+/// `ancestor_from_frame` at `t` for the edges from a frame up to an
+/// ancestor (the frame's edge first), or `None` when an edge cannot be
+/// interpolated there.
+fn chain_at(up: &[&Edge], t: f64, max_gap: f64) -> Option<Isometry3<f64>> {
+    up.iter()
+        .rev()
+        .try_fold(Isometry3::identity(), |acc, edge| {
+            Some(acc * edge.at(t, max_gap)?)
+        })
+}
+
 /// The frames from `frame` up to the root, `frame` first.
 fn ancestors(edges: &BTreeMap<String, Edge>, frame: &str) -> Vec<String> {
     let mut chain = vec![frame.to_string()];
@@ -205,24 +216,16 @@ pub fn compose<'a>(
         })?;
     let mut poses = Vec::with_capacity(clock.samples.len());
     let mut missing = 0;
-    'stamps: for &(t, _) in &clock.samples {
-        let mut from_child = Isometry3::identity();
-        for edge in child_side.iter().rev() {
-            let Some(x) = edge.at(t, max_gap_secs) else {
-                missing += 1;
-                continue 'stamps;
-            };
-            from_child *= x;
+    for &(t, _) in &clock.samples {
+        match (
+            chain_at(&child_side, t, max_gap_secs),
+            chain_at(&parent_side, t, max_gap_secs),
+        ) {
+            (Some(from_child), Some(from_parent)) => {
+                poses.push((t, from_parent.inverse() * from_child));
+            }
+            _ => missing += 1,
         }
-        let mut from_parent = Isometry3::identity();
-        for edge in parent_side.iter().rev() {
-            let Some(x) = edge.at(t, max_gap_secs) else {
-                missing += 1;
-                continue 'stamps;
-            };
-            from_parent *= x;
-        }
-        poses.push((t, from_parent.inverse() * from_child));
     }
     Ok((poses, missing))
 }
