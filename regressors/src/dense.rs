@@ -24,6 +24,64 @@ pub fn from_faer(m: MatRef<'_, f64>) -> SampleMatrix {
     SampleMatrix::from_row_major(n, d, data).unwrap_or_else(|_| SampleMatrix::zeros(n, d))
 }
 
+/// Matrices smaller than this many entries (512 KiB) are left to the
+/// allocator: only the large `n × n` buffers of an evaluation are recycled.
+const RECYCLE_MIN_ENTRIES: usize = 1 << 16;
+/// The most a thread keeps in spare buffers (bytes).
+const SPARE_BYTES_PER_THREAD: usize = 256 << 20;
+
+std::thread_local! {
+    /// Large matrices handed back by [`recycle`], for [`zeros`] to reuse.
+    static SPARE: std::cell::RefCell<Vec<Mat<f64>>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// An `nrows × ncols` matrix of zeros, reusing a buffer of that shape that
+/// this thread handed to [`recycle`] when there is one.
+///
+/// An exact-GP evaluation allocates and frees several `n × n` matrices;
+/// fresh allocations that large come from the system as untouched pages, so
+/// every evaluation paid the kernel for page faults and zeroing again (about
+/// 15 % of `paper.yaml`'s fits on two cores). Reusing the buffers removes
+/// that; the values are the same, since the buffer is zeroed.
+pub fn zeros(nrows: usize, ncols: usize) -> Mat<f64> {
+    if nrows * ncols >= RECYCLE_MIN_ENTRIES {
+        let reused = SPARE.with(|spare| {
+            let mut spare = spare.borrow_mut();
+            let at = spare
+                .iter()
+                .position(|m| m.nrows() == nrows && m.ncols() == ncols)?;
+            Some(spare.swap_remove(at))
+        });
+        if let Some(mut m) = reused {
+            m.fill(0.0);
+            return m;
+        }
+    }
+    Mat::zeros(nrows, ncols)
+}
+
+/// Hands a matrix no longer needed back to this thread's spare buffers
+/// (large ones only, at most 256 MiB per thread, the oldest dropped first).
+pub fn recycle(m: Mat<f64>) {
+    let entries = m.nrows() * m.ncols();
+    if entries < RECYCLE_MIN_ENTRIES || entries * 8 > SPARE_BYTES_PER_THREAD {
+        return;
+    }
+    SPARE.with(|spare| {
+        let mut spare = spare.borrow_mut();
+        spare.push(m);
+        let bytes = |v: &Vec<Mat<f64>>| v.iter().map(|m| m.nrows() * m.ncols() * 8).sum::<usize>();
+        while bytes(&spare) > SPARE_BYTES_PER_THREAD {
+            spare.remove(0);
+        }
+    });
+}
+
+/// Frees this thread's spare buffers (after a fit, say).
+pub fn release_spare() {
+    SPARE.with(|spare| spare.borrow_mut().clear());
+}
+
 /// `Σ_ij a_ij b_ij`.
 pub fn frobenius_dot(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
     debug_assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
@@ -38,7 +96,7 @@ pub fn frobenius_dot(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
 /// `a ∘ b` (element-wise product).
 pub fn hadamard(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     debug_assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
-    let mut out = Mat::zeros(a.nrows(), a.ncols());
+    let mut out = zeros(a.nrows(), a.ncols());
     for j in 0..a.ncols() {
         let (ca, cb) = (column(a, j), column(b, j));
         for ((o, x), y) in column_mut(&mut out, j)
@@ -158,4 +216,50 @@ pub fn gemm(
         par()
     };
     matmul(dst, accum, a, b, alpha, parallelism);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spare_shapes() -> Vec<(usize, usize)> {
+        SPARE.with(|s| s.borrow().iter().map(|m| (m.nrows(), m.ncols())).collect())
+    }
+
+    #[test]
+    fn recycled_buffers_come_back_zeroed_and_only_when_large() {
+        release_spare();
+        let n = 300; // 90 000 entries: recycled
+        let mut a = zeros(n, n);
+        a.fill(7.0);
+        let at = a.as_ptr();
+        recycle(a);
+        assert_eq!(spare_shapes(), vec![(n, n)]);
+        // Another shape is not served from it.
+        let b = zeros(n, n + 1);
+        assert_eq!(spare_shapes(), vec![(n, n)]);
+        let again = zeros(n, n);
+        assert_eq!(again.as_ptr(), at, "the buffer is reused");
+        assert!(again.norm_max() == 0.0, "and zeroed");
+        assert!(spare_shapes().is_empty());
+        // Small matrices are left to the allocator.
+        recycle(Mat::zeros(10, 10));
+        assert!(spare_shapes().is_empty());
+        drop(b);
+    }
+
+    #[test]
+    fn spare_buffers_stay_within_the_byte_cap() {
+        release_spare();
+        // 64 MiB each: the cap keeps the newest four.
+        let n = 2896;
+        for _ in 0..6 {
+            recycle(Mat::zeros(n, n));
+        }
+        let kept = spare_shapes().len();
+        assert!(kept * n * n * 8 <= SPARE_BYTES_PER_THREAD, "{kept} kept");
+        assert_eq!(kept, SPARE_BYTES_PER_THREAD / (n * n * 8));
+        release_spare();
+        assert!(spare_shapes().is_empty());
+    }
 }

@@ -57,7 +57,8 @@ impl Cholesky {
         // A failed attempt leaves a partly overwritten matrix (faer zeroes
         // the failing column, upper part included), so every attempt starts
         // from a fresh copy of `k`.
-        let mut work = k.clone();
+        let mut work = crate::dense::zeros(n, n);
+        work.copy_from(k);
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;
             if attempt > 0 {
@@ -140,7 +141,7 @@ impl Cholesky {
     /// `K⁻¹` in its lower triangle (read nothing above the diagonal).
     pub fn inverse_lower(&self) -> Mat<f64> {
         let n = self.l.nrows();
-        let mut out = Mat::zeros(n, n);
+        let mut out = crate::dense::zeros(n, n);
         let mut buffer = MemBuffer::new(llt::inverse::inverse_scratch::<f64>(n, par()));
         llt::inverse::inverse(
             out.as_mut(),

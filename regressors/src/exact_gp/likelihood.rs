@@ -16,7 +16,7 @@ use faer::{Mat, MatRef};
 
 use super::cholesky::Cholesky;
 use crate::RegressorError;
-use crate::dense::{column, for_column_blocks, trace};
+use crate::dense::{column, for_column_blocks, recycle, trace};
 use crate::kernels::Kernel;
 
 /// `log 2π`.
@@ -53,7 +53,7 @@ fn weights(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
     let scale = -(p as f64);
     let alpha_cols: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|c| column(alpha, c)).collect();
     let outer = |i: usize, j: usize| -> f64 { alpha_cols.iter().map(|a| a[i] * a[j]).sum() };
-    let mut w = Mat::<f64>::zeros(n, n);
+    let mut w = crate::dense::zeros(n, n);
     let mut unused = vec![(); n];
     for_column_blocks(&mut w, &mut unused, |j0, columns, _| {
         let j1 = j0 + columns.len();
@@ -100,16 +100,22 @@ pub fn log_marginal_likelihood(
         });
     }
     let gradient = with_gradient.then(|| {
-        let w = weights(chol.inverse_lower().as_ref(), alpha.as_ref());
+        let inverse = chol.inverse_lower();
+        let w = weights(inverse.as_ref(), alpha.as_ref());
+        recycle(inverse);
         let mut g = vec![0.0; kernel.n_params() + 1];
         let m = kernel.n_params();
         kernel.accumulate_gradient(x, &cache, w.as_ref(), &mut g[..m]);
         g[m] = noise_variance * trace(w.as_ref());
+        recycle(w);
         for v in &mut g {
             *v *= 0.5;
         }
         g
     });
+    // The next evaluation reuses these buffers.
+    cache.recycle();
+    recycle(chol.l);
     Ok(LmlEvaluation {
         lml,
         gradient,

@@ -91,7 +91,7 @@ pub fn maximize_lml(
         params.seed,
     );
     let value_scale = 1.0 / (y.nrows() * y.ncols()).max(1) as f64;
-    let (out, records) = starts::maximize_best(
+    let result = starts::maximize_best(
         &objective,
         candidates,
         |c| {
@@ -104,7 +104,10 @@ pub fn maximize_lml(
         value_scale,
         &params.settings(),
         progress,
-    )?;
+    );
+    // The evaluations' buffers are not needed once the search is over.
+    crate::dense::release_spare();
+    let (out, records) = result?;
     let (kernel, noise_variance) = objective.hyperparameters(&out.coords);
     Ok(Optimized {
         kernel,

@@ -72,7 +72,7 @@ pub fn scaled_sq_dist(
             .collect()
     };
     let (n1, n2) = (norms(&z1), norms(&z2));
-    let mut r2 = Mat::<f64>::zeros(z1.nrows(), z2.nrows());
+    let mut r2 = crate::dense::zeros(z1.nrows(), z2.nrows());
     gemm(
         r2.as_mut(),
         Accum::Replace,

@@ -27,7 +27,7 @@ impl Linear {
         let scaled = Mat::from_fn(x1.nrows(), x1.ncols(), |i, q| {
             x1[(i, q)] * self.variances[q]
         });
-        let mut k = Mat::zeros(x1.nrows(), x2.nrows());
+        let mut k = crate::dense::zeros(x1.nrows(), x2.nrows());
         gemm(
             k.as_mut(),
             Accum::Replace,

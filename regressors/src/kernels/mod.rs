@@ -21,7 +21,7 @@ pub use expr::{KernelExpr, KernelExprError, KernelInit};
 pub use linear::{Linear, White};
 pub use stationary::{Family, Stationary};
 
-use crate::dense::{hadamard, trace};
+use crate::dense::{column, column_mut, hadamard, trace};
 
 /// A kernel with its current hyperparameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -80,18 +80,34 @@ impl GramCache {
         let (n1, n2) = children
             .first()
             .map_or((0, 0), |c| (c.k.nrows(), c.k.ncols()));
-        let mut k = Mat::from_fn(n1, n2, |_, _| if is_sum { 0.0 } else { 1.0 });
+        let mut k = crate::dense::zeros(n1, n2);
+        if !is_sum {
+            k.fill(1.0);
+        }
         for child in &children {
-            k = if is_sum {
-                k + &child.k
-            } else {
-                hadamard(k.as_ref(), child.k.as_ref())
-            };
+            for j in 0..n2 {
+                let c = column(child.k.as_ref(), j);
+                for (v, c) in column_mut(&mut k, j).iter_mut().zip(c.iter()) {
+                    *v = if is_sum { *v + c } else { *v * c };
+                }
+            }
         }
         Self {
             k,
             s: None,
             children,
+        }
+    }
+
+    /// Hands this cache's matrices back for reuse (see
+    /// [`crate::dense::recycle`]).
+    pub fn recycle(self) {
+        crate::dense::recycle(self.k);
+        if let Some(s) = self.s {
+            crate::dense::recycle(s);
+        }
+        for child in self.children {
+            child.recycle();
         }
     }
 }

@@ -99,7 +99,7 @@ impl Stationary {
         let mut k = scaled_sq_dist(x1, x2, &self.lengthscales, same);
         let mut s = match family {
             Family::Rbf => None,
-            _ => Some(Mat::zeros(k.nrows(), k.ncols())),
+            _ => Some(crate::dense::zeros(k.nrows(), k.ncols())),
         };
         self.apply_profile(family, &mut k, s.as_mut());
         (k, s)
@@ -148,7 +148,7 @@ impl Stationary {
     ) {
         let s = s.unwrap_or(k);
         let n = k.nrows();
-        let mut m = Mat::<f64>::zeros(n, n);
+        let mut m = crate::dense::zeros(n, n);
         // Per column: (Σ_i W_ij K_ij, Σ_i M_ij).
         let mut partial = vec![(0.0, 0.0); n];
         for_column_blocks(&mut m, &mut partial, |j0, columns, partial| {
@@ -181,6 +181,7 @@ impl Stationary {
                 .sum();
             *o += total / (self.lengthscales[q] * self.lengthscales[q]);
         }
+        crate::dense::recycle(m);
     }
 
     /// For `K(X1, X2)` with value `k` and derivative matrix `s` (see
