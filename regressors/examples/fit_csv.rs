@@ -1,10 +1,14 @@
 //! The gpodo side of the peer benchmark (`bench/peers/`): fits the exact GP
 //! (RBF-ARD, outputs sharing kernel and noise, L-BFGS) on a CSV written by
 //! `fit_peers.py --write-data` (columns `x0..x{D-1}, y0, y1, y2`, already
-//! z-scored) from the peers' starting point (variance 1, lengthscales √D,
-//! noise 0.01), and prints one JSON line like the peers do.
+//! z-scored) with gpodo's default start policy (lengthscale 1, √D and the
+//! median distance, raced), or from the peers' starting point alone
+//! (variance 1, lengthscales √D, noise 0.01) when `GPODO_LENGTHSCALE` is
+//! set to √D, and prints one JSON line like the peers do.
 //!
 //! `cargo run --release -p gpodo-regressors --example fit_csv -- FILE.csv`
+//! (`GPODO_LENGTHSCALE`, `GPODO_GRAD_TOL`, `GPODO_COST_TOL` override the
+//! start and the stopping rules).
 
 use std::time::Instant;
 
@@ -47,6 +51,9 @@ fn main() -> anyhow::Result<()> {
     };
     if let Ok(tol) = std::env::var("GPODO_GRAD_TOL") {
         params.gradient_tolerance = tol.parse()?;
+    }
+    if let Ok(l) = std::env::var("GPODO_LENGTHSCALE") {
+        params.init.lengthscale = Some(l.parse()?);
     }
     if let Ok(tol) = std::env::var("GPODO_COST_TOL") {
         params.relative_cost_tolerance = tol.parse()?;
