@@ -1,6 +1,7 @@
 //! Conversions between the row-major [`SampleMatrix`] of the trait crate and
 //! faer's column-major [`Mat`], plus the few element-wise helpers the kernel
-//! code needs. Conversions happen at the crate boundary only (STYLE.md).
+//! code needs and the per-thread recycling of large buffers ([`zeros`],
+//! [`recycle`]). Conversions happen at the crate boundary only (STYLE.md).
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef};
