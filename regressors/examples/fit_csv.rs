@@ -7,8 +7,9 @@
 //! set to √D, and prints one JSON line like the peers do.
 //!
 //! `cargo run --release -p gpodo-regressors --example fit_csv -- FILE.csv`
-//! (`GPODO_LENGTHSCALE`, `GPODO_GRAD_TOL`, `GPODO_COST_TOL` override the
-//! start and the stopping rules).
+//! (`GPODO_LENGTHSCALE`, `GPODO_GRAD_TOL`, `GPODO_COST_TOL` and
+//! `GPODO_LBFGS_MEMORY` override the start, the stopping rules and the
+//! L-BFGS memory; 10 is the peers' scipy default).
 
 use std::time::Instant;
 
@@ -57,6 +58,9 @@ fn main() -> anyhow::Result<()> {
     }
     if let Ok(tol) = std::env::var("GPODO_COST_TOL") {
         params.relative_cost_tolerance = tol.parse()?;
+    }
+    if let Ok(m) = std::env::var("GPODO_LBFGS_MEMORY") {
+        params.lbfgs_memory = m.parse()?;
     }
     let mut gp = ExactGp::new(params)?;
     let start = Instant::now();

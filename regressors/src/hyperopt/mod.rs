@@ -30,15 +30,19 @@ use crate::RegressorError;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Optimizer {
-    /// Bounded L-BFGS (memory 10) with L-BFGS-B's behaviour: a projected
-    /// search that never leaves the bounds (default; the authors' scripts
-    /// and GPy use scipy's L-BFGS-B).
+    /// Bounded L-BFGS with L-BFGS-B's behaviour: a projected search that
+    /// never leaves the bounds (default; the authors' scripts and GPy use
+    /// scipy's L-BFGS-B). Its memory is
+    /// [`OptimizerSettings::lbfgs_memory`].
     #[default]
     Lbfgs,
     /// Polak–Ribière nonlinear conjugate gradient with restarts (the paper's
     /// wording, §V-A); bounds act as quadratic penalties.
     ConjugateGradient,
 }
+
+/// The GP regressors' default L-BFGS memory (correction pairs).
+pub const LBFGS_MEMORY: usize = 30;
 
 /// How to run the optimiser (the flat YAML fields of each GP's parameters).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,6 +61,8 @@ pub struct OptimizerSettings {
     /// fraction of its magnitude (scipy's L-BFGS-B rule,
     /// `(f_k − f_{k+1}) / max(|f_k|, |f_{k+1}|, 1) ≤ factr·ε`).
     pub relative_cost_tolerance: f64,
+    /// Correction pairs the L-BFGS keeps (scipy's `maxcor`, 10 there).
+    pub lbfgs_memory: usize,
 }
 
 /// The relative-decrease stopping rule of scipy's L-BFGS-B, on an objective
@@ -101,6 +107,9 @@ impl OptimizerSettings {
         }
         if !(self.relative_cost_tolerance.is_finite() && self.relative_cost_tolerance >= 0.0) {
             return bad("relative_cost_tolerance", "a non-negative number");
+        }
+        if self.lbfgs_memory == 0 {
+            return bad("lbfgs_memory", "at least 1 correction pair");
         }
         Ok(())
     }
@@ -392,7 +401,21 @@ mod tests {
             seed: 3,
             gradient_tolerance: 1e-10,
             relative_cost_tolerance: 0.0,
+            lbfgs_memory: 10,
         }
+    }
+
+    #[test]
+    fn a_memory_of_zero_pairs_is_named_in_the_error() {
+        let bad = OptimizerSettings {
+            lbfgs_memory: 0,
+            ..settings(Optimizer::Lbfgs)
+        };
+        match bad.check("exact_gp", true) {
+            Err(RegressorError::InvalidSpec { field, .. }) => assert_eq!(field, "lbfgs_memory"),
+            other => panic!("expected an InvalidSpec error, got {other:?}"),
+        }
+        assert!(settings(Optimizer::Lbfgs).check("exact_gp", true).is_ok());
     }
 
     #[test]

@@ -428,6 +428,83 @@ mod tests {
         )
     }
 
+    /// `½ Σ_i c_i x_i²` rotated by a fixed chain of 2-D rotations, with
+    /// curvatures `c_i` spread over three decades: a 40-D problem whose
+    /// conditioning a short memory sees only in part.
+    struct IllConditioned {
+        curvature: Vec<f64>,
+    }
+
+    impl IllConditioned {
+        fn new(d: usize) -> Self {
+            Self {
+                curvature: (0..d)
+                    .map(|i| 10f64.powf(3.0 * i as f64 / (d - 1) as f64))
+                    .collect(),
+            }
+        }
+        /// `Rᵀ x` with `R` a product of rotations of adjacent coordinates.
+        fn rotate(x: &[f64], inverse: bool) -> Vec<f64> {
+            let mut z = x.to_vec();
+            let (c, s) = (0.8f64, 0.6f64);
+            let pairs: Vec<usize> = (0..z.len() - 1).collect();
+            let order: Vec<usize> = if inverse {
+                pairs.into_iter().rev().collect()
+            } else {
+                pairs
+            };
+            for i in order {
+                let s = if inverse { -s } else { s };
+                let (a, b) = (z[i], z[i + 1]);
+                z[i] = c * a - s * b;
+                z[i + 1] = s * a + c * b;
+            }
+            z
+        }
+    }
+
+    impl CostFunction for IllConditioned {
+        type Param = Vec<f64>;
+        type Output = f64;
+        fn cost(&self, x: &Vec<f64>) -> Result<f64, ArgminError> {
+            let z = Self::rotate(x, false);
+            Ok(z.iter()
+                .zip(&self.curvature)
+                .map(|(z, c)| 0.5 * c * z * z)
+                .sum())
+        }
+    }
+
+    impl Gradient for IllConditioned {
+        type Param = Vec<f64>;
+        type Gradient = Vec<f64>;
+        fn gradient(&self, x: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
+            let z = Self::rotate(x, false);
+            let gz: Vec<f64> = z.iter().zip(&self.curvature).map(|(z, c)| c * z).collect();
+            Ok(Self::rotate(&gz, true))
+        }
+    }
+
+    #[test]
+    fn a_longer_memory_needs_fewer_iterations_on_an_ill_conditioned_problem() {
+        let d = 40;
+        // The rotation is orthogonal: its inverse undoes it.
+        let x: Vec<f64> = (0..d).map(|i| (i as f64 * 0.37).sin()).collect();
+        let back = IllConditioned::rotate(&IllConditioned::rotate(&x, false), true);
+        assert!(x.iter().zip(&back).all(|(a, b)| (a - b).abs() < 1e-12));
+        let iterations = |memory: usize| {
+            let solver = ProjectedLbfgs::new(vec![-10.0; d], vec![10.0; d], memory, 1e-8, NEVER);
+            let (x, cost, iters) = solve(IllConditioned::new(d), solver, vec![1.0; d]);
+            assert!(cost < 1e-12, "memory {memory}: cost {cost} at {x:?}");
+            iters
+        };
+        let (short, long) = (iterations(3), iterations(30));
+        assert!(
+            long < short,
+            "memory 30 took {long} iterations, memory 3 took {short}"
+        );
+    }
+
     #[test]
     fn agrees_with_the_unbounded_optimum_inside_the_box() {
         // A x = b solved by hand: the optimum lies inside [-5, 5]³.

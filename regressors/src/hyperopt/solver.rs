@@ -112,7 +112,7 @@ pub(super) fn run(
             let solver = ProjectedLbfgs::new(
                 bounds.iter().map(LogBounds::lower).collect(),
                 bounds.iter().map(LogBounds::upper).collect(),
-                10,
+                settings.lbfgs_memory,
                 settings.gradient_tolerance,
                 tol_cost,
             );

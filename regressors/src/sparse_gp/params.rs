@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
 use crate::exact_gp::Bounds;
-use crate::hyperopt::{Optimizer, OptimizerSettings, StartPolicy};
+use crate::hyperopt::{LBFGS_MEMORY, Optimizer, OptimizerSettings, StartPolicy};
 use crate::kernels::{KernelExpr, KernelInit};
 
 /// Which sparse approximation.
@@ -101,6 +101,8 @@ pub struct SparseGpParams {
     /// Relative objective-change stopping tolerance (default 2.2e-9), as
     /// for the exact GP.
     pub relative_cost_tolerance: f64,
+    /// Correction pairs of the L-BFGS (default 30, as for the exact GP).
+    pub lbfgs_memory: usize,
     /// Hyperparameter bounds (as for the exact GP).
     pub bounds: Bounds,
 }
@@ -123,6 +125,7 @@ impl Default for SparseGpParams {
             seed: 0,
             gradient_tolerance: 1e-5,
             relative_cost_tolerance: 2.2e-9,
+            lbfgs_memory: LBFGS_MEMORY,
             bounds: Bounds::default(),
         }
     }
@@ -169,6 +172,7 @@ impl SparseGpParams {
             seed: self.seed,
             gradient_tolerance: self.gradient_tolerance,
             relative_cost_tolerance: self.relative_cost_tolerance,
+            lbfgs_memory: self.lbfgs_memory,
         }
     }
 }
