@@ -1,11 +1,12 @@
-//! Times each step of one exact-GP evaluation (RBF-ARD, d = 28, 3 outputs,
-//! seeded data): the Gram matrix, the Cholesky factor, the inverse, the
+//! Times each step of one exact-GP evaluation (RBF-ARD unless a kernel
+//! expression follows `N`; d = 28, 3 outputs, seeded data): the Gram matrix, the Cholesky factor, the inverse, the
 //! log marginal likelihood alone and with its gradient, averaged over 10
 //! repetitions. Compare with the LAPACK floor of `bench/peers/dense_floor.py`
 //! at the same `n`.
 //!
 //! ```sh
 //! cargo run --release -p gpodo-regressors --example evaluation_cost -- 1869
+//! cargo run --release -p gpodo-regressors --example evaluation_cost -- 1200 "matern52 + linear"
 //! ```
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -26,7 +27,10 @@ fn main() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let x: Mat<f64> = Mat::from_fn(n, d, |_, _| rng.random_range(-1.7..1.7));
     let y = Mat::from_fn(n, 3, |i, c| x[(i, c)].sin() + rng.random_range(-0.2..0.2));
-    let kernel = KernelExpr::Leaf("rbf".into()).build(d, &KernelInit::default());
+    let expr = std::env::args().nth(2).unwrap_or_else(|| "rbf".into());
+    let kernel = KernelExpr::parse(&expr)
+        .unwrap()
+        .build(d, &KernelInit::default());
     let reps = 10;
     let t = Instant::now();
     for _ in 0..reps {

@@ -45,20 +45,35 @@ std::thread_local! {
 /// 15 % of `paper.yaml`'s fits on two cores). Reusing the buffers removes
 /// that; the values are the same, since the buffer is zeroed.
 pub fn zeros(nrows: usize, ncols: usize) -> Mat<f64> {
-    if nrows * ncols >= RECYCLE_MIN_ENTRIES {
-        let reused = SPARE.with(|spare| {
-            let mut spare = spare.borrow_mut();
-            let at = spare
-                .iter()
-                .position(|m| m.nrows() == nrows && m.ncols() == ncols)?;
-            Some(spare.swap_remove(at))
-        });
-        if let Some(mut m) = reused {
+    match take_spare(nrows, ncols) {
+        Some(mut m) => {
             m.fill(0.0);
-            return m;
+            m
         }
+        None => Mat::zeros(nrows, ncols),
     }
-    Mat::zeros(nrows, ncols)
+}
+
+/// A spare buffer of this shape that this thread handed to [`recycle`],
+/// if there is one (large shapes only).
+fn take_spare(nrows: usize, ncols: usize) -> Option<Mat<f64>> {
+    if nrows * ncols < RECYCLE_MIN_ENTRIES {
+        return None;
+    }
+    SPARE.with(|spare| {
+        let mut spare = spare.borrow_mut();
+        let at = spare
+            .iter()
+            .position(|m| m.nrows() == nrows && m.ncols() == ncols)?;
+        Some(spare.swap_remove(at))
+    })
+}
+
+/// An `nrows × ncols` matrix for a caller that overwrites every entry
+/// before reading any: a recycled buffer of that shape keeps whatever it
+/// held (no zeroing pass over `n²` entries), a fresh one is zeros.
+pub fn scratch(nrows: usize, ncols: usize) -> Mat<f64> {
+    take_spare(nrows, ncols).unwrap_or_else(|| Mat::zeros(nrows, ncols))
 }
 
 /// Hands a matrix no longer needed back to this thread's spare buffers
@@ -247,6 +262,22 @@ mod tests {
         recycle(Mat::zeros(10, 10));
         assert!(spare_shapes().is_empty());
         drop(b);
+    }
+
+    #[test]
+    fn scratch_reuses_a_buffer_without_zeroing_it() {
+        release_spare();
+        let n = 300;
+        // Fresh: zeros.
+        let mut a = scratch(n, n);
+        assert!(a.norm_max() == 0.0);
+        a.fill(3.0);
+        let at = a.as_ptr();
+        recycle(a);
+        let again = scratch(n, n);
+        assert_eq!(again.as_ptr(), at, "the buffer is reused");
+        assert_eq!(again[(n - 1, n - 1)], 3.0, "as it was left");
+        assert!(spare_shapes().is_empty());
     }
 
     #[test]

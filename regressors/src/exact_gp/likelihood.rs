@@ -53,7 +53,8 @@ fn weights(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
     let scale = -(p as f64);
     let alpha_cols: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|c| column(alpha, c)).collect();
     let outer = |i: usize, j: usize| -> f64 { alpha_cols.iter().map(|a| a[i] * a[j]).sum() };
-    let mut w = crate::dense::zeros(n, n);
+    // Every entry is written below (the lower triangle, then the upper).
+    let mut w = crate::dense::scratch(n, n);
     let mut unused = vec![(); n];
     for_column_blocks(&mut w, &mut unused, |j0, columns, _| {
         let j1 = j0 + columns.len();

@@ -99,29 +99,37 @@ impl Stationary {
         let mut k = scaled_sq_dist(x1, x2, &self.lengthscales, same);
         let mut s = match family {
             Family::Rbf => None,
-            _ => Some(crate::dense::zeros(k.nrows(), k.ncols())),
+            _ => Some(crate::dense::scratch(k.nrows(), k.ncols())),
         };
         self.apply_profile(family, &mut k, s.as_mut());
         (k, s)
     }
 
     /// Replaces `r²` by `σ² κ(r)` in place, writing `σ²(−κ'/r)` to `s`
-    /// (column blocks in parallel, see [`for_column_blocks`]).
+    /// (column blocks in parallel, see [`for_column_blocks`]); with `s`,
+    /// both come from one evaluation of the profile per entry.
     fn apply_profile(&self, family: Family, r2: &mut Mat<f64>, s: Option<&mut Mat<f64>>) {
         let var = self.variance;
-        let mut unused = vec![(); r2.ncols()];
         if let Some(s) = s {
-            // `S` first: it reads `r²` before `r2` becomes `K`.
-            let r2 = r2.as_ref();
-            for_column_blocks(s, &mut unused, |j0, columns, _| {
-                for (jj, scol) in columns.iter_mut().enumerate() {
-                    let rcol = column(r2, j0 + jj);
-                    for (sv, r) in scol.iter_mut().zip(rcol.iter()) {
-                        *sv = var * family.profile(*r).1;
+            // `r2`'s columns ride along as the per-column output of `s`'s
+            // blocks: one pass reads `r²` and writes both matrices.
+            let mut r2_columns: Vec<&mut [f64]> = r2
+                .col_iter_mut()
+                .filter_map(|c| c.try_as_col_major_mut().map(|c| c.as_slice_mut()))
+                .collect();
+            debug_assert_eq!(r2_columns.len(), s.ncols());
+            for_column_blocks(s, &mut r2_columns, |_, scols, rcols| {
+                for (scol, rcol) in scols.iter_mut().zip(rcols.iter_mut()) {
+                    for (sv, rv) in scol.iter_mut().zip(rcol.iter_mut()) {
+                        let (k, slope) = family.profile(*rv);
+                        *sv = var * slope;
+                        *rv = var * k;
                     }
                 }
             });
+            return;
         }
+        let mut unused = vec![(); r2.ncols()];
         for_column_blocks(r2, &mut unused, |_, columns, _| {
             for col in columns.iter_mut() {
                 for v in col.iter_mut() {
@@ -148,7 +156,7 @@ impl Stationary {
     ) {
         let s = s.unwrap_or(k);
         let n = k.nrows();
-        let mut m = crate::dense::zeros(n, n);
+        let mut m = crate::dense::scratch(n, n);
         // Per column: (Σ_i W_ij K_ij, Σ_i M_ij).
         let mut partial = vec![(0.0, 0.0); n];
         for_column_blocks(&mut m, &mut partial, |j0, columns, partial| {
