@@ -112,7 +112,7 @@ pub fn frobenius_dot(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
 /// `a ∘ b` (element-wise product).
 pub fn hadamard(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     debug_assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
-    let mut out = zeros(a.nrows(), a.ncols());
+    let mut out = scratch(a.nrows(), a.ncols());
     for j in 0..a.ncols() {
         let (ca, cb) = (column(a, j), column(b, j));
         for ((o, x), y) in column_mut(&mut out, j)

@@ -57,7 +57,7 @@ impl Cholesky {
         // A failed attempt leaves a partly overwritten matrix (faer zeroes
         // the failing column, upper part included), so every attempt starts
         // from a fresh copy of `k`.
-        let mut work = crate::dense::zeros(n, n);
+        let mut work = crate::dense::scratch(n, n);
         work.copy_from(k);
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;

@@ -72,7 +72,8 @@ pub fn scaled_sq_dist(
             .collect()
     };
     let (n1, n2) = (norms(&z1), norms(&z2));
-    let mut r2 = crate::dense::zeros(z1.nrows(), z2.nrows());
+    // `Accum::Replace` writes every entry without reading it.
+    let mut r2 = crate::dense::scratch(z1.nrows(), z2.nrows());
     gemm(
         r2.as_mut(),
         Accum::Replace,
@@ -116,5 +117,20 @@ mod tests {
         }
         let r2 = scaled_sq_dist(x1.as_ref(), x1.as_ref(), &ell, true);
         assert_eq!(r2[(2, 2)], 0.0);
+    }
+
+    #[test]
+    fn a_recycled_buffer_left_with_nan_does_not_leak_into_the_distances() {
+        // Large enough to be recycled: the GEMM must overwrite, not read.
+        let n = 300;
+        let x = Mat::from_fn(n, 2, |i, q| ((i * 7 + q * 3) % 13) as f64 * 0.1);
+        let clean = scaled_sq_dist(x.as_ref(), x.as_ref(), &[1.0, 2.0], true);
+        crate::dense::release_spare();
+        let mut poisoned = crate::dense::zeros(n, n);
+        poisoned.fill(f64::NAN);
+        crate::dense::recycle(poisoned);
+        let r2 = scaled_sq_dist(x.as_ref(), x.as_ref(), &[1.0, 2.0], true);
+        assert_eq!(r2, clean);
+        crate::dense::release_spare();
     }
 }

@@ -27,7 +27,8 @@ impl Linear {
         let scaled = Mat::from_fn(x1.nrows(), x1.ncols(), |i, q| {
             x1[(i, q)] * self.variances[q]
         });
-        let mut k = crate::dense::zeros(x1.nrows(), x2.nrows());
+        // `Accum::Replace` writes every entry without reading it.
+        let mut k = crate::dense::scratch(x1.nrows(), x2.nrows());
         gemm(
             k.as_mut(),
             Accum::Replace,

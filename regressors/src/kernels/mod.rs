@@ -80,11 +80,13 @@ impl GramCache {
         let (n1, n2) = children
             .first()
             .map_or((0, 0), |c| (c.k.nrows(), c.k.ncols()));
-        let mut k = crate::dense::zeros(n1, n2);
-        if !is_sum {
-            k.fill(1.0);
+        // The first child's values start the node (`0 + c` and `1 · c` are
+        // `c` exactly), the others are added or multiplied in.
+        let mut k = crate::dense::scratch(n1, n2);
+        if let Some(first) = children.first() {
+            k.copy_from(&first.k);
         }
-        for child in &children {
+        for child in children.iter().skip(1) {
             for j in 0..n2 {
                 let c = column(child.k.as_ref(), j);
                 for (v, c) in column_mut(&mut k, j).iter_mut().zip(c.iter()) {
