@@ -11,6 +11,7 @@ mod cross;
 pub(crate) mod distance;
 pub mod expr;
 mod linear;
+mod profile;
 mod stationary;
 
 use faer::{Mat, MatRef};
@@ -19,7 +20,8 @@ use serde::{Deserialize, Serialize};
 pub use distance::median_pairwise_distance;
 pub use expr::{KernelExpr, KernelExprError, KernelInit};
 pub use linear::{Linear, White};
-pub use stationary::{Family, Stationary};
+pub use profile::Family;
+pub use stationary::Stationary;
 
 use crate::dense::{column, column_mut, hadamard, trace};
 

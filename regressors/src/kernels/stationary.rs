@@ -14,41 +14,8 @@ use faer::{Accum, Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
 use super::distance::{column_means, scaled_sq_dist, shift_scale};
+use super::profile::Family;
 use crate::dense::{column, for_column_blocks, frobenius_dot, gemm, hadamard};
-
-/// Which stationary profile `κ(r)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Family {
-    /// Squared exponential (RBF).
-    Rbf,
-    /// Matérn ν = 5/2.
-    Matern52,
-    /// Matérn ν = 3/2.
-    Matern32,
-}
-
-impl Family {
-    /// `κ(r)` and `−κ'(r)/r`, from `r²`.
-    #[inline]
-    fn profile(self, r2: f64) -> (f64, f64) {
-        match self {
-            Self::Rbf => {
-                let k = (-0.5 * r2).exp();
-                (k, k)
-            }
-            Self::Matern52 => {
-                let sr = (5.0 * r2).sqrt();
-                let e = (-sr).exp();
-                ((1.0 + sr + 5.0 / 3.0 * r2) * e, 5.0 / 3.0 * (1.0 + sr) * e)
-            }
-            Self::Matern32 => {
-                let sr = (3.0 * r2).sqrt();
-                let e = (-sr).exp();
-                ((1.0 + sr) * e, 3.0 * e)
-            }
-        }
-    }
-}
 
 /// Hyperparameters of a stationary ARD kernel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -120,11 +87,7 @@ impl Stationary {
             debug_assert_eq!(r2_columns.len(), s.ncols());
             for_column_blocks(s, &mut r2_columns, |_, scols, rcols| {
                 for (scol, rcol) in scols.iter_mut().zip(rcols.iter_mut()) {
-                    for (sv, rv) in scol.iter_mut().zip(rcol.iter_mut()) {
-                        let (k, slope) = family.profile(*rv);
-                        *sv = var * slope;
-                        *rv = var * k;
-                    }
+                    family.apply(var, rcol, Some(scol));
                 }
             });
             return;
@@ -132,9 +95,7 @@ impl Stationary {
         let mut unused = vec![(); r2.ncols()];
         for_column_blocks(r2, &mut unused, |_, columns, _| {
             for col in columns.iter_mut() {
-                for v in col.iter_mut() {
-                    *v = var * family.profile(*v).0;
-                }
+                family.apply(var, col, None);
             }
         });
     }
