@@ -38,7 +38,7 @@ pub fn exp_kernel(a: f64) -> f64 {
     const LOG2_E: f64 = std::f64::consts::LOG2_E;
     // ln 2 split so that `r · LN2_HI` is exact for |r| < 2¹⁰.
     const LN2_HI: f64 = 0.693_145_751_953_125;
-    const LN2_LO: f64 = 1.428_606_820_309_417_232_12e-6;
+    const LN2_LO: f64 = 1.428_606_820_309_417_3e-6;
     // 2⁵² + 1023: adding it puts `r + 1023` in the low mantissa bits.
     const EXPONENT_SHIFT: f64 = 4_503_599_627_371_519.0;
     let r = (a * LOG2_E).round_ties_even();
