@@ -71,6 +71,32 @@ fn lml_gradient_matches_finite_differences() {
 }
 
 #[test]
+fn the_likelihood_and_its_gradient_are_bit_identical_whatever_the_thread_count() {
+    let mut rng = rng(22);
+    // Several column blocks and faer's parallel GEMM and triangular paths.
+    let (n, d) = (700, 5);
+    let x = inputs(&mut rng, n, d);
+    let y = targets(&mut rng, &x, 0.1);
+    let before = faer::get_global_parallelism();
+    for expr in ["rbf", "matern52 + linear", "rbf * linear"] {
+        let kernel = random_kernel(&mut rng, expr, d);
+        let at = |par: faer::Par| {
+            faer::set_global_parallelism(par);
+            log_marginal_likelihood(&kernel, 0.05, x.as_ref(), y.as_ref(), true).unwrap()
+        };
+        let sequential = at(faer::Par::Seq);
+        for threads in [2, 3] {
+            assert_eq!(
+                at(faer::Par::rayon(threads)),
+                sequential,
+                "{expr}, {threads} threads"
+            );
+        }
+    }
+    faer::set_global_parallelism(before);
+}
+
+#[test]
 fn one_and_two_point_cases_match_closed_forms() {
     let (s2, ell, sn2) = (1.3_f64, 0.7_f64, 0.2_f64);
     let mut kernel = KernelExpr::parse("rbf")

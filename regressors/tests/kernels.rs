@@ -62,6 +62,45 @@ fn gradient_matches_finite_differences_for_every_kernel() {
 }
 
 #[test]
+fn the_lower_gram_and_the_gradient_read_only_lower_triangles() {
+    let mut rng = rng(14);
+    for expr in EXPRESSIONS {
+        // Large enough for recycled buffers (see `dense::recycle`), the
+        // parallel column blocks and faer's blocking.
+        let (n, d) = (260, 4);
+        let x = inputs(&mut rng, n, d);
+        let w = symmetric(&mut rng, n);
+        let kernel = random_kernel(&mut rng, expr, d);
+        // Every scratch buffer the lower Gram takes holds NaN above the
+        // diagonal unless it writes there.
+        gpodo_regressors::dense::release_spare();
+        for _ in 0..8 {
+            let mut poisoned = gpodo_regressors::dense::zeros(n, n);
+            poisoned.fill(f64::NAN);
+            gpodo_regressors::dense::recycle(poisoned);
+        }
+        let lower = kernel.gram_lower_with_cache(x.as_ref());
+        gpodo_regressors::dense::release_spare();
+        let full = kernel.gram_with_cache(x.as_ref());
+        for j in 0..n {
+            for i in j..n {
+                assert_eq!(lower.k[(i, j)], full.k[(i, j)], "{expr} ({i}, {j})");
+            }
+        }
+        let w_nan_above = Mat::from_fn(n, n, |i, j| if i >= j { w[(i, j)] } else { f64::NAN });
+        let mut from_lower = vec![0.0; kernel.n_params()];
+        kernel.accumulate_gradient(x.as_ref(), &lower, w_nan_above.as_ref(), &mut from_lower);
+        let mut from_full = vec![0.0; kernel.n_params()];
+        kernel.accumulate_gradient(x.as_ref(), &full, w.as_ref(), &mut from_full);
+        assert!(
+            from_lower.iter().all(|g| g.is_finite()),
+            "{expr}: {from_lower:?}"
+        );
+        assert_eq!(from_lower, from_full, "{expr}");
+    }
+}
+
+#[test]
 fn gram_matrices_are_symmetric_positive_semidefinite() {
     let mut rng = rng(12);
     for expr in EXPRESSIONS {

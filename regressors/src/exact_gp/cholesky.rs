@@ -36,8 +36,9 @@ impl Cholesky {
     }
 
     /// Factorises `k + shift·I` (e.g. a kernel matrix plus its noise
-    /// variance) without modifying `k`: one copy of `k` is made, and made
-    /// again only when a jitter has to be retried.
+    /// variance) without modifying `k`, reading only its lower triangle:
+    /// one copy of that is made, and made again only when a jitter has to
+    /// be retried.
     ///
     /// # Errors
     /// As [`Cholesky::factor`].
@@ -58,11 +59,11 @@ impl Cholesky {
         // the failing column, upper part included), so every attempt starts
         // from a fresh copy of `k`.
         let mut work = crate::dense::scratch(n, n);
-        work.copy_from(k);
+        work.copy_from_triangular_lower(k);
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;
             if attempt > 0 {
-                work.copy_from(k);
+                work.copy_from_triangular_lower(k);
             }
             for i in 0..n {
                 work[(i, i)] += shift;
@@ -174,6 +175,19 @@ mod tests {
         assert!((&a * c.solve(b.as_ref()) - &b).norm_max() < 1e-11);
         let two_step = c.solve_upper(c.solve_lower(b.as_ref()).as_ref());
         assert!((&two_step - c.solve(b.as_ref())).norm_max() < 1e-11);
+    }
+
+    #[test]
+    fn reads_only_the_lower_triangle() {
+        let n = 300;
+        let a = Mat::from_fn(n, n, |i, j| {
+            (-((i as f64 - j as f64) / 40.0).powi(2)).exp() + if i == j { 0.1 } else { 0.0 }
+        });
+        let upper_nan = Mat::from_fn(n, n, |i, j| if i >= j { a[(i, j)] } else { f64::NAN });
+        let full = Cholesky::factor_shifted(&a, 0.5).unwrap();
+        let lower = Cholesky::factor_shifted(&upper_nan, 0.5).unwrap();
+        assert_eq!(lower.l, full.l);
+        assert_eq!(lower.jitter, 0.0);
     }
 
     #[test]

@@ -43,35 +43,24 @@ pub fn lml_from_factor(chol: &Cholesky, y: MatRef<'_, f64>, alpha: MatRef<'_, f6
     -0.5 * data_fit - 0.5 * p as f64 * chol.log_det() - 0.5 * (n * p) as f64 * LN_2PI
 }
 
-/// `W = A Aᵀ − p K_y⁻¹` (full, symmetric) from the lower triangle of
-/// `K_y⁻¹` and `A = K_y⁻¹ Y` (`n × p`), in one pass over column blocks (in
-/// parallel, see [`for_column_blocks`]): each entry below the diagonal is
-/// read once from its column, each entry above it from the matching row of
-/// the block's columns (contiguous in the inverse's earlier columns).
-fn weights(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
+/// `W = A Aᵀ − p K_y⁻¹` on and below the diagonal (all the kernels'
+/// gradients read of the symmetric `W`) from the lower triangle of `K_y⁻¹`
+/// and `A = K_y⁻¹ Y` (`n × p`), in one pass over column blocks (in
+/// parallel, see [`for_column_blocks`]).
+fn weights_lower(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
     let (n, p) = (alpha.nrows(), alpha.ncols());
     let scale = -(p as f64);
     let alpha_cols: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|c| column(alpha, c)).collect();
-    let outer = |i: usize, j: usize| -> f64 { alpha_cols.iter().map(|a| a[i] * a[j]).sum() };
-    // Every entry is written below (the lower triangle, then the upper).
+    // Every entry on and below the diagonal is written.
     let mut w = crate::dense::scratch(n, n);
     let mut unused = vec![(); n];
     for_column_blocks(&mut w, &mut unused, |j0, columns, _| {
-        let j1 = j0 + columns.len();
         for (jj, col) in columns.iter_mut().enumerate() {
             let j = j0 + jj;
             let inv = column(inverse_lower, j);
             for i in j..n {
-                col[i] = outer(i, j) + scale * inv[i];
-            }
-        }
-        // Above the diagonal: W_ij = W_ji for i < j, read from column i
-        // (`i` is a row of the block, not an index into `columns`).
-        #[allow(clippy::needless_range_loop)]
-        for i in 0..j1 {
-            let inv = column(inverse_lower, i);
-            for j in j0.max(i + 1)..j1 {
-                columns[j - j0][i] = outer(i, j) + scale * inv[j];
+                let outer: f64 = alpha_cols.iter().map(|a| a[i] * a[j]).sum();
+                col[i] = outer + scale * inv[i];
             }
         }
     });
@@ -90,7 +79,8 @@ pub fn log_marginal_likelihood(
     with_gradient: bool,
 ) -> Result<LmlEvaluation, RegressorError> {
     let n = y.nrows();
-    let cache = kernel.gram_with_cache(x);
+    // Only lower triangles are formed and read from here on.
+    let cache = kernel.gram_lower_with_cache(x);
     let chol = Cholesky::factor_shifted(&cache.k, noise_variance)?;
     let alpha = chol.solve(y);
     let lml = lml_from_factor(&chol, y, alpha.as_ref());
@@ -102,7 +92,7 @@ pub fn log_marginal_likelihood(
     }
     let gradient = with_gradient.then(|| {
         let inverse = chol.inverse_lower();
-        let w = weights(inverse.as_ref(), alpha.as_ref());
+        let w = weights_lower(inverse.as_ref(), alpha.as_ref());
         recycle(inverse);
         let mut g = vec![0.0; kernel.n_params() + 1];
         let m = kernel.n_params();

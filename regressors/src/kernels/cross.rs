@@ -13,7 +13,7 @@ impl Kernel {
     /// [`Kernel::accumulate_cross_gradient`] needs.
     pub fn cross_with_cache(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> GramCache {
         if let Some((family, s)) = self.family() {
-            let (k, s) = s.cross_with_s(family, x1, x2, false);
+            let (k, s) = s.cross_with_s(family, x1, x2);
             return GramCache::leaf(k, s);
         }
         match self {
@@ -21,7 +21,7 @@ impl Kernel {
             Self::Sum(c) | Self::Product(c) => {
                 let children: Vec<GramCache> =
                     c.iter().map(|k| k.cross_with_cache(x1, x2)).collect();
-                GramCache::combine(matches!(self, Self::Sum(_)), children)
+                GramCache::combine(matches!(self, Self::Sum(_)), children, false)
             }
             _ => GramCache::leaf(Mat::zeros(x1.nrows(), x2.nrows()), None),
         }

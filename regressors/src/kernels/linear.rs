@@ -6,7 +6,9 @@
 use faer::{Accum, Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
-use crate::dense::gemm;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+
+use crate::dense::{gemm, par, symmetric_times};
 
 /// Hyperparameters of the linear kernel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -39,9 +41,34 @@ impl Linear {
         k
     }
 
-    /// Adds `Σ_ij W_ij ∂K_ij/∂log v_q` to `out` (Gram matrix of `x`).
+    /// `K(X, X)` on and below the diagonal only (one triangular GEMM; what
+    /// is above the diagonal is unspecified).
+    pub fn gram_lower(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        let scaled = Mat::from_fn(x.nrows(), x.ncols(), |i, q| x[(i, q)] * self.variances[q]);
+        // `Accum::Replace` writes every entry of the lower triangle.
+        let mut k = crate::dense::scratch(x.nrows(), x.nrows());
+        triangular::matmul(
+            k.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            scaled.as_ref(),
+            BlockStructure::Rectangular,
+            x.transpose(),
+            BlockStructure::Rectangular,
+            1.0,
+            par(),
+        );
+        k
+    }
+
+    /// Adds `Σ_ij W_ij ∂K_ij/∂log v_q = v_q x_qᵀ W x_q` to `out` (Gram
+    /// matrix of `x`, symmetric `W` read by its lower triangle).
     pub fn accumulate_gradient(&self, x: MatRef<'_, f64>, w: MatRef<'_, f64>, out: &mut [f64]) {
-        self.accumulate_cross_gradient(x, x, w, Some(out), None);
+        let wx = symmetric_times(w, x);
+        for (q, o) in out.iter_mut().enumerate().take(x.ncols()) {
+            let quad: f64 = (0..x.nrows()).map(|i| x[(i, q)] * wx[(i, q)]).sum();
+            *o += self.variances[q] * quad;
+        }
     }
 
     /// Adds `Σ_ij W_ij ∂K(X1, X2)_ij/∂log v_q` to `out` and, when asked,

@@ -23,7 +23,9 @@ pub use linear::{Linear, White};
 pub use profile::Family;
 pub use stationary::Stationary;
 
-use crate::dense::{column, column_mut, hadamard, trace};
+use crate::dense::{
+    column, column_mut, hadamard, lower_hadamard_in_place, symmetrize_from_lower, trace,
+};
 
 /// A kernel with its current hyperparameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -77,8 +79,9 @@ impl GramCache {
         }
     }
 
-    /// A sum or product node over its children's caches.
-    fn combine(is_sum: bool, children: Vec<GramCache>) -> Self {
+    /// A sum or product node over its children's caches (on and below the
+    /// diagonal only when `lower`).
+    fn combine(is_sum: bool, children: Vec<GramCache>, lower: bool) -> Self {
         let (n1, n2) = children
             .first()
             .map_or((0, 0), |c| (c.k.nrows(), c.k.ncols()));
@@ -90,8 +93,9 @@ impl GramCache {
         }
         for child in children.iter().skip(1) {
             for j in 0..n2 {
+                let i0 = if lower { j.min(n1) } else { 0 };
                 let c = column(child.k.as_ref(), j);
-                for (v, c) in column_mut(&mut k, j).iter_mut().zip(c.iter()) {
+                for (v, c) in column_mut(&mut k, j)[i0..].iter_mut().zip(c[i0..].iter()) {
                     *v = if is_sum { *v + c } else { *v * c };
                 }
             }
@@ -100,6 +104,18 @@ impl GramCache {
             k,
             s: None,
             children,
+        }
+    }
+
+    /// Copies every matrix's lower triangle onto its upper one (a cache of
+    /// [`Kernel::gram_lower_with_cache`] made whole).
+    fn symmetrize(&mut self) {
+        symmetrize_from_lower(&mut self.k);
+        if let Some(s) = self.s.as_mut() {
+            symmetrize_from_lower(s);
+        }
+        for child in &mut self.children {
+            child.symmetrize();
         }
     }
 
@@ -334,30 +350,44 @@ impl Kernel {
         self.gram_with_cache(x).k
     }
 
-    /// `K(X, X)` with what [`Kernel::accumulate_gradient`] needs.
+    /// `K(X, X)` with what [`Kernel::accumulate_gradient`] needs, in full
+    /// (the lower triangles of [`Kernel::gram_lower_with_cache`], mirrored).
     pub fn gram_with_cache(&self, x: MatRef<'_, f64>) -> GramCache {
+        let mut cache = self.gram_lower_with_cache(x);
+        cache.symmetrize();
+        cache
+    }
+
+    /// `K(X, X)` with what [`Kernel::accumulate_gradient`] needs, every
+    /// matrix on and below its diagonal only (what is above it is
+    /// unspecified): all an exact GP's likelihood and gradient read, at
+    /// half the cost of the full matrices.
+    pub fn gram_lower_with_cache(&self, x: MatRef<'_, f64>) -> GramCache {
         let n = x.nrows();
         if let Some((family, s)) = self.family() {
-            let (k, s) = s.gram(family, x);
+            let (k, s) = s.gram_lower(family, x);
             return GramCache::leaf(k, s);
         }
         match self {
-            Self::Linear(l) => GramCache::leaf(l.cross(x, x), None),
+            Self::Linear(l) => GramCache::leaf(l.gram_lower(x), None),
             Self::White(w) => GramCache::leaf(
                 Mat::from_fn(n, n, |i, j| if i == j { w.variance } else { 0.0 }),
                 None,
             ),
             Self::Sum(c) | Self::Product(c) => {
-                let children: Vec<GramCache> = c.iter().map(|k| k.gram_with_cache(x)).collect();
-                GramCache::combine(matches!(self, Self::Sum(_)), children)
+                let children: Vec<GramCache> =
+                    c.iter().map(|k| k.gram_lower_with_cache(x)).collect();
+                GramCache::combine(matches!(self, Self::Sum(_)), children, true)
             }
             _ => GramCache::leaf(Mat::zeros(n, n), None),
         }
     }
 
     /// Adds `Σ_ij W_ij ∂K_ij/∂θ_k` for every log-hyperparameter `θ_k` to `out`
-    /// (length [`Kernel::n_params`]), from the cache of
-    /// [`Kernel::gram_with_cache`] at the same `X`.
+    /// (length [`Kernel::n_params`]) for a symmetric `W`, from the cache of
+    /// [`Kernel::gram_lower_with_cache`] (or [`Kernel::gram_with_cache`]) at
+    /// the same `X`. Only the lower triangles of `W` and of the cache are
+    /// read.
     pub fn accumulate_gradient(
         &self,
         x: MatRef<'_, f64>,
@@ -387,7 +417,7 @@ impl Kernel {
                     let mut wi = w.to_owned();
                     for (j, cj) in cache.children.iter().enumerate() {
                         if j != i {
-                            wi = hadamard(wi.as_ref(), cj.k.as_ref());
+                            lower_hadamard_in_place(&mut wi, cj.k.as_ref());
                         }
                     }
                     let m = k.n_params();

@@ -13,9 +13,9 @@
 use faer::{Accum, Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
-use super::distance::{column_means, scaled_sq_dist, shift_scale};
+use super::distance::{column_means, scaled_sq_dist, scaled_sq_dist_lower, shift_scale};
 use super::profile::Family;
-use crate::dense::{column, for_column_blocks, frobenius_dot, gemm, hadamard};
+use crate::dense::{column, for_column_blocks, frobenius_dot, gemm, hadamard, symmetric_times};
 
 /// Hyperparameters of a stationary ARD kernel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,40 +43,58 @@ impl Stationary {
 
     /// `K(X1, X2)`.
     pub fn cross(&self, family: Family, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
-        let mut k = scaled_sq_dist(x1, x2, &self.lengthscales, false);
-        self.apply_profile(family, &mut k, None);
-        k
+        self.cross_with_s(family, x1, x2).0
     }
 
     /// `K(X, X)` and `S = σ² (−κ'(r)/r)` for the gradient (`None` for the
-    /// RBF, where `S = K`).
-    pub fn gram(&self, family: Family, x: MatRef<'_, f64>) -> (Mat<f64>, Option<Mat<f64>>) {
-        self.cross_with_s(family, x, x, true)
+    /// RBF, where `S = K`), on and below the diagonal only (what is above
+    /// it is unspecified; see [`crate::dense::symmetrize_from_lower`]).
+    pub fn gram_lower(&self, family: Family, x: MatRef<'_, f64>) -> (Mat<f64>, Option<Mat<f64>>) {
+        let k = scaled_sq_dist_lower(x, &self.lengthscales);
+        self.profile_of(family, k, true)
     }
 
-    /// `K(X1, X2)` and `S` as in [`Stationary::gram`]; `same` when `X1` is
-    /// `X2` (exact zeros on the distance diagonal).
+    /// `K(X1, X2)` and `S` as in [`Stationary::gram_lower`], in full,
+    /// between two distinct point sets.
     pub fn cross_with_s(
         &self,
         family: Family,
         x1: MatRef<'_, f64>,
         x2: MatRef<'_, f64>,
-        same: bool,
     ) -> (Mat<f64>, Option<Mat<f64>>) {
-        let mut k = scaled_sq_dist(x1, x2, &self.lengthscales, same);
+        let k = scaled_sq_dist(x1, x2, &self.lengthscales);
+        self.profile_of(family, k, false)
+    }
+
+    /// `(σ² κ(r), σ²(−κ'/r))` from `r²` (taken over as `K`'s buffer), on
+    /// and below the diagonal only when `lower`.
+    fn profile_of(
+        &self,
+        family: Family,
+        mut k: Mat<f64>,
+        lower: bool,
+    ) -> (Mat<f64>, Option<Mat<f64>>) {
         let mut s = match family {
             Family::Rbf => None,
             _ => Some(crate::dense::scratch(k.nrows(), k.ncols())),
         };
-        self.apply_profile(family, &mut k, s.as_mut());
+        self.apply_profile(family, &mut k, s.as_mut(), lower);
         (k, s)
     }
 
     /// Replaces `r²` by `σ² κ(r)` in place, writing `σ²(−κ'/r)` to `s`
-    /// (column blocks in parallel, see [`for_column_blocks`]); with `s`,
-    /// both come from one evaluation of the profile per entry.
-    fn apply_profile(&self, family: Family, r2: &mut Mat<f64>, s: Option<&mut Mat<f64>>) {
+    /// (column blocks in parallel, see [`for_column_blocks`]; rows from the
+    /// diagonal down when `lower`); with `s`, both come from one evaluation
+    /// of the profile per entry.
+    fn apply_profile(
+        &self,
+        family: Family,
+        r2: &mut Mat<f64>,
+        s: Option<&mut Mat<f64>>,
+        lower: bool,
+    ) {
         let var = self.variance;
+        let first = |j: usize| if lower { j } else { 0 };
         if let Some(s) = s {
             // `r2`'s columns ride along as the per-column output of `s`'s
             // blocks: one pass reads `r²` and writes both matrices.
@@ -85,28 +103,32 @@ impl Stationary {
                 .filter_map(|c| c.try_as_col_major_mut().map(|c| c.as_slice_mut()))
                 .collect();
             debug_assert_eq!(r2_columns.len(), s.ncols());
-            for_column_blocks(s, &mut r2_columns, |_, scols, rcols| {
-                for (scol, rcol) in scols.iter_mut().zip(rcols.iter_mut()) {
-                    family.apply(var, rcol, Some(scol));
+            for_column_blocks(s, &mut r2_columns, |j0, scols, rcols| {
+                for (jj, (scol, rcol)) in scols.iter_mut().zip(rcols.iter_mut()).enumerate() {
+                    let i0 = first(j0 + jj);
+                    family.apply(var, &mut rcol[i0..], Some(&mut scol[i0..]));
                 }
             });
             return;
         }
         let mut unused = vec![(); r2.ncols()];
-        for_column_blocks(r2, &mut unused, |_, columns, _| {
-            for col in columns.iter_mut() {
-                family.apply(var, col, None);
+        for_column_blocks(r2, &mut unused, |j0, columns, _| {
+            for (jj, col) in columns.iter_mut().enumerate() {
+                family.apply(var, &mut col[first(j0 + jj)..], None);
             }
         });
     }
 
     /// Adds `Σ_ij W_ij ∂K_ij/∂θ` for `θ = (log σ², log ℓ_1, …)` to `out`,
-    /// for the Gram matrix `k = K(X, X)`.
+    /// for the Gram matrix `k = K(X, X)` and a symmetric `W`, reading only
+    /// the lower triangles of `W`, `K` and `S`.
     ///
-    /// `W`, `K` and `S` are symmetric here, so `M = W ∘ S` is formed once in
-    /// a parallel pass over column blocks that also takes `Σ W ∘ K` and the
-    /// column sums of `M` (equal to its row sums), each reduced in column
-    /// order (bit-identical whatever the thread count); then one GEMM `M X`.
+    /// `M = W ∘ S` is formed on and below the diagonal in a parallel pass
+    /// over column blocks that also takes `Σ W ∘ K` (twice the strict lower
+    /// part plus the diagonal) per column, reduced in column order
+    /// (bit-identical whatever the thread count); then `M [X | 1]` from
+    /// `M`'s lower triangle (two triangular GEMMs), whose last column is
+    /// `M`'s row sums.
     pub fn accumulate_gradient(
         &self,
         x: MatRef<'_, f64>,
@@ -116,41 +138,47 @@ impl Stationary {
         out: &mut [f64],
     ) {
         let s = s.unwrap_or(k);
-        let n = k.nrows();
+        let (n, d) = (k.nrows(), x.ncols());
+        // Every entry on and below the diagonal is written.
         let mut m = crate::dense::scratch(n, n);
-        // Per column: (Σ_i W_ij K_ij, Σ_i M_ij).
-        let mut partial = vec![(0.0, 0.0); n];
+        // Per column: Σ_i W_ij K_ij over the whole column of the symmetric
+        // matrices.
+        let mut partial = vec![0.0; n];
         for_column_blocks(&mut m, &mut partial, |j0, columns, partial| {
             for (jj, (mcol, part)) in columns.iter_mut().zip(partial.iter_mut()).enumerate() {
                 let j = j0 + jj;
                 let (wcol, kcol, scol) =
                     (column(w, j), column(k.as_ref(), j), column(s.as_ref(), j));
-                let (mut wk, mut msum) = (0.0, 0.0);
-                for i in 0..n {
-                    wk += wcol[i] * kcol[i];
-                    let v = wcol[i] * scol[i];
-                    mcol[i] = v;
-                    msum += v;
+                let mut below = 0.0;
+                for i in j + 1..n {
+                    below += wcol[i] * kcol[i];
+                    mcol[i] = wcol[i] * scol[i];
                 }
-                *part = (wk, msum);
+                mcol[j] = wcol[j] * scol[j];
+                *part = 2.0 * below + wcol[j] * kcol[j];
             }
         });
+        // [x − x̄ | 1].
         let centre = column_means(x);
-        let xc = shift_scale(x, &centre, &vec![1.0; x.ncols()]);
-        let mut mx = Mat::<f64>::zeros(n, x.ncols());
-        gemm(mx.as_mut(), Accum::Replace, m.as_ref(), xc.as_ref(), 1.0);
-        out[0] += partial.iter().map(|p| p.0).sum::<f64>();
-        // Σ_ij M_ij (x_iq − x_jq)² = 2 Σ_i x_iq² r_i − 2 Σ_i x_iq (M X)_iq.
+        let xc1 = Mat::from_fn(
+            n,
+            d + 1,
+            |i, q| if q < d { x[(i, q)] - centre[q] } else { 1.0 },
+        );
+        let mx = symmetric_times(m.as_ref(), xc1.as_ref());
+        crate::dense::recycle(m);
+        out[0] += partial.iter().sum::<f64>();
+        // Σ_ij M_ij (x_iq − x_jq)² = 2 Σ_i x_iq² r_i − 2 Σ_i x_iq (M X)_iq,
+        // with r = M 1 the row sums.
         for (q, o) in out[1..].iter_mut().enumerate() {
             let total: f64 = (0..n)
                 .map(|i| {
-                    let xi = xc[(i, q)];
-                    2.0 * xi * (xi * partial[i].1 - mx[(i, q)])
+                    let xi = xc1[(i, q)];
+                    2.0 * xi * (xi * mx[(i, d)] - mx[(i, q)])
                 })
                 .sum();
             *o += total / (self.lengthscales[q] * self.lengthscales[q]);
         }
-        crate::dense::recycle(m);
     }
 
     /// For `K(X1, X2)` with value `k` and derivative matrix `s` (see

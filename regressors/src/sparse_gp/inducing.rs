@@ -74,7 +74,7 @@ fn kmeans_plus_plus(x: MatRef<'_, f64>, m: usize, rng: &mut ChaCha8Rng) -> Mat<f
 fn lloyd_step(x: MatRef<'_, f64>, centres: &mut Mat<f64>) -> bool {
     let (n, d, m) = (x.nrows(), x.ncols(), centres.nrows());
     let ones = vec![1.0; d];
-    let r2 = scaled_sq_dist(x, centres.as_ref(), &ones, false);
+    let r2 = scaled_sq_dist(x, centres.as_ref(), &ones);
     let mut sums = Mat::<f64>::zeros(m, d);
     let mut counts = vec![0usize; m];
     for i in 0..n {

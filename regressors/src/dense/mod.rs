@@ -7,6 +7,11 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef};
 use gpodo_traits::SampleMatrix;
 
+mod symmetric;
+pub use symmetric::{
+    lower_hadamard_in_place, symmetric_frobenius_dot, symmetric_times, symmetrize_from_lower,
+};
+
 /// Copies a row-major sample matrix into a faer matrix.
 pub fn to_faer(m: &SampleMatrix) -> Mat<f64> {
     Mat::from_fn(m.nrows(), m.ncols(), |i, j| m.get(i, j))
@@ -145,16 +150,6 @@ pub fn column(a: MatRef<'_, f64>, j: usize) -> std::borrow::Cow<'_, [f64]> {
 /// Column `j` of an owned matrix as a mutable slice.
 pub fn column_mut(a: &mut Mat<f64>, j: usize) -> &mut [f64] {
     a.col_as_slice_mut(j)
-}
-
-/// Copies the lower triangle onto the upper one.
-pub fn symmetrize_from_lower(a: &mut Mat<f64>) {
-    let n = a.nrows();
-    for j in 0..n {
-        for i in 0..j {
-            a[(i, j)] = a[(j, i)];
-        }
-    }
 }
 
 /// The parallelism used by the dense kernels: faer's global setting, so a

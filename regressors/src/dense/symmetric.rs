@@ -1,0 +1,120 @@
+//! Symmetric `n × n` matrices stored by their lower triangle (what is above
+//! the diagonal is never read): an exact-GP evaluation computes `K`, `S`,
+//! `W` and `W ∘ S` only on and below the diagonal, which halves the
+//! distance GEMM, the kernel profile's `exp`, and every pass over `n²`.
+
+use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+use faer::{Accum, Mat, MatRef};
+
+use super::{column, column_mut, par};
+
+/// Copies the lower triangle onto the upper one.
+pub fn symmetrize_from_lower(a: &mut Mat<f64>) {
+    let n = a.nrows();
+    for j in 0..n {
+        for i in 0..j {
+            a[(i, j)] = a[(j, i)];
+        }
+    }
+}
+
+/// `A B` for a symmetric `A` given by its lower triangle: `tril(A) B +
+/// stril(A)ᵀ B`, two triangular products by faer (the same flops as one
+/// full GEMM, reading half of `A`).
+pub fn symmetric_times(a_lower: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a_lower.nrows(), b.ncols());
+    matmul(
+        out.as_mut(),
+        BlockStructure::Rectangular,
+        Accum::Replace,
+        a_lower,
+        BlockStructure::TriangularLower,
+        b,
+        BlockStructure::Rectangular,
+        1.0,
+        par(),
+    );
+    matmul(
+        out.as_mut(),
+        BlockStructure::Rectangular,
+        Accum::Add,
+        a_lower.transpose(),
+        BlockStructure::StrictTriangularUpper,
+        b,
+        BlockStructure::Rectangular,
+        1.0,
+        par(),
+    );
+    out
+}
+
+/// `Σ_ij A_ij B_ij` for symmetric `A` and `B` given by their lower
+/// triangles: twice the strict lower part plus the diagonal, summed column
+/// by column.
+pub fn symmetric_frobenius_dot(a_lower: MatRef<'_, f64>, b_lower: MatRef<'_, f64>) -> f64 {
+    let mut total = 0.0;
+    for j in 0..a_lower.ncols() {
+        let (ca, cb) = (column(a_lower, j), column(b_lower, j));
+        let below: f64 = ca[j + 1..]
+            .iter()
+            .zip(&cb[j + 1..])
+            .map(|(x, y)| x * y)
+            .sum();
+        total += 2.0 * below + ca[j] * cb[j];
+    }
+    total
+}
+
+/// `A ← A ∘ B` on and below the diagonal.
+pub fn lower_hadamard_in_place(a: &mut Mat<f64>, b_lower: MatRef<'_, f64>) {
+    for j in 0..a.ncols() {
+        let cb = column(b_lower, j);
+        for (x, y) in column_mut(a, j)[j..].iter_mut().zip(&cb[j..]) {
+            *x *= y;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A symmetric matrix, and a copy of its lower triangle with NaN above.
+    fn symmetric_and_lower(n: usize) -> (Mat<f64>, Mat<f64>) {
+        let full = Mat::from_fn(n, n, |i, j| ((i * j + i + j) % 7) as f64 - 2.5);
+        let lower = Mat::from_fn(n, n, |i, j| if i >= j { full[(i, j)] } else { f64::NAN });
+        (full, lower)
+    }
+
+    #[test]
+    fn the_symmetric_product_reads_only_the_lower_triangle() {
+        let (full, lower) = symmetric_and_lower(37);
+        let b = Mat::from_fn(37, 5, |i, q| (i as f64 * 0.3 - q as f64).sin());
+        let expected = &full * &b;
+        let got = symmetric_times(lower.as_ref(), b.as_ref());
+        assert!((&got - &expected).norm_max() < 1e-12);
+    }
+
+    #[test]
+    fn the_symmetric_dot_and_hadamard_read_only_the_lower_triangle() {
+        let (full_a, lower_a) = symmetric_and_lower(23);
+        let full_b = Mat::from_fn(23, 23, |i, j| 1.0 + (i + j) as f64 * 0.1);
+        let direct = super::super::frobenius_dot(full_a.as_ref(), full_b.as_ref());
+        let got = symmetric_frobenius_dot(lower_a.as_ref(), full_b.as_ref());
+        assert!((got - direct).abs() < 1e-10 * direct.abs());
+        let mut product = lower_a.clone();
+        lower_hadamard_in_place(&mut product, full_b.as_ref());
+        for j in 0..23 {
+            for i in j..23 {
+                assert_eq!(product[(i, j)], full_a[(i, j)] * full_b[(i, j)]);
+            }
+        }
+    }
+
+    #[test]
+    fn symmetrize_copies_the_lower_triangle_up() {
+        let (full, mut lower) = symmetric_and_lower(9);
+        symmetrize_from_lower(&mut lower);
+        assert_eq!(lower, full);
+    }
+}
