@@ -48,23 +48,6 @@ pub fn symmetric_times(a_lower: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64>
     out
 }
 
-/// `Σ_ij A_ij B_ij` for symmetric `A` and `B` given by their lower
-/// triangles: twice the strict lower part plus the diagonal, summed column
-/// by column.
-pub fn symmetric_frobenius_dot(a_lower: MatRef<'_, f64>, b_lower: MatRef<'_, f64>) -> f64 {
-    let mut total = 0.0;
-    for j in 0..a_lower.ncols() {
-        let (ca, cb) = (column(a_lower, j), column(b_lower, j));
-        let below: f64 = ca[j + 1..]
-            .iter()
-            .zip(&cb[j + 1..])
-            .map(|(x, y)| x * y)
-            .sum();
-        total += 2.0 * below + ca[j] * cb[j];
-    }
-    total
-}
-
 /// `A ← A ∘ B` on and below the diagonal.
 pub fn lower_hadamard_in_place(a: &mut Mat<f64>, b_lower: MatRef<'_, f64>) {
     for j in 0..a.ncols() {
@@ -96,12 +79,9 @@ mod tests {
     }
 
     #[test]
-    fn the_symmetric_dot_and_hadamard_read_only_the_lower_triangle() {
+    fn the_lower_hadamard_reads_only_the_lower_triangle() {
         let (full_a, lower_a) = symmetric_and_lower(23);
         let full_b = Mat::from_fn(23, 23, |i, j| 1.0 + (i + j) as f64 * 0.1);
-        let direct = super::super::frobenius_dot(full_a.as_ref(), full_b.as_ref());
-        let got = symmetric_frobenius_dot(lower_a.as_ref(), full_b.as_ref());
-        assert!((got - direct).abs() < 1e-10 * direct.abs());
         let mut product = lower_a.clone();
         lower_hadamard_in_place(&mut product, full_b.as_ref());
         for j in 0..23 {
