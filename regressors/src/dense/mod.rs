@@ -8,7 +8,9 @@ use faer::{Accum, Mat, MatMut, MatRef};
 use gpodo_traits::SampleMatrix;
 
 mod symmetric;
-pub use symmetric::{lower_hadamard_in_place, symmetric_times, symmetrize_from_lower};
+pub use symmetric::{
+    copy_lower_triangle, lower_hadamard_in_place, symmetric_times, symmetrize_from_lower,
+};
 
 /// Copies a row-major sample matrix into a faer matrix.
 pub fn to_faer(m: &SampleMatrix) -> Mat<f64> {

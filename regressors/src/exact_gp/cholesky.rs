@@ -11,7 +11,7 @@ use faer::linalg::triangular_solve::{
 use faer::{Mat, MatRef};
 
 use crate::RegressorError;
-use crate::dense::{par, symmetrize_from_lower};
+use crate::dense::{copy_lower_triangle, par, symmetrize_from_lower};
 
 /// Jitter steps relative to the mean diagonal: 0, then 1e-10, 1e-9, … 1e-3.
 const RELATIVE_JITTERS: [f64; 9] = [0.0, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3];
@@ -23,16 +23,6 @@ pub struct Cholesky {
     pub l: Mat<f64>,
     /// The absolute diagonal jitter that was added (0 when none was needed).
     pub jitter: f64,
-}
-
-/// Copies the lower triangle of `k` into `work` as one slice copy per
-/// column (faer's `copy_from_triangular_lower`, an element-wise zip, was
-/// 1.4 % of a `paper.yaml` profile).
-fn copy_lower(work: &mut Mat<f64>, k: &Mat<f64>) {
-    for j in 0..k.ncols() {
-        let source = crate::dense::column(k.as_ref(), j);
-        crate::dense::column_mut(work, j)[j..].copy_from_slice(&source[j..]);
-    }
 }
 
 impl Cholesky {
@@ -69,11 +59,11 @@ impl Cholesky {
         // the failing column, upper part included), so every attempt starts
         // from a fresh copy of `k`.
         let mut work = crate::dense::scratch(n, n);
-        copy_lower(&mut work, k);
+        copy_lower_triangle(&mut work, k.as_ref());
         for (attempt, relative) in RELATIVE_JITTERS.iter().enumerate() {
             let jitter = relative * scale;
             if attempt > 0 {
-                copy_lower(&mut work, k);
+                copy_lower_triangle(&mut work, k.as_ref());
             }
             for i in 0..n {
                 work[(i, i)] += shift;

@@ -24,11 +24,14 @@ impl Linear {
         Self { variances }
     }
 
+    /// `X diag(v)`.
+    fn scaled(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        Mat::from_fn(x.nrows(), x.ncols(), |i, q| x[(i, q)] * self.variances[q])
+    }
+
     /// `K(X1, X2) = X1 diag(v) X2ᵀ`.
     pub fn cross(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
-        let scaled = Mat::from_fn(x1.nrows(), x1.ncols(), |i, q| {
-            x1[(i, q)] * self.variances[q]
-        });
+        let scaled = self.scaled(x1);
         // `Accum::Replace` writes every entry without reading it.
         let mut k = crate::dense::scratch(x1.nrows(), x2.nrows());
         gemm(
@@ -44,7 +47,7 @@ impl Linear {
     /// `K(X, X)` on and below the diagonal only (one triangular GEMM; what
     /// is above the diagonal is unspecified).
     pub fn gram_lower(&self, x: MatRef<'_, f64>) -> Mat<f64> {
-        let scaled = Mat::from_fn(x.nrows(), x.ncols(), |i, q| x[(i, q)] * self.variances[q]);
+        let scaled = self.scaled(x);
         // `Accum::Replace` writes every entry of the lower triangle.
         let mut k = crate::dense::scratch(x.nrows(), x.nrows());
         triangular::matmul(

@@ -24,7 +24,8 @@ pub use profile::Family;
 pub use stationary::Stationary;
 
 use crate::dense::{
-    column, column_mut, hadamard, lower_hadamard_in_place, symmetrize_from_lower, trace,
+    column, column_mut, copy_lower_triangle, hadamard, lower_hadamard_in_place,
+    symmetrize_from_lower, trace,
 };
 
 /// A kernel with its current hyperparameters.
@@ -89,7 +90,11 @@ impl GramCache {
         // `c` exactly), the others are added or multiplied in.
         let mut k = crate::dense::scratch(n1, n2);
         if let Some(first) = children.first() {
-            k.copy_from(&first.k);
+            if lower {
+                copy_lower_triangle(&mut k, first.k.as_ref());
+            } else {
+                k.copy_from(&first.k);
+            }
         }
         for child in children.iter().skip(1) {
             for j in 0..n2 {
@@ -414,7 +419,8 @@ impl Kernel {
                 let mut at = 0;
                 for (i, (k, c)) in children.iter().zip(&cache.children).enumerate() {
                     // ∂(K_1 ∘ … ∘ K_m)/∂θ_i = ∂K_i/∂θ_i ∘ Π_{j≠i} K_j.
-                    let mut wi = w.to_owned();
+                    let mut wi = crate::dense::scratch(w.nrows(), w.ncols());
+                    copy_lower_triangle(&mut wi, w);
                     for (j, cj) in cache.children.iter().enumerate() {
                         if j != i {
                             lower_hadamard_in_place(&mut wi, cj.k.as_ref());
