@@ -59,11 +59,12 @@ class TimeLimit(Exception):
     pass
 
 
-def load_table(path, n, d):
+def load_table(path, n, d, targets=TARGETS):
     with open(path, newline="") as fh:
         header = next(csv.reader(fh))
-    if len(header) != N_INPUTS + len(TARGETS) or header[N_INPUTS:] != TARGETS:
-        sys.exit(f"unexpected header in {path}: {header}")
+    if len(header) != N_INPUTS + len(targets) or header[N_INPUTS:] != targets:
+        sys.exit(f"unexpected header in {path}: expected {N_INPUTS} inputs then "
+                 f"{','.join(targets)}, found {header}")
     data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     if n is not None:
         if n > data.shape[0]:
@@ -195,6 +196,9 @@ def main():
     ap.add_argument("--table", type=Path, default=DEFAULT_TABLE,
                     help="training CSV (default: ../shared/data/exoter_gp_train_1s.csv "
                          "relative to the repository root)")
+    ap.add_argument("--targets", default=",".join(TARGETS),
+                    help="the table's last three columns, comma-separated (the simulated "
+                         "testbed's residuals_train.csv: res_vx,res_vy,res_vz)")
     ap.add_argument("--n", type=int, default=None, help="use the first N rows (default: all)")
     ap.add_argument("--d", type=int, default=N_INPUTS, help="use the first D input columns")
     ap.add_argument("--peers", default="gpy,sklearn", help="comma list of: gpy, sklearn")
@@ -211,7 +215,8 @@ def main():
         if p not in PEERS:
             sys.exit(f"unknown peer {p!r}; choose from {sorted(PEERS)}")
 
-    X_raw, Y_raw, _ = load_table(args.table, args.n, args.d)
+    targets = [t.strip() for t in args.targets.split(",") if t.strip()]
+    X_raw, Y_raw, _ = load_table(args.table, args.n, args.d, targets)
     X, Y = zscore(X_raw), zscore(Y_raw)
     n, d = X.shape
 

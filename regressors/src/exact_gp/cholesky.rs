@@ -5,13 +5,15 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+use faer::linalg::triangular_inverse::invert_lower_triangular;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::{Mat, MatRef};
+use faer::{Accum, Mat, MatRef};
 
 use crate::RegressorError;
-use crate::dense::{copy_lower_triangle, par, symmetrize_from_lower};
+use crate::dense::{copy_lower_triangle, par, recycle, scratch, symmetrize_from_lower};
 
 /// Jitter steps relative to the mean diagonal: 0, then 1e-10, 1e-9, … 1e-3.
 const RELATIVE_JITTERS: [f64; 9] = [0.0, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3];
@@ -139,17 +141,32 @@ impl Cholesky {
         out
     }
 
-    /// `K⁻¹` in its lower triangle (read nothing above the diagonal).
+    /// `K⁻¹` in its lower triangle: `L⁻¹` by faer's triangular inverse,
+    /// then `L⁻ᵀ L⁻¹` by its triangular product, reading and writing
+    /// nothing above the diagonal. The upper triangle of the result is
+    /// unspecified (a recycled buffer's old values); [`Cholesky::inverse`]
+    /// mirrors the lower one into it.
+    ///
+    /// faer's own `llt::inverse` does the same two steps but allocates the
+    /// `n × n` intermediate afresh on every call (8 MB of page faults at
+    /// n = 1000); here both buffers are recycled ([`crate::dense::scratch`]).
     pub fn inverse_lower(&self) -> Mat<f64> {
         let n = self.l.nrows();
-        let mut out = crate::dense::zeros(n, n);
-        let mut buffer = MemBuffer::new(llt::inverse::inverse_scratch::<f64>(n, par()));
-        llt::inverse::inverse(
+        let mut l_inv = scratch(n, n);
+        invert_lower_triangular(l_inv.as_mut(), self.l.as_ref(), par());
+        let mut out = scratch(n, n);
+        matmul(
             out.as_mut(),
-            self.l.as_ref(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            l_inv.transpose(),
+            BlockStructure::TriangularUpper,
+            l_inv.as_ref(),
+            BlockStructure::TriangularLower,
+            1.0,
             par(),
-            MemStack::new(&mut buffer),
         );
+        recycle(l_inv);
         out
     }
 }
@@ -188,6 +205,44 @@ mod tests {
         let lower = Cholesky::factor_shifted(&upper_nan, 0.5).unwrap();
         assert_eq!(lower.l, full.l);
         assert_eq!(lower.jitter, 0.0);
+    }
+
+    #[test]
+    fn inverse_lower_equals_faers_inverse_from_poisoned_buffers() {
+        let n = 300;
+        let a = Mat::from_fn(n, n, |i, j| {
+            (-((i as f64 - j as f64) / 40.0).powi(2)).exp() + if i == j { 0.1 } else { 0.0 }
+        });
+        let c = Cholesky::factor(a.clone()).unwrap();
+        // The recycled buffers the inverse works in hold NaN everywhere.
+        crate::dense::release_spare();
+        for _ in 0..2 {
+            recycle(Mat::from_fn(n, n, |_, _| f64::NAN));
+        }
+        let ours = c.inverse_lower();
+        let mut reference = Mat::<f64>::zeros(n, n);
+        llt::inverse::inverse(
+            reference.as_mut(),
+            c.l.as_ref(),
+            faer::Par::Seq,
+            MemStack::new(&mut MemBuffer::new(llt::inverse::inverse_scratch::<f64>(
+                n,
+                faer::Par::Seq,
+            ))),
+        );
+        for j in 0..n {
+            for i in j..n {
+                assert_eq!(
+                    ours[(i, j)].to_bits(),
+                    reference[(i, j)].to_bits(),
+                    "({i}, {j})"
+                );
+            }
+        }
+        // And the full inverse is symmetric with no NaN left above.
+        let full = c.inverse();
+        assert!((0..n).all(|j| (0..n).all(|i| full[(i, j)] == full[(j, i)])));
+        crate::dense::release_spare();
     }
 
     #[test]

@@ -44,27 +44,24 @@ pub fn lml_from_factor(chol: &Cholesky, y: MatRef<'_, f64>, alpha: MatRef<'_, f6
 }
 
 /// `W = A Aᵀ − p K_y⁻¹` on and below the diagonal (all the kernels'
-/// gradients read of the symmetric `W`) from the lower triangle of `K_y⁻¹`
-/// and `A = K_y⁻¹ Y` (`n × p`), in one pass over column blocks (in
-/// parallel, see [`for_column_blocks`]).
-fn weights_lower(inverse_lower: MatRef<'_, f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
+/// gradients read of the symmetric `W`), written over the lower triangle of
+/// `K_y⁻¹` it is given, with `A = K_y⁻¹ Y` (`n × p`), in one pass over
+/// column blocks (in parallel, see [`for_column_blocks`]).
+fn weights_lower(mut inverse_lower: Mat<f64>, alpha: MatRef<'_, f64>) -> Mat<f64> {
     let (n, p) = (alpha.nrows(), alpha.ncols());
     let scale = -(p as f64);
     let alpha_cols: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|c| column(alpha, c)).collect();
-    // Every entry on and below the diagonal is written.
-    let mut w = crate::dense::scratch(n, n);
     let mut unused = vec![(); n];
-    for_column_blocks(&mut w, &mut unused, |j0, columns, _| {
+    for_column_blocks(&mut inverse_lower, &mut unused, |j0, columns, _| {
         for (jj, col) in columns.iter_mut().enumerate() {
             let j = j0 + jj;
-            let inv = column(inverse_lower, j);
-            for i in j..n {
+            for (i, entry) in col.iter_mut().enumerate().skip(j) {
                 let outer: f64 = alpha_cols.iter().map(|a| a[i] * a[j]).sum();
-                col[i] = outer + scale * inv[i];
+                *entry = outer + scale * *entry;
             }
         }
     });
-    w
+    inverse_lower
 }
 
 /// Evaluates the log marginal likelihood, and its gradient when asked.
@@ -91,9 +88,7 @@ pub fn log_marginal_likelihood(
         });
     }
     let gradient = with_gradient.then(|| {
-        let inverse = chol.inverse_lower();
-        let w = weights_lower(inverse.as_ref(), alpha.as_ref());
-        recycle(inverse);
+        let w = weights_lower(chol.inverse_lower(), alpha.as_ref());
         let mut g = vec![0.0; kernel.n_params() + 1];
         let m = kernel.n_params();
         kernel.accumulate_gradient(x, &cache, w.as_ref(), &mut g[..m]);
