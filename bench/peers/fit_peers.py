@@ -75,10 +75,15 @@ def load_table(path, n, d, targets=TARGETS):
     return data[:, :d].copy(), data[:, N_INPUTS:].copy(), header[:d]
 
 
-def zscore(a):
+def standardiser(a):
+    """Column means and population stds (a std < 1e-12 becomes 1)."""
     mean = a.mean(axis=0)
     std = a.std(axis=0, ddof=0)
-    std = np.where(std < 1e-12, 1.0, std)
+    return mean, np.where(std < 1e-12, 1.0, std)
+
+
+def zscore(a):
+    mean, std = standardiser(a)
     return (a - mean) / std
 
 

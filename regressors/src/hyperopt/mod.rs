@@ -171,6 +171,14 @@ impl std::fmt::Debug for ProgressSink {
 /// A point, the cost there and its gradient.
 type Evaluated = (Vec<f64>, f64, Vec<f64>);
 
+/// One evaluation of the objective, before negation and scaling.
+struct RawEvaluation {
+    /// Where it was evaluated (the optimiser's point, clamped).
+    clamped: Vec<f64>,
+    value: f64,
+    gradient: Vec<f64>,
+}
+
 /// The negated, scaled objective in the optimiser's (unclamped)
 /// coordinates, caching the last point (argmin asks for the cost and the
 /// gradient separately) and remembering the best point evaluated.
@@ -201,6 +209,13 @@ impl Negated<'_> {
         {
             return Ok((*cost, grad.clone()));
         }
+        let raw = self.evaluate_raw(u)?;
+        Ok(self.record(u, raw))
+    }
+
+    /// The objective and its gradient at the clamped `u`, unscaled and not
+    /// cached (but counted).
+    fn evaluate_raw(&self, u: &[f64]) -> Result<RawEvaluation, RegressorError> {
         let clamped = self.clamp(u);
         let (value, gradient) = self.objective.evaluate(&clamped)?;
         self.evaluations.set(self.evaluations.get() + 1);
@@ -209,10 +224,21 @@ impl Negated<'_> {
             value,
             "hyperparameter objective"
         );
+        Ok(RawEvaluation {
+            clamped,
+            value,
+            gradient,
+        })
+    }
+
+    /// The cost and gradient the optimiser sees at `u` (negated, scaled,
+    /// plus the bound penalties) for the objective's `raw` evaluation.
+    fn scaled(&self, u: &[f64], raw: &RawEvaluation) -> (f64, f64, Vec<f64>) {
         let scale = self.scale.get();
-        let objective_cost = -value * scale;
+        let objective_cost = -raw.value * scale;
         let mut cost = objective_cost;
-        let mut grad: Vec<f64> = gradient
+        let mut grad: Vec<f64> = raw
+            .gradient
             .iter()
             .zip(u.iter().zip(self.bounds))
             .map(|(g, (u, b))| -g * b.derivative(*u) * scale)
@@ -222,6 +248,13 @@ impl Negated<'_> {
             cost += p;
             *g += dp;
         }
+        (objective_cost, cost, grad)
+    }
+
+    /// Scales `raw` (at `u`), caches it as the last point and keeps it as
+    /// the best when it is.
+    fn record(&self, u: &[f64], raw: RawEvaluation) -> (f64, Vec<f64>) {
+        let (objective_cost, cost, grad) = self.scaled(u, &raw);
         // The best point is kept by objective alone, at its clamped
         // coordinates (where the objective was evaluated).
         let improved = self
@@ -230,16 +263,10 @@ impl Negated<'_> {
             .as_ref()
             .is_none_or(|(_, c)| objective_cost < *c);
         if improved {
-            *self.best.borrow_mut() = Some((clamped, objective_cost));
+            *self.best.borrow_mut() = Some((raw.clamped, objective_cost));
         }
         *self.last.borrow_mut() = Some((u.to_vec(), cost, grad.clone()));
-        Ok((cost, grad))
-    }
-
-    /// Forgets the cache and the best point (after a change of scale).
-    fn reset(&self) {
-        *self.last.borrow_mut() = None;
-        *self.best.borrow_mut() = None;
+        (cost, grad)
     }
 }
 
@@ -314,13 +341,15 @@ pub fn maximize(
             best: RefCell::new(None),
             evaluations: Cell::new(0),
         };
-        let initial = problem.evaluate(&start_u).and_then(|(_, grad)| {
+        // The scale is fixed by the gradient at the start, so that
+        // evaluation is scaled once it is known (not evaluated twice).
+        let initial = problem.evaluate_raw(&start_u).map(|raw| {
+            let (_, _, grad) = problem.scaled(&start_u, &raw);
             let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
             if norm > 1.0 {
                 problem.scale.set(value_scale / norm);
-                problem.reset();
             }
-            problem.evaluate(&start_u).map(|(cost, _)| cost)
+            problem.record(&start_u, raw).0
         });
         match initial {
             Ok(_) => {}
@@ -416,6 +445,45 @@ mod tests {
             other => panic!("expected an InvalidSpec error, got {other:?}"),
         }
         assert!(settings(Optimizer::Lbfgs).check("exact_gp", true).is_ok());
+    }
+
+    /// [`Quadratic`], remembering every point it is evaluated at.
+    struct Counting {
+        inner: Quadratic,
+        points: RefCell<Vec<Vec<f64>>>,
+    }
+
+    impl Objective for Counting {
+        fn evaluate(&self, c: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+            self.points.borrow_mut().push(c.to_vec());
+            self.inner.evaluate(c)
+        }
+    }
+
+    #[test]
+    fn evaluates_no_point_twice_when_the_start_sets_the_scale() {
+        // The gradient at the start (norm 2·√(100² + 50²) ≈ 224) rescales
+        // the objective; the start is still evaluated once.
+        let objective = Counting {
+            inner: Quadratic(vec![100.0, -50.0]),
+            points: RefCell::new(Vec::new()),
+        };
+        let coords = Coordinates {
+            start: vec![0.0; 2],
+            bounds: vec![LogBounds::unbounded(); 2],
+            perturb: vec![true; 2],
+        };
+        let one_start = OptimizerSettings {
+            restarts: 0,
+            ..settings(Optimizer::Lbfgs)
+        };
+        let out = maximize(&objective, &coords, 1.0, &one_start, None).unwrap();
+        let points = objective.points.borrow();
+        assert_eq!(out.evaluations, points.len());
+        for pair in points.windows(2) {
+            assert_ne!(pair[0], pair[1], "the same point evaluated twice in a row");
+        }
+        assert!((out.coords[0] - 100.0).abs() < 1e-6, "{out:?}");
     }
 
     #[test]
