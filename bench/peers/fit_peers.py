@@ -87,12 +87,32 @@ def zscore(a):
     return (a - mean) / std
 
 
+def rbf(A, B, variance, lengthscales):
+    """The ARD RBF kernel matrix K(A, B)."""
+    lengthscales = np.asarray(lengthscales)
+    ZA, ZB = A / lengthscales, B / lengthscales
+    r2 = np.sum(ZA * ZA, axis=1)[:, None] + np.sum(ZB * ZB, axis=1)[None, :] - 2.0 * ZA @ ZB.T
+    return variance * np.exp(-0.5 * np.maximum(r2, 0.0))
+
+
+def add_table_arguments(ap):
+    """--table and --targets, shared by the peer scripts."""
+    ap.add_argument("--table", type=Path, default=DEFAULT_TABLE,
+                    help="training CSV (default: ../shared/data/exoter_gp_train_1s.csv "
+                         "relative to the repository root)")
+    ap.add_argument("--targets", default=",".join(TARGETS),
+                    help="the table's last three columns, comma-separated (the simulated "
+                         "testbed's residuals_train.csv: res_vx,res_vy,res_vz)")
+
+
+def targets_of(args):
+    """The target column names parsed from --targets."""
+    return [t.strip() for t in args.targets.split(",") if t.strip()]
+
+
 def exact_lml(X, Y, variance, lengthscales, noise):
     """Jitter-free LML of an ARD RBF GP, summed over the columns of Y."""
-    Z = X / np.asarray(lengthscales)
-    sq = np.sum(Z * Z, axis=1)
-    r2 = np.maximum(sq[:, None] + sq[None, :] - 2.0 * Z @ Z.T, 0.0)
-    K = variance * np.exp(-0.5 * r2)
+    K = rbf(X, X, variance, lengthscales)
     K[np.diag_indices_from(K)] += noise
     L = np.linalg.cholesky(K)
     alpha = scipy.linalg.cho_solve((L, True), Y)
@@ -198,12 +218,7 @@ PEERS = {"gpy": fit_gpy, "sklearn": fit_sklearn}
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--table", type=Path, default=DEFAULT_TABLE,
-                    help="training CSV (default: ../shared/data/exoter_gp_train_1s.csv "
-                         "relative to the repository root)")
-    ap.add_argument("--targets", default=",".join(TARGETS),
-                    help="the table's last three columns, comma-separated (the simulated "
-                         "testbed's residuals_train.csv: res_vx,res_vy,res_vz)")
+    add_table_arguments(ap)
     ap.add_argument("--n", type=int, default=None, help="use the first N rows (default: all)")
     ap.add_argument("--d", type=int, default=N_INPUTS, help="use the first D input columns")
     ap.add_argument("--peers", default="gpy,sklearn", help="comma list of: gpy, sklearn")
@@ -220,8 +235,7 @@ def main():
         if p not in PEERS:
             sys.exit(f"unknown peer {p!r}; choose from {sorted(PEERS)}")
 
-    targets = [t.strip() for t in args.targets.split(",") if t.strip()]
-    X_raw, Y_raw, _ = load_table(args.table, args.n, args.d, targets)
+    X_raw, Y_raw, _ = load_table(args.table, args.n, args.d, targets_of(args))
     X, Y = zscore(X_raw), zscore(Y_raw)
     n, d = X.shape
 

@@ -39,13 +39,9 @@ import numpy as np
 import scipy.linalg
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fit_peers import DEFAULT_TABLE, TARGETS, exact_lml, load_table, standardiser  # noqa: E402
-
-
-def rbf(a, b, variance, lengthscales):
-    za, zb = a / lengthscales, b / lengthscales
-    r2 = (za * za).sum(1)[:, None] + (zb * zb).sum(1)[None, :] - 2.0 * za @ zb.T
-    return variance * np.exp(-0.5 * np.maximum(r2, 0.0))
+from fit_peers import (  # noqa: E402
+    add_table_arguments, exact_lml, load_table, rbf, standardiser, targets_of,
+)
 
 
 def posterior_mean(x, y, x_test, variance, lengthscales, noise):
@@ -57,9 +53,7 @@ def posterior_mean(x, y, x_test, variance, lengthscales, noise):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--table", type=Path, default=DEFAULT_TABLE, help="training CSV")
-    ap.add_argument("--targets", default=",".join(TARGETS),
-                    help="the table's last three columns, comma-separated")
+    add_table_arguments(ap)
     ap.add_argument("--n", type=int, required=True, help="training rows (the first N)")
     ap.add_argument("--d", type=int, required=True, help="inputs (the first D)")
     ap.add_argument("--test-from", type=int, default=2000,
@@ -71,7 +65,7 @@ def main():
                     help="JSON lines of fits (fit_peers.py, fit_csv); others are skipped")
     args = ap.parse_args()
 
-    targets = [t.strip() for t in args.targets.split(",") if t.strip()]
+    targets = targets_of(args)
     x_all, y_all, _ = load_table(args.table, None, args.d, targets)
     if args.n > x_all.shape[0]:
         sys.exit(f"--n {args.n} but {args.table} has only {x_all.shape[0]} rows")
