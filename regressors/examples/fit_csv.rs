@@ -9,13 +9,27 @@
 //! `cargo run --release -p gpodo-regressors --example fit_csv -- FILE.csv`
 //! (`GPODO_LENGTHSCALE`, `GPODO_GRAD_TOL`, `GPODO_COST_TOL` and
 //! `GPODO_LBFGS_MEMORY` override the start, the stopping rules and the
-//! L-BFGS memory; 10 is the peers' scipy default).
+//! L-BFGS memory; 10 is the peers' scipy default; `GPODO_KERNEL` sets a
+//! kernel expression, e.g. `rbf + linear`; `GPODO_RACE` and `GPODO_HALVE`
+//! set the start race's iterations and when it halves, `GPODO_MAX_ITERS`
+//! the iteration limit (1000); `GPODO_TRACE=1` prints every optimiser iteration to
+//! stderr as `run iteration LML`). The JSON line lists every candidate
+//! start with its start and final LML, evaluations and iterations.
 
 use std::time::Instant;
 
 use anyhow::{Context, bail};
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
+use gpodo_traits::{FitProgress, ResidualDataset, ResidualRegressor, SampleMatrix};
+
+/// Prints every optimiser iteration to stderr.
+struct Trace;
+
+impl FitProgress for Trace {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+        eprintln!("{start} {iteration} {objective}");
+    }
+}
 
 fn main() -> anyhow::Result<()> {
     let Some(path) = std::env::args().nth(1) else {
@@ -62,7 +76,22 @@ fn main() -> anyhow::Result<()> {
     if let Ok(m) = std::env::var("GPODO_LBFGS_MEMORY") {
         params.lbfgs_memory = m.parse()?;
     }
+    if let Ok(expr) = std::env::var("GPODO_KERNEL") {
+        params.kernel = gpodo_regressors::kernels::KernelExpr::parse(&expr)?;
+    }
+    if let Ok(r) = std::env::var("GPODO_RACE") {
+        params.start.race_iterations = r.parse()?;
+    }
+    if let Ok(m) = std::env::var("GPODO_MAX_ITERS") {
+        params.max_iters = m.parse()?;
+    }
+    if let Ok(h) = std::env::var("GPODO_HALVE") {
+        params.start.halve_after = h.parse()?;
+    }
     let mut gp = ExactGp::new(params)?;
+    if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {
+        gp.set_progress(Some(std::sync::Arc::new(Trace)));
+    }
     let start = Instant::now();
     let report = gp.fit(&data)?;
     let seconds = start.elapsed().as_secs_f64();
@@ -87,6 +116,7 @@ fn main() -> anyhow::Result<()> {
             "lml": report.objective, "evaluations": report.evaluations,
             "variance": get("rbf.variance"), "noise_variance": get("noise_variance"),
             "lengthscales": lengthscales,
+            "starts": report.starts,
         })
     );
     Ok(())

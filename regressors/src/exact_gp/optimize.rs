@@ -58,8 +58,10 @@ impl Objective for Lml<'_> {
 /// `params.kernel` on `(x, y)` by maximising the log marginal likelihood:
 /// the candidate starts of [`starts::kernel_bases`] and their seeded perturbations
 /// ([`StartPolicy`](crate::hyperopt::StartPolicy)) are scored by their LML,
-/// the optimiser runs from the best `start.optimize_best` (plus `restarts`
-/// perturbations of the best), and the highest optimum wins.
+/// the named bases and the best `start.optimize_best` race (the better
+/// half of them after `start.halve_after` iterations), the leader runs to
+/// convergence (plus `restarts` perturbations of it), and the highest
+/// optimum wins.
 ///
 /// # Errors
 /// [`RegressorError::Optimizer`] or [`RegressorError::NotPositiveDefinite`]

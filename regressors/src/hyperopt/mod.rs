@@ -9,6 +9,7 @@
 
 mod bounds;
 mod projected_lbfgs;
+mod run;
 mod solver;
 pub mod starts;
 
@@ -25,6 +26,7 @@ pub use projected_lbfgs::ProjectedLbfgs;
 pub use starts::StartPolicy;
 
 use crate::RegressorError;
+use run::Run;
 
 /// The optimiser of the objective.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -333,60 +335,25 @@ pub fn maximize(
                 })
                 .collect()
         };
-        let problem = Negated {
-            objective,
-            bounds: &coords.bounds,
-            scale: Cell::new(value_scale),
-            last: RefCell::new(None),
-            best: RefCell::new(None),
-            evaluations: Cell::new(0),
-        };
-        // The scale is fixed by the gradient at the start, so that
-        // evaluation is scaled once it is known (not evaluated twice).
-        let initial = problem.evaluate_raw(&start_u).map(|raw| {
-            let (_, _, grad) = problem.scaled(&start_u, &raw);
-            let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
-            if norm > 1.0 {
-                problem.scale.set(value_scale / norm);
-            }
-            problem.record(&start_u, raw).0
-        });
-        match initial {
-            Ok(_) => {}
-            Err(e) => {
-                evaluations += problem.evaluations.get();
+        let mut run = match Run::start(objective, &coords.bounds, start_u, value_scale, settings) {
+            Ok(run) => run,
+            Err((e, spent)) => {
+                evaluations += spent;
                 last_error = Some(e);
                 continue;
             }
         };
-        let scale = problem.scale.get();
-        let tol_cost = CostTolerance {
-            relative: settings.relative_cost_tolerance,
-            unit: scale,
-        };
-        let outcome = solver::run(
-            &problem,
-            &coords.bounds,
-            start_u,
-            settings,
-            tol_cost,
-            progress.map(|p| (p, start, scale)),
-        );
-        match outcome {
-            Ok(n) => iterations += n,
-            Err(e) if problem.best.borrow().is_some() => {
-                // A failed line search still leaves the best point evaluated.
-                tracing::debug!(error = %e, "optimiser stopped early; keeping the best point");
+        run.advance(settings.max_iters, settings, progress.map(|p| (p, start)));
+        evaluations += run.evaluations();
+        iterations += run.iterations();
+        match run.finish() {
+            Ok(out) => {
+                start_values.push(out.value);
+                if best.as_ref().is_none_or(|(_, v)| out.value > *v) {
+                    best = Some((out.coords, out.value));
+                }
             }
-            Err(e) => last_error = Some(optimizer_error(settings, e)),
-        }
-        evaluations += problem.evaluations.get();
-        if let Some((u, cost)) = problem.best.into_inner() {
-            let value = -cost / scale;
-            start_values.push(value);
-            if best.as_ref().is_none_or(|(_, v)| value > *v) {
-                best = Some((u, value));
-            }
+            Err(e) => last_error = Some(e),
         }
     }
     let Some((coords, value)) = best else {

@@ -1,7 +1,8 @@
 //! One optimiser start with argmin: the bounded projected L-BFGS
 //! ([`ProjectedLbfgs`], L-BFGS-B's behaviour) or Polak–Ribière nonlinear
 //! conjugate gradient (Moré–Thuente line search, bounds as penalties), with
-//! the same stopping rules (gradient norm, change of the objective).
+//! the same stopping rules (gradient norm, change of the objective), as a
+//! [`Stepper`] that can pause at an iteration limit and resume.
 
 use std::sync::Arc;
 
@@ -86,61 +87,127 @@ impl Observe<HyperState> for Reporter {
     }
 }
 
-/// Runs one start from `u0`; returns the iterations. The best point seen is
-/// recorded by `problem` whatever happens; `progress` (with the start's
-/// number and the objective's scale) hears of every iteration.
-pub(super) fn run(
-    problem: &Negated<'_>,
-    bounds: &[LogBounds],
-    u0: Vec<f64>,
-    settings: &OptimizerSettings,
-    tol_cost: CostTolerance,
-    progress: Option<(&Arc<dyn FitProgress>, usize, f64)>,
-) -> Result<u64, ArgminError> {
-    let reporter = progress.map(|(p, start, scale)| Reporter {
-        progress: Arc::clone(p),
-        start,
-        scale,
-    });
-    let converging_cg = |inner| Converging {
-        inner,
-        tol_grad: settings.gradient_tolerance,
-        tol_cost,
-    };
-    match settings.optimizer {
-        Optimizer::Lbfgs => {
-            let solver = ProjectedLbfgs::new(
+/// Argmin's nonlinear CG as this module configures it.
+type ConvergingCg = Converging<
+    NonlinearConjugateGradient<
+        Vec<f64>,
+        MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64>,
+        PolakRibiere,
+        f64,
+    >,
+>;
+
+/// The solver of one start.
+enum AnySolver {
+    Lbfgs(ProjectedLbfgs),
+    Cg(Box<ConvergingCg>),
+}
+
+/// One start's solver with its iteration state: it runs to an iteration
+/// limit, and when it stopped there it can be resumed with a higher limit
+/// exactly where it was (the same iterates, the same L-BFGS memory), so a
+/// run advanced in several legs is the run advanced in one.
+pub(super) struct Stepper {
+    solver: AnySolver,
+    state: HyperState,
+}
+
+impl Stepper {
+    /// A solver for `settings.optimizer` on `bounds`, to start at `u0`.
+    ///
+    /// # Errors
+    /// When the line search cannot be configured.
+    pub(super) fn new(
+        bounds: &[LogBounds],
+        u0: Vec<f64>,
+        settings: &OptimizerSettings,
+        tol_cost: CostTolerance,
+    ) -> Result<Self, ArgminError> {
+        let solver = match settings.optimizer {
+            Optimizer::Lbfgs => AnySolver::Lbfgs(ProjectedLbfgs::new(
                 bounds.iter().map(LogBounds::lower).collect(),
                 bounds.iter().map(LogBounds::upper).collect(),
                 settings.lbfgs_memory,
                 settings.gradient_tolerance,
                 tol_cost,
-            );
-            let mut executor = Executor::new(problem, solver)
-                .configure(|s| s.param(u0).max_iters(settings.max_iters));
-            if let Some(r) = reporter {
-                executor = executor.add_observer(r, ObserverMode::Always);
+            )),
+            Optimizer::ConjugateGradient => {
+                let line_search = MoreThuenteLineSearch::new().with_c(1e-4, 0.1)?;
+                let inner = NonlinearConjugateGradient::new(line_search, PolakRibiere::new())
+                    .restart_iters(u0.len() as u64)
+                    .restart_orthogonality(0.1);
+                AnySolver::Cg(Box::new(Converging {
+                    inner,
+                    tol_grad: settings.gradient_tolerance,
+                    tol_cost,
+                }))
             }
-            executor.run().map(|r| {
-                tracing::debug!(
-                    iterations = r.state().get_iter(),
-                    reason = ?r.state().get_termination_reason(),
-                    "optimiser start finished"
-                );
-                r.state().get_iter()
-            })
-        }
-        Optimizer::ConjugateGradient => {
-            let line_search = MoreThuenteLineSearch::new().with_c(1e-4, 0.1)?;
-            let solver = NonlinearConjugateGradient::new(line_search, PolakRibiere::new())
-                .restart_iters(u0.len() as u64)
-                .restart_orthogonality(0.1);
-            let mut executor = Executor::new(problem, converging_cg(solver))
-                .configure(|s| s.param(u0).max_iters(settings.max_iters));
-            if let Some(r) = reporter {
-                executor = executor.add_observer(r, ObserverMode::Always);
-            }
-            executor.run().map(|r| r.state().get_iter())
-        }
+        };
+        Ok(Self {
+            solver,
+            state: HyperState::new().param(u0),
+        })
     }
+
+    /// Runs until `max_iters` iterations in all; `progress` (with the
+    /// start's number and the objective's scale) hears of every iteration.
+    /// Returns the iterations so far, and the stepper itself when it
+    /// stopped at the limit (it can go on), `None` when it stopped for
+    /// another reason (converged, or no step lowers the objective).
+    ///
+    /// # Errors
+    /// The solver's or the objective's error (the stepper is lost; the best
+    /// point seen is still recorded by `problem`).
+    pub(super) fn advance(
+        self,
+        problem: &Negated<'_>,
+        max_iters: u64,
+        progress: Option<(&Arc<dyn FitProgress>, usize, f64)>,
+    ) -> Result<(u64, Option<Self>), ArgminError> {
+        let reporter = progress.map(|(p, start, scale)| Reporter {
+            progress: Arc::clone(p),
+            start,
+            scale,
+        });
+        let Self { solver, state } = self;
+        let (solver, state) = match solver {
+            AnySolver::Lbfgs(s) => {
+                let (s, state) = execute(problem, s, state, max_iters, reporter)?;
+                (AnySolver::Lbfgs(s), state)
+            }
+            AnySolver::Cg(s) => {
+                let (s, state) = execute(problem, *s, state, max_iters, reporter)?;
+                (AnySolver::Cg(Box::new(s)), state)
+            }
+        };
+        let iterations = state.get_iter();
+        let reason = state.get_termination_reason();
+        tracing::debug!(iterations, ?reason, "optimiser start paused or finished");
+        let paused = matches!(reason, Some(TerminationReason::MaxItersReached));
+        Ok((iterations, paused.then_some(Self { solver, state })))
+    }
+}
+
+/// Runs `solver` from `state` (fresh, or paused at an earlier limit) up to
+/// `max_iters` iterations in all.
+fn execute<'a, 'b, S>(
+    problem: &'a Negated<'b>,
+    solver: S,
+    mut state: HyperState,
+    max_iters: u64,
+    reporter: Option<Reporter>,
+) -> Result<(S, HyperState), ArgminError>
+where
+    S: Solver<&'a Negated<'b>, HyperState>,
+{
+    // A paused state carries its "limit reached" status; the executor
+    // skips the solver's `init` when the state has iterations already.
+    state.termination_status = TerminationStatus::NotTerminated;
+    let state = state.max_iters(max_iters);
+    let mut executor = Executor::new(problem, solver).configure(|_| state);
+    if let Some(r) = reporter {
+        executor = executor.add_observer(r, ObserverMode::Always);
+    }
+    let result = executor.run()?;
+    Ok((result.solver, result.state))
 }

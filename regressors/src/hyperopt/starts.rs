@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use faer::MatRef;
 use gpodo_traits::StartRecord;
 
+use super::run::Run;
 use super::{
     Coordinates, LogBounds, Maximized, Objective, OptimizerSettings, ProgressSink, maximize,
 };
@@ -37,6 +38,15 @@ pub struct StartPolicy {
     /// best-scored candidates run this many, and only the leader goes on to
     /// convergence (default 15; 0 runs every one of them to convergence).
     pub race_iterations: u64,
+    /// Iterations after which only the better half of the race (rounded
+    /// up, by LML so far) goes on to `race_iterations`, resumed exactly
+    /// where it paused, so the leader and its optimum are unchanged
+    /// whenever it is in that half (default 7; 0 races every candidate the
+    /// whole way). Starts from unit lengthscales climb slowly at first: on
+    /// the 16 fits of `bench/README.md` the 15-iteration leader ranked as
+    /// low as 4th of 4 or 5 after 3–5 iterations, and at most 3rd of 5 (2nd
+    /// of 4) after 6–9.
+    pub halve_after: u64,
 }
 
 impl Default for StartPolicy {
@@ -45,6 +55,7 @@ impl Default for StartPolicy {
             perturbations: 2,
             optimize_best: 2,
             race_iterations: 15,
+            halve_after: 7,
         }
     }
 }
@@ -226,8 +237,9 @@ pub fn kernel_bases(
 
 /// Scores `candidates` with `score` (the objective without its gradient),
 /// runs [`maximize`] from every named base and the best
-/// `policy.optimize_best` of them — all for `policy.race_iterations`
-/// iterations, then the leader alone to
+/// `policy.optimize_best` of them — all for `policy.halve_after`
+/// iterations, the better half on to `policy.race_iterations`, then the
+/// leader alone to
 /// convergence, with `settings.restarts` extra perturbed runs — and
 /// returns the highest optimum, with every candidate's record
 /// (restarts appended as records of their own). Evaluations and iterations
@@ -283,22 +295,33 @@ pub fn maximize_best(
             restarts: 0,
             ..*settings
         };
-        let mut leader: Option<(usize, Vec<f64>, f64)> = None;
+        let mut racers = Vec::with_capacity(runs.len());
         for (i, start) in runs {
-            let coords = Coordinates {
-                start,
-                bounds: bounds.to_vec(),
-                perturb: perturb.to_vec(),
-            };
+            let u: Vec<f64> = start
+                .iter()
+                .zip(bounds)
+                .map(|(c, b)| b.from_log(*c))
+                .collect();
             let sink = numbered(progress, run_number);
             run_number += 1;
-            match maximize(objective, &coords, value_scale, &short, sink.as_ref()) {
+            match Run::start(objective, bounds, u, value_scale, &short) {
+                Ok(run) => racers.push((i, run, sink)),
+                Err((e, spent)) => {
+                    evaluations += spent;
+                    last_error = Some(e);
+                }
+            }
+        }
+        race(&mut racers, policy, &short);
+        let mut leader: Option<(usize, Vec<f64>, f64)> = None;
+        for (i, run, _) in racers {
+            evaluations += run.evaluations();
+            iterations += run.iterations();
+            match run.finish() {
                 Ok(out) => {
                     records[i].final_objective = Some(out.value);
                     records[i].evaluations = Some(out.evaluations);
                     records[i].iterations = Some(out.iterations);
-                    evaluations += out.evaluations;
-                    iterations += out.iterations;
                     if leader.as_ref().is_none_or(|l| out.value > l.2) {
                         leader = Some((i, out.coords.clone(), out.value));
                     }
@@ -354,6 +377,42 @@ pub fn maximize_best(
     out.evaluations = evaluations;
     out.iterations = iterations;
     Ok((out, records))
+}
+
+/// A racer: the candidate's index, its run and its progress sink.
+type Racer<'a> = (
+    usize,
+    Run<'a>,
+    Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
+);
+
+/// Advances every racer to `policy.halve_after` iterations, then only the
+/// better half of them (rounded up, by their best value so far; ties keep
+/// the earlier candidate) on to `policy.race_iterations`. Each run is
+/// resumed where it paused, so a racer that goes on ends exactly where an
+/// uninterrupted race of `race_iterations` would have left it: halving
+/// only spares the iterations of the racers that trail.
+fn race(racers: &mut [Racer<'_>], policy: &StartPolicy, settings: &OptimizerSettings) {
+    let first = match policy.halve_after {
+        0 => policy.race_iterations,
+        h => h.min(policy.race_iterations),
+    };
+    for (_, run, sink) in racers.iter_mut() {
+        run.advance(first, settings, sink.as_ref().map(|s| (s, 0)));
+    }
+    let mut order: Vec<usize> = (0..racers.len()).collect();
+    order.sort_by(|&a, &b| {
+        let value = |k: usize| racers[k].1.best_value().unwrap_or(f64::NEG_INFINITY);
+        value(b).total_cmp(&value(a)).then(a.cmp(&b))
+    });
+    for &k in order.iter().take(racers.len().div_ceil(2)) {
+        let (_, run, sink) = &mut racers[k];
+        run.advance(
+            policy.race_iterations,
+            settings,
+            sink.as_ref().map(|s| (s, 0)),
+        );
+    }
 }
 
 #[cfg(test)]
@@ -413,5 +472,88 @@ mod tests {
         assert_eq!(scored[1].value, None);
         assert_eq!(best(&scored, 2), vec![2, 4]);
         assert_eq!(best(&scored, 10), vec![2, 4, 0, 3]);
+    }
+
+    /// Four Gaussian bumps of different heights in the plane.
+    struct Bumps;
+
+    const PEAKS: [([f64; 2], f64); 4] = [
+        ([0.0, 0.0], 1.0),
+        ([4.0, 0.0], 2.0),
+        ([0.0, 4.0], 1.5),
+        ([4.0, 4.0], 0.5),
+    ];
+
+    impl Objective for Bumps {
+        fn evaluate(&self, c: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+            let (mut value, mut grad) = (0.0, vec![0.0; 2]);
+            for (t, w) in PEAKS {
+                let e = w * (-0.5 * ((c[0] - t[0]).powi(2) + (c[1] - t[1]).powi(2))).exp();
+                value += e;
+                grad[0] -= e * (c[0] - t[0]);
+                grad[1] -= e * (c[1] - t[1]);
+            }
+            Ok((value, grad))
+        }
+    }
+
+    #[test]
+    fn halving_the_race_spares_only_the_trailing_racers() {
+        // One named start near each bump: all four race.
+        let candidates: Vec<(String, Vec<f64>)> = PEAKS
+            .iter()
+            .enumerate()
+            .map(|(k, (t, _))| (format!("near {k}"), vec![t[0] + 1.2, t[1] - 0.9]))
+            .collect();
+        let bounds = vec![LogBounds::unbounded(); 2];
+        let settings = OptimizerSettings {
+            optimizer: super::super::Optimizer::Lbfgs,
+            max_iters: 200,
+            restarts: 0,
+            seed: 0,
+            gradient_tolerance: 1e-12,
+            relative_cost_tolerance: 0.0,
+            lbfgs_memory: 5,
+        };
+        let fit = |halve_after| {
+            let policy = StartPolicy {
+                perturbations: 0,
+                optimize_best: 1,
+                race_iterations: 6,
+                halve_after,
+            };
+            maximize_best(
+                &Bumps,
+                candidates.clone(),
+                |c| Bumps.evaluate(c).map(|(v, _)| v),
+                &bounds,
+                &[true, true],
+                &policy,
+                1.0,
+                &settings,
+                &ProgressSink::default(),
+            )
+            .unwrap()
+        };
+        let (whole, whole_records) = fit(0);
+        let (halved, halved_records) = fit(2);
+        // The same leader, continued to the same optimum: the highest bump.
+        assert_eq!(halved.coords, whole.coords);
+        assert_eq!(halved.value, whole.value);
+        assert!((whole.coords[0] - 4.0).abs() < 0.01 && whole.coords[1].abs() < 0.01);
+        assert!(halved.evaluations < whole.evaluations);
+        // After 2 iterations the racers near bumps 1 and 2 (the highest)
+        // lead: they go on exactly as in the whole race; the other two stop.
+        let iterations: Vec<Option<u64>> = halved_records.iter().map(|r| r.iterations).collect();
+        assert_eq!(iterations[0], Some(2));
+        assert_eq!(iterations[3], Some(2));
+        for k in [1, 2] {
+            assert_eq!(halved_records[k], whole_records[k], "racer {k}");
+        }
+        for k in [0, 3] {
+            let (cut, whole) = (&halved_records[k], &whole_records[k]);
+            assert!(cut.evaluations < whole.evaluations, "racer {k}");
+            assert!(cut.final_objective <= whole.final_objective, "racer {k}");
+        }
     }
 }

@@ -1,0 +1,230 @@
+//! One optimiser start as a value: its start is evaluated (which fixes the
+//! objective's scale), then it is advanced to an iteration limit, possibly
+//! in several legs (the start race advances many runs a few iterations
+//! each and only the better ones further), and finally turned into a
+//! [`Maximized`].
+
+use std::cell::{Cell, RefCell};
+use std::sync::Arc;
+
+use gpodo_traits::FitProgress;
+
+use super::solver::Stepper;
+use super::{
+    CostTolerance, LogBounds, Maximized, Negated, Objective, OptimizerSettings, optimizer_error,
+};
+use crate::RegressorError;
+
+/// One optimiser start, advanced leg by leg.
+pub(super) struct Run<'a> {
+    problem: Negated<'a>,
+    /// The solver, while it can go on.
+    stepper: Option<Stepper>,
+    iterations: u64,
+    /// The optimiser's error, when it failed before any point was kept.
+    error: Option<RegressorError>,
+}
+
+impl<'a> Run<'a> {
+    /// Evaluates `objective` at `u` (optimiser coordinates on `bounds`) and
+    /// prepares the solver. The objective is scaled by `value_scale`,
+    /// further divided by the gradient norm at the start when that exceeds
+    /// 1 (see [`Negated`]).
+    ///
+    /// # Errors
+    /// The objective's error at the start, with the evaluations it took.
+    pub(super) fn start(
+        objective: &'a dyn Objective,
+        bounds: &'a [LogBounds],
+        u: Vec<f64>,
+        value_scale: f64,
+        settings: &OptimizerSettings,
+    ) -> Result<Self, (RegressorError, usize)> {
+        let problem = Negated {
+            objective,
+            bounds,
+            scale: Cell::new(value_scale),
+            last: RefCell::new(None),
+            best: RefCell::new(None),
+            evaluations: Cell::new(0),
+        };
+        // The scale is fixed by the gradient at the start, so that
+        // evaluation is scaled once it is known (not evaluated twice).
+        match problem.evaluate_raw(&u) {
+            Ok(raw) => {
+                let (_, _, grad) = problem.scaled(&u, &raw);
+                let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+                if norm > 1.0 {
+                    problem.scale.set(value_scale / norm);
+                }
+                problem.record(&u, raw);
+            }
+            Err(e) => return Err((e, problem.evaluations.get())),
+        }
+        let tol_cost = CostTolerance {
+            relative: settings.relative_cost_tolerance,
+            unit: problem.scale.get(),
+        };
+        let (stepper, error) = match Stepper::new(bounds, u, settings, tol_cost) {
+            Ok(s) => (Some(s), None),
+            Err(e) => (None, Some(optimizer_error(settings, e))),
+        };
+        Ok(Self {
+            problem,
+            stepper,
+            iterations: 0,
+            error,
+        })
+    }
+
+    /// Runs the optimiser on until `max_iters` iterations in all, unless it
+    /// has stopped already; `progress` (with the start's number) hears of
+    /// every iteration. A failed search keeps the best point evaluated.
+    pub(super) fn advance(
+        &mut self,
+        max_iters: u64,
+        settings: &OptimizerSettings,
+        progress: Option<(&Arc<dyn FitProgress>, usize)>,
+    ) {
+        let Some(stepper) = self.stepper.take() else {
+            return;
+        };
+        let scale = self.problem.scale.get();
+        let progress = progress.map(|(p, start)| (p, start, scale));
+        match stepper.advance(&self.problem, max_iters, progress) {
+            Ok((iterations, stepper)) => {
+                self.iterations = iterations;
+                self.stepper = stepper;
+            }
+            Err(e) if self.problem.best.borrow().is_some() => {
+                tracing::debug!(error = %e, "optimiser stopped early; keeping the best point");
+            }
+            Err(e) => self.error = Some(optimizer_error(settings, e)),
+        }
+    }
+
+    /// The best objective so far (unscaled, to maximise).
+    pub(super) fn best_value(&self) -> Option<f64> {
+        let scale = self.problem.scale.get();
+        self.problem
+            .best
+            .borrow()
+            .as_ref()
+            .map(|(_, cost)| -cost / scale)
+    }
+
+    /// Objective evaluations so far.
+    pub(super) fn evaluations(&self) -> usize {
+        self.problem.evaluations.get()
+    }
+
+    /// Iterations of the legs that ended without an error.
+    pub(super) fn iterations(&self) -> u64 {
+        self.iterations
+    }
+
+    /// The best point and its value (unscaled, to maximise), or the
+    /// optimiser's error when it kept none.
+    ///
+    /// # Errors
+    /// The optimiser's error, when no point was kept.
+    pub(super) fn finish(self) -> Result<Maximized, RegressorError> {
+        let (evaluations, iterations) = (self.evaluations(), self.iterations);
+        let scale = self.problem.scale.get();
+        match (self.problem.best.into_inner(), self.error) {
+            (Some((coords, cost)), _) => {
+                let value = -cost / scale;
+                Ok(Maximized {
+                    coords,
+                    value,
+                    evaluations,
+                    iterations,
+                    start_values: vec![value],
+                })
+            }
+            (None, Some(e)) => Err(e),
+            (None, None) => Err(RegressorError::Optimizer {
+                optimizer: "optimiser".into(),
+                detail: "no point was evaluated".into(),
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hyperopt::Optimizer;
+
+    /// The Rosenbrock function in `d` coordinates, negated (to maximise),
+    /// remembering every point it is evaluated at: curved enough that the
+    /// L-BFGS memory and CG's direction matter to every iterate.
+    struct Rosenbrock(RefCell<Vec<Vec<f64>>>);
+
+    impl Objective for Rosenbrock {
+        fn evaluate(&self, c: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+            self.0.borrow_mut().push(c.to_vec());
+            let mut value = 0.0;
+            let mut grad = vec![0.0; c.len()];
+            for i in 0..c.len() - 1 {
+                let (a, b) = (1.0 - c[i], c[i + 1] - c[i] * c[i]);
+                value -= a * a + 100.0 * b * b;
+                grad[i] += 2.0 * a + 400.0 * b * c[i];
+                grad[i + 1] -= 200.0 * b;
+            }
+            Ok((value, grad))
+        }
+    }
+
+    fn settings(optimizer: Optimizer) -> OptimizerSettings {
+        OptimizerSettings {
+            optimizer,
+            max_iters: 40,
+            restarts: 0,
+            seed: 0,
+            gradient_tolerance: 1e-12,
+            relative_cost_tolerance: 0.0,
+            lbfgs_memory: 5,
+        }
+    }
+
+    /// The points evaluated, the result and the iterations of a run
+    /// advanced through the iteration limits `legs`.
+    fn run_in_legs(optimizer: Optimizer, legs: &[u64]) -> (Vec<Vec<f64>>, Maximized, u64) {
+        let objective = Rosenbrock(RefCell::new(Vec::new()));
+        let bounds = vec![LogBounds::new([(-3.0f64).exp(), 3.0f64.exp()]); 6];
+        let settings = settings(optimizer);
+        let u: Vec<f64> = [-1.2, 1.0, -0.5, 0.8, 1.5, -1.0]
+            .iter()
+            .zip(&bounds)
+            .map(|(c, b)| b.from_log(*c))
+            .collect();
+        let mut run = Run::start(&objective, &bounds, u, 1.0, &settings).unwrap();
+        for &limit in legs {
+            run.advance(limit, &settings, None);
+        }
+        let iterations = run.iterations();
+        let out = run.finish().unwrap();
+        (objective.0.into_inner(), out, iterations)
+    }
+
+    #[test]
+    fn a_run_paused_and_resumed_is_the_run_advanced_at_once() {
+        for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
+            let (points, out, iterations) = run_in_legs(optimizer, &[40]);
+            assert_eq!(iterations, 40, "{optimizer:?} should run to its limit");
+            let (points_in_legs, out_in_legs, iterations_in_legs) =
+                run_in_legs(optimizer, &[5, 5, 17, 40]);
+            // The same points in the same order: no re-initialisation on
+            // resuming (which would evaluate the pause point again) and the
+            // same solver memory.
+            assert_eq!(points_in_legs, points, "{optimizer:?}");
+            assert_eq!(out_in_legs, out, "{optimizer:?}");
+            assert_eq!(iterations_in_legs, 40);
+            // A shorter run stops earlier.
+            let (short, _, short_iterations) = run_in_legs(optimizer, &[17]);
+            assert_eq!(short_iterations, 17);
+            assert!(short.len() < points.len() && points.starts_with(&short));
+        }
+    }
+}
