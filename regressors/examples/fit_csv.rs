@@ -86,7 +86,7 @@ fn main() -> anyhow::Result<()> {
         params.max_iters = m.parse()?;
     }
     if let Ok(h) = std::env::var("GPODO_HALVE") {
-        params.start.halve_after = h.parse()?;
+        params.start.halve_after = Some(h.parse()?);
     }
     let mut gp = ExactGp::new(params)?;
     if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {

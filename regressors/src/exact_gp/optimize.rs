@@ -102,7 +102,9 @@ pub fn maximize_lml(
         },
         &bounds,
         &perturb,
-        &params.start,
+        &params
+            .start
+            .halving_by_default(starts::EXACT_GP_HALVE_AFTER),
         value_scale,
         &params.settings(),
         progress,

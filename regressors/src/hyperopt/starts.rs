@@ -41,12 +41,11 @@ pub struct StartPolicy {
     /// Iterations after which only the better half of the race (rounded
     /// up, by LML so far) goes on to `race_iterations`, resumed exactly
     /// where it paused, so the leader and its optimum are unchanged
-    /// whenever it is in that half (default 7; 0 races every candidate the
-    /// whole way). Starts from unit lengthscales climb slowly at first: on
-    /// the 16 fits of `bench/README.md` the 15-iteration leader ranked as
-    /// low as 4th of 4 or 5 after 3–5 iterations, and at most 3rd of 5 (2nd
-    /// of 4) after 6–9.
-    pub halve_after: u64,
+    /// whenever it is in that half; 0 races every candidate the whole way.
+    /// Unset, each model's own default: 7 for the exact GP
+    /// ([`EXACT_GP_HALVE_AFTER`]), none for the sparse GP, whose race was
+    /// not measured for it (`bench/README.md`, "Halving the start race").
+    pub halve_after: Option<u64>,
 }
 
 impl Default for StartPolicy {
@@ -55,12 +54,26 @@ impl Default for StartPolicy {
             perturbations: 2,
             optimize_best: 2,
             race_iterations: 15,
-            halve_after: 7,
+            halve_after: None,
         }
     }
 }
 
+/// The exact GP's default for [`StartPolicy::halve_after`]. Starts from
+/// unit lengthscales climb slowly at first: on the 16 fits of
+/// `bench/README.md` the 15-iteration leader ranked as low as 4th of 4 or 5
+/// after 3–5 iterations, and at most 3rd of 5 (2nd of 4) after 6–11.
+pub const EXACT_GP_HALVE_AFTER: u64 = 7;
+
 impl StartPolicy {
+    /// This policy with `halve_after` set to `default` when it is unset.
+    pub fn halving_by_default(self, default: u64) -> Self {
+        Self {
+            halve_after: Some(self.halve_after.unwrap_or(default)),
+            ..self
+        }
+    }
+
     /// Checks the fields, naming the bad one for `regressor`.
     ///
     /// # Errors
@@ -386,19 +399,23 @@ type Racer<'a> = (
     Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 );
 
-/// Advances every racer to `policy.halve_after` iterations, then only the
+/// Advances every racer to `policy.halve_after` iterations (unset or 0:
+/// `policy.race_iterations`), then only the
 /// better half of them (rounded up, by their best value so far; ties keep
 /// the earlier candidate) on to `policy.race_iterations`. Each run is
 /// resumed where it paused, so a racer that goes on ends exactly where an
 /// uninterrupted race of `race_iterations` would have left it: halving
 /// only spares the iterations of the racers that trail.
 fn race(racers: &mut [Racer<'_>], policy: &StartPolicy, settings: &OptimizerSettings) {
-    let first = match policy.halve_after {
+    let first = match policy.halve_after.unwrap_or(0) {
         0 => policy.race_iterations,
         h => h.min(policy.race_iterations),
     };
     for (_, run, sink) in racers.iter_mut() {
         run.advance(first, settings, sink.as_ref().map(|s| (s, 0)));
+    }
+    if first >= policy.race_iterations {
+        return;
     }
     let mut order: Vec<usize> = (0..racers.len()).collect();
     order.sort_by(|&a, &b| {
@@ -520,7 +537,7 @@ mod tests {
                 perturbations: 0,
                 optimize_best: 1,
                 race_iterations: 6,
-                halve_after,
+                halve_after: Some(halve_after),
             };
             maximize_best(
                 &Bumps,
