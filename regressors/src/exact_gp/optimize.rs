@@ -104,7 +104,7 @@ pub fn maximize_lml(
         &perturb,
         &params
             .start
-            .halving_by_default(starts::EXACT_GP_HALVE_AFTER),
+            .with_default_halve_after(starts::EXACT_GP_HALVE_AFTER),
         value_scale,
         &params.settings(),
         progress,

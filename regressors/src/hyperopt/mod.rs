@@ -337,23 +337,18 @@ pub fn maximize(
         };
         let mut run = match Run::start(objective, &coords.bounds, start_u, value_scale, settings) {
             Ok(run) => run,
-            Err((e, spent)) => {
-                evaluations += spent;
+            Err(e) => {
                 last_error = Some(e);
                 continue;
             }
         };
-        run.advance(settings.max_iters, settings, progress.map(|p| (p, start)));
-        evaluations += run.evaluations();
-        iterations += run.iterations();
-        match run.finish() {
-            Ok(out) => {
-                start_values.push(out.value);
-                if best.as_ref().is_none_or(|(_, v)| out.value > *v) {
-                    best = Some((out.coords, out.value));
-                }
-            }
-            Err(e) => last_error = Some(e),
+        run.advance(settings.max_iters, progress.map(|p| (p, start)));
+        let out = run.finish();
+        evaluations += out.evaluations;
+        iterations += out.iterations;
+        start_values.push(out.value);
+        if best.as_ref().is_none_or(|(_, v)| out.value > *v) {
+            best = Some((out.coords, out.value));
         }
     }
     let Some((coords, value)) = best else {

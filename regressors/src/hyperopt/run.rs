@@ -20,9 +20,8 @@ pub(super) struct Run<'a> {
     problem: Negated<'a>,
     /// The solver, while it can go on.
     stepper: Option<Stepper>,
+    /// Iterations of the legs that ended without an error.
     iterations: u64,
-    /// The optimiser's error, when it failed before any point was kept.
-    error: Option<RegressorError>,
 }
 
 impl<'a> Run<'a> {
@@ -32,14 +31,15 @@ impl<'a> Run<'a> {
     /// 1 (see [`Negated`]).
     ///
     /// # Errors
-    /// The objective's error at the start, with the evaluations it took.
+    /// The objective's error at the start (a failed evaluation is not
+    /// counted), or the solver's when it cannot be set up.
     pub(super) fn start(
         objective: &'a dyn Objective,
         bounds: &'a [LogBounds],
         u: Vec<f64>,
         value_scale: f64,
         settings: &OptimizerSettings,
-    ) -> Result<Self, (RegressorError, usize)> {
+    ) -> Result<Self, RegressorError> {
         let problem = Negated {
             objective,
             bounds,
@@ -50,42 +50,37 @@ impl<'a> Run<'a> {
         };
         // The scale is fixed by the gradient at the start, so that
         // evaluation is scaled once it is known (not evaluated twice).
-        match problem.evaluate_raw(&u) {
-            Ok(raw) => {
-                let (_, _, grad) = problem.scaled(&u, &raw);
-                let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
-                if norm > 1.0 {
-                    problem.scale.set(value_scale / norm);
-                }
-                problem.record(&u, raw);
-            }
-            Err(e) => return Err((e, problem.evaluations.get())),
+        let raw = problem.evaluate_raw(&u)?;
+        let (_, _, grad) = problem.scaled(&u, &raw);
+        let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+        if norm > 1.0 {
+            problem.scale.set(value_scale / norm);
         }
+        problem.record(&u, raw);
         let tol_cost = CostTolerance {
             relative: settings.relative_cost_tolerance,
             unit: problem.scale.get(),
         };
-        let (stepper, error) = match Stepper::new(bounds, u, settings, tol_cost) {
-            Ok(s) => (Some(s), None),
-            Err(e) => (None, Some(optimizer_error(settings, e))),
-        };
+        let stepper = Stepper::new(bounds, u, settings, tol_cost)
+            .map_err(|e| optimizer_error(settings, e))?;
         Ok(Self {
             problem,
-            stepper,
+            stepper: Some(stepper),
             iterations: 0,
-            error,
         })
     }
 
-    /// Runs the optimiser on until `max_iters` iterations in all, unless it
-    /// has stopped already; `progress` (with the start's number) hears of
-    /// every iteration. A failed search keeps the best point evaluated.
+    /// Runs the optimiser on until `max_iters` iterations in all (at least
+    /// 1: a run paused at 0 would be set up again), unless it has stopped
+    /// already; `progress` (with the start's number) hears of every
+    /// iteration. A leg that fails ends the run, keeping the best point
+    /// evaluated; its iterations are not counted (the earlier legs' are).
     pub(super) fn advance(
         &mut self,
         max_iters: u64,
-        settings: &OptimizerSettings,
         progress: Option<(&Arc<dyn FitProgress>, usize)>,
     ) {
+        debug_assert!(max_iters > 0, "a run paused at iteration 0 cannot resume");
         let Some(stepper) = self.stepper.take() else {
             return;
         };
@@ -96,57 +91,47 @@ impl<'a> Run<'a> {
                 self.iterations = iterations;
                 self.stepper = stepper;
             }
-            Err(e) if self.problem.best.borrow().is_some() => {
+            Err(e) => {
                 tracing::debug!(error = %e, "optimiser stopped early; keeping the best point");
             }
-            Err(e) => self.error = Some(optimizer_error(settings, e)),
         }
     }
 
+    /// Whether the optimiser stopped only at its iteration limit (so a
+    /// higher one would take it further).
+    pub(super) fn can_go_on(&self) -> bool {
+        self.stepper.is_some()
+    }
+
     /// The best objective so far (unscaled, to maximise).
-    pub(super) fn best_value(&self) -> Option<f64> {
-        let scale = self.problem.scale.get();
+    pub(super) fn best_value(&self) -> f64 {
         self.problem
             .best
             .borrow()
             .as_ref()
-            .map(|(_, cost)| -cost / scale)
+            .map_or(f64::NEG_INFINITY, |(_, cost)| {
+                -cost / self.problem.scale.get()
+            })
     }
 
-    /// Objective evaluations so far.
-    pub(super) fn evaluations(&self) -> usize {
-        self.problem.evaluations.get()
-    }
-
-    /// Iterations of the legs that ended without an error.
-    pub(super) fn iterations(&self) -> u64 {
-        self.iterations
-    }
-
-    /// The best point and its value (unscaled, to maximise), or the
-    /// optimiser's error when it kept none.
-    ///
-    /// # Errors
-    /// The optimiser's error, when no point was kept.
-    pub(super) fn finish(self) -> Result<Maximized, RegressorError> {
-        let (evaluations, iterations) = (self.evaluations(), self.iterations);
+    /// The best point evaluated and its value (unscaled, to maximise),
+    /// with the run's evaluations and iterations.
+    pub(super) fn finish(self) -> Maximized {
+        let (evaluations, iterations) = (self.problem.evaluations.get(), self.iterations);
         let scale = self.problem.scale.get();
-        match (self.problem.best.into_inner(), self.error) {
-            (Some((coords, cost)), _) => {
-                let value = -cost / scale;
-                Ok(Maximized {
-                    coords,
-                    value,
-                    evaluations,
-                    iterations,
-                    start_values: vec![value],
-                })
-            }
-            (None, Some(e)) => Err(e),
-            (None, None) => Err(RegressorError::Optimizer {
-                optimizer: "optimiser".into(),
-                detail: "no point was evaluated".into(),
-            }),
+        // `start` recorded the start point, so there is always a best one.
+        let (coords, cost) = self
+            .problem
+            .best
+            .into_inner()
+            .unwrap_or_else(|| (Vec::new(), f64::INFINITY));
+        let value = -cost / scale;
+        Maximized {
+            coords,
+            value,
+            evaluations,
+            iterations,
+            start_values: vec![value],
         }
     }
 }
@@ -201,10 +186,10 @@ mod tests {
             .collect();
         let mut run = Run::start(&objective, &bounds, u, 1.0, &settings).unwrap();
         for &limit in legs {
-            run.advance(limit, &settings, None);
+            run.advance(limit, None);
         }
-        let iterations = run.iterations();
-        let out = run.finish().unwrap();
+        let out = run.finish();
+        let iterations = out.iterations;
         (objective.0.into_inner(), out, iterations)
     }
 
@@ -215,9 +200,10 @@ mod tests {
             assert_eq!(iterations, 40, "{optimizer:?} should run to its limit");
             let (points_in_legs, out_in_legs, iterations_in_legs) =
                 run_in_legs(optimizer, &[5, 5, 17, 40]);
-            // The same points in the same order: no re-initialisation on
-            // resuming (which would evaluate the pause point again) and the
-            // same solver memory.
+            // The same points in the same order: the solver keeps its
+            // memory (L-BFGS pairs, CG direction) and its iteration count
+            // across a pause (a fresh solver from the pause point would
+            // step differently).
             assert_eq!(points_in_legs, points, "{optimizer:?}");
             assert_eq!(out_in_legs, out, "{optimizer:?}");
             assert_eq!(iterations_in_legs, 40);
@@ -225,6 +211,24 @@ mod tests {
             let (short, _, short_iterations) = run_in_legs(optimizer, &[17]);
             assert_eq!(short_iterations, 17);
             assert!(short.len() < points.len() && points.starts_with(&short));
+        }
+    }
+
+    #[test]
+    fn a_run_that_converges_stops_whatever_its_legs() {
+        for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
+            let (points, out, iterations) = run_in_legs(optimizer, &[5000]);
+            assert!(
+                iterations < 5000,
+                "{optimizer:?} should converge on its gradient"
+            );
+            // Paused just before it converges, resumed past it, and resumed
+            // again after it stopped (that leg does nothing).
+            let legs = [iterations - 1, 5000, 6000];
+            let (points_in_legs, out_in_legs, iterations_in_legs) = run_in_legs(optimizer, &legs);
+            assert_eq!(points_in_legs, points, "{optimizer:?}");
+            assert_eq!(out_in_legs, out, "{optimizer:?}");
+            assert_eq!(iterations_in_legs, iterations);
         }
     }
 }

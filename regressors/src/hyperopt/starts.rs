@@ -35,16 +35,18 @@ pub struct StartPolicy {
     /// (default 2).
     pub optimize_best: usize,
     /// Iterations of the race: every named base and the `optimize_best`
-    /// best-scored candidates run this many, and only the leader goes on to
-    /// convergence (default 15; 0 runs every one of them to convergence).
+    /// best-scored candidates run up to this many (see `halve_after`), and
+    /// only the leader goes on to convergence (default 15; 0 runs every one
+    /// of them to convergence).
     pub race_iterations: u64,
     /// Iterations after which only the better half of the race (rounded
     /// up, by LML so far) goes on to `race_iterations`, resumed exactly
     /// where it paused, so the leader and its optimum are unchanged
     /// whenever it is in that half; 0 races every candidate the whole way.
     /// Unset, each model's own default: 7 for the exact GP
-    /// ([`EXACT_GP_HALVE_AFTER`]), none for the sparse GP, whose race was
-    /// not measured for it (`bench/README.md`, "Halving the start race").
+    /// ([`EXACT_GP_HALVE_AFTER`]), none for the sparse GP, whose racers'
+    /// ranks were not measured, and where halving continued another start
+    /// on 5 fits of 13 (`bench/README.md`, "Halving the start race").
     pub halve_after: Option<u64>,
 }
 
@@ -67,7 +69,7 @@ pub const EXACT_GP_HALVE_AFTER: u64 = 7;
 
 impl StartPolicy {
     /// This policy with `halve_after` set to `default` when it is unset.
-    pub fn halving_by_default(self, default: u64) -> Self {
+    pub fn with_default_halve_after(self, default: u64) -> Self {
         Self {
             halve_after: Some(self.halve_after.unwrap_or(default)),
             ..self
@@ -249,11 +251,11 @@ pub fn kernel_bases(
 }
 
 /// Scores `candidates` with `score` (the objective without its gradient),
-/// runs [`maximize`] from every named base and the best
-/// `policy.optimize_best` of them — all for `policy.halve_after`
-/// iterations, the better half on to `policy.race_iterations`, then the
-/// leader alone to
-/// convergence, with `settings.restarts` extra perturbed runs — and
+/// races the optimiser from every named base and the best
+/// `policy.optimize_best` of them for `policy.race_iterations` (only the
+/// better half after `policy.halve_after`, when set), then runs
+/// [`maximize`] from the leader's best point alone to convergence, with
+/// `settings.restarts` extra perturbed runs, and
 /// returns the highest optimum, with every candidate's record
 /// (restarts appended as records of their own). Evaluations and iterations
 /// are summed over all runs.
@@ -302,7 +304,7 @@ pub fn maximize_best(
         .collect();
     if chosen.len() > 1 && policy.race_iterations > 0 {
         // The race: every chosen candidate runs a few iterations, and only
-        // the leader goes on (from where it stopped).
+        // the leader goes on, restarted from its best point.
         let short = OptimizerSettings {
             max_iters: policy.race_iterations,
             restarts: 0,
@@ -319,30 +321,23 @@ pub fn maximize_best(
             run_number += 1;
             match Run::start(objective, bounds, u, value_scale, &short) {
                 Ok(run) => racers.push((i, run, sink)),
-                Err((e, spent)) => {
-                    evaluations += spent;
-                    last_error = Some(e);
-                }
+                Err(e) => last_error = Some(e),
             }
         }
-        race(&mut racers, policy, &short);
+        race(&mut racers, policy);
         let mut leader: Option<(usize, Vec<f64>, f64)> = None;
         for (i, run, _) in racers {
-            evaluations += run.evaluations();
-            iterations += run.iterations();
-            match run.finish() {
-                Ok(out) => {
-                    records[i].final_objective = Some(out.value);
-                    records[i].evaluations = Some(out.evaluations);
-                    records[i].iterations = Some(out.iterations);
-                    if leader.as_ref().is_none_or(|l| out.value > l.2) {
-                        leader = Some((i, out.coords.clone(), out.value));
-                    }
-                    if best_run.as_ref().is_none_or(|b| out.value > b.value) {
-                        best_run = Some(out);
-                    }
-                }
-                Err(e) => last_error = Some(e),
+            let out = run.finish();
+            evaluations += out.evaluations;
+            iterations += out.iterations;
+            records[i].final_objective = Some(out.value);
+            records[i].evaluations = Some(out.evaluations);
+            records[i].iterations = Some(out.iterations);
+            if leader.as_ref().is_none_or(|l| out.value > l.2) {
+                leader = Some((i, out.coords.clone(), out.value));
+            }
+            if best_run.as_ref().is_none_or(|b| out.value > b.value) {
+                best_run = Some(out);
             }
         }
         runs = leader.map(|(i, c, _)| vec![(i, c)]).unwrap_or_default();
@@ -400,35 +395,35 @@ type Racer<'a> = (
 );
 
 /// Advances every racer to `policy.halve_after` iterations (unset or 0:
-/// `policy.race_iterations`), then only the
-/// better half of them (rounded up, by their best value so far; ties keep
-/// the earlier candidate) on to `policy.race_iterations`. Each run is
-/// resumed where it paused, so a racer that goes on ends exactly where an
-/// uninterrupted race of `race_iterations` would have left it: halving
+/// `policy.race_iterations`), then only the better half of them (rounded
+/// up; ranked by their best value so far, ties to the earlier candidate,
+/// among those that can still go on: a racer that converged keeps its
+/// value without taking a place) on to `policy.race_iterations`. Each run
+/// is resumed where it paused, so a racer that goes on ends exactly where
+/// an uninterrupted race of `race_iterations` would have left it: halving
 /// only spares the iterations of the racers that trail.
-fn race(racers: &mut [Racer<'_>], policy: &StartPolicy, settings: &OptimizerSettings) {
+fn race(racers: &mut [Racer<'_>], policy: &StartPolicy) {
     let first = match policy.halve_after.unwrap_or(0) {
         0 => policy.race_iterations,
         h => h.min(policy.race_iterations),
     };
     for (_, run, sink) in racers.iter_mut() {
-        run.advance(first, settings, sink.as_ref().map(|s| (s, 0)));
+        run.advance(first, sink.as_ref().map(|s| (s, 0)));
     }
     if first >= policy.race_iterations {
         return;
     }
-    let mut order: Vec<usize> = (0..racers.len()).collect();
+    let places = racers.len().div_ceil(2);
+    let mut order: Vec<usize> = (0..racers.len())
+        .filter(|&k| racers[k].1.can_go_on())
+        .collect();
     order.sort_by(|&a, &b| {
-        let value = |k: usize| racers[k].1.best_value().unwrap_or(f64::NEG_INFINITY);
+        let value = |k: usize| racers[k].1.best_value();
         value(b).total_cmp(&value(a)).then(a.cmp(&b))
     });
-    for &k in order.iter().take(racers.len().div_ceil(2)) {
+    for &k in order.iter().take(places) {
         let (_, run, sink) = &mut racers[k];
-        run.advance(
-            policy.race_iterations,
-            settings,
-            sink.as_ref().map(|s| (s, 0)),
-        );
+        run.advance(policy.race_iterations, sink.as_ref().map(|s| (s, 0)));
     }
 }
 
@@ -491,14 +486,15 @@ mod tests {
         assert_eq!(best(&scored, 10), vec![2, 4, 0, 3]);
     }
 
-    /// Four Gaussian bumps of different heights in the plane.
+    /// Five Gaussian bumps of different heights in the plane.
     struct Bumps;
 
-    const PEAKS: [([f64; 2], f64); 4] = [
+    const PEAKS: [([f64; 2], f64); 5] = [
         ([0.0, 0.0], 1.0),
         ([4.0, 0.0], 2.0),
         ([0.0, 4.0], 1.5),
         ([4.0, 4.0], 0.5),
+        ([8.0, 0.0], 1.2),
     ];
 
     impl Objective for Bumps {
@@ -516,7 +512,7 @@ mod tests {
 
     #[test]
     fn halving_the_race_spares_only_the_trailing_racers() {
-        // One named start near each bump: all four race.
+        // One named start near each bump: all five race.
         let candidates: Vec<(String, Vec<f64>)> = PEAKS
             .iter()
             .enumerate()
@@ -559,12 +555,13 @@ mod tests {
         assert_eq!(halved.value, whole.value);
         assert!((whole.coords[0] - 4.0).abs() < 0.01 && whole.coords[1].abs() < 0.01);
         assert!(halved.evaluations < whole.evaluations);
-        // After 2 iterations the racers near bumps 1 and 2 (the highest)
-        // lead: they go on exactly as in the whole race; the other two stop.
+        // After 2 iterations the racers near the three highest bumps (1, 2
+        // and 4: half of five, rounded up) lead: they go on exactly as in
+        // the whole race; the other two stop.
         let iterations: Vec<Option<u64>> = halved_records.iter().map(|r| r.iterations).collect();
         assert_eq!(iterations[0], Some(2));
         assert_eq!(iterations[3], Some(2));
-        for k in [1, 2] {
+        for k in [1, 2, 4] {
             assert_eq!(halved_records[k], whole_records[k], "racer {k}");
         }
         for k in [0, 3] {
@@ -572,5 +569,28 @@ mod tests {
             assert!(cut.evaluations < whole.evaluations, "racer {k}");
             assert!(cut.final_objective <= whole.final_objective, "racer {k}");
         }
+    }
+
+    #[test]
+    fn halve_after_is_unset_unless_given_and_each_model_fills_its_default() {
+        let parse = |text: &str| serde_saphyr::from_str::<StartPolicy>(text).unwrap();
+        let omitted = parse("perturbations: 1");
+        assert_eq!(omitted.halve_after, None);
+        assert_eq!(omitted.perturbations, 1);
+        assert_eq!(parse("halve_after: 0").halve_after, Some(0));
+        assert_eq!(
+            omitted
+                .with_default_halve_after(EXACT_GP_HALVE_AFTER)
+                .halve_after,
+            Some(EXACT_GP_HALVE_AFTER)
+        );
+        // A value the user gave, 0 (no halving) included, is kept.
+        assert_eq!(
+            parse("halve_after: 0")
+                .with_default_halve_after(EXACT_GP_HALVE_AFTER)
+                .halve_after,
+            Some(0)
+        );
+        assert!(serde_saphyr::from_str::<StartPolicy>("halve_after_typo: 3").is_err());
     }
 }
