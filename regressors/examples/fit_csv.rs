@@ -13,7 +13,7 @@
 //! kernel expression, e.g. `rbf + linear`; `GPODO_RACE` and `GPODO_HALVE`
 //! set the start race's iterations and when it halves, `GPODO_MAX_ITERS`
 //! the iteration limit (1000); `GPODO_TRACE=1` prints every optimiser iteration to
-//! stderr as `run iteration LML`). The JSON line lists every candidate
+//! stderr as `run iteration LML seconds`). The JSON line lists every candidate
 //! start with its start and final LML, evaluations and iterations.
 
 use std::time::Instant;
@@ -22,12 +22,14 @@ use anyhow::{Context, bail};
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
 use gpodo_traits::{FitProgress, ResidualDataset, ResidualRegressor, SampleMatrix};
 
-/// Prints every optimiser iteration to stderr.
-struct Trace;
+/// Prints every optimiser iteration to stderr, with the seconds since the
+/// fit began.
+struct Trace(Instant);
 
 impl FitProgress for Trace {
     fn iteration(&self, start: usize, iteration: u64, objective: f64) {
-        eprintln!("{start} {iteration} {objective}");
+        let seconds = self.0.elapsed().as_secs_f64();
+        eprintln!("{start} {iteration} {objective} {seconds:.3}");
     }
 }
 
@@ -90,7 +92,7 @@ fn main() -> anyhow::Result<()> {
     }
     let mut gp = ExactGp::new(params)?;
     if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {
-        gp.set_progress(Some(std::sync::Arc::new(Trace)));
+        gp.set_progress(Some(std::sync::Arc::new(Trace(Instant::now()))));
     }
     let start = Instant::now();
     let report = gp.fit(&data)?;
