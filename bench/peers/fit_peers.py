@@ -263,7 +263,7 @@ def main():
         out = {"impl": r.pop("impl"), "n": n, "d": d, "seconds": r.pop("seconds"),
                "lml": lml, "evaluations": r.pop("evaluations")}
         out.update(r)
-        # The peers' paths depend on SciPy's L-BFGS-B (a C port since 1.15).
+        # The peers' paths depend on the SciPy release's L-BFGS-B.
         out.update(lml_start=lml_start, blas_threads=blas_threads,
                    numpy=np.__version__, scipy=scipy.__version__)
         print(json.dumps(out), flush=True)
