@@ -11,7 +11,9 @@
 //! `GPODO_LBFGS_MEMORY` override the start, the stopping rules and the
 //! L-BFGS memory; 10 is the peers' scipy default; `GPODO_KERNEL` sets a
 //! kernel expression, e.g. `rbf + linear`; `GPODO_RACE` and `GPODO_HALVE`
-//! set the start race's iterations and when it halves, `GPODO_MAX_ITERS`
+//! set the start race's iterations and when it halves,
+//! `GPODO_PERTURBATIONS` the perturbed candidates per base (2; with
+//! `GPODO_LENGTHSCALE` and 0, one start alone, the peers' own), `GPODO_MAX_ITERS`
 //! the iteration limit (1000); `GPODO_TRACE=1` prints every optimiser iteration to
 //! stderr as `run iteration LML seconds`). The JSON line lists every candidate
 //! start with its start and final LML, evaluations and iterations.
@@ -89,6 +91,9 @@ fn main() -> anyhow::Result<()> {
     }
     if let Ok(h) = std::env::var("GPODO_HALVE") {
         params.start.halve_after = Some(h.parse()?);
+    }
+    if let Ok(k) = std::env::var("GPODO_PERTURBATIONS") {
+        params.start.perturbations = k.parse()?;
     }
     let mut gp = ExactGp::new(params)?;
     if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {
