@@ -104,8 +104,10 @@ def main():
                     help=f"rows from the simulated table {SIM_TABLE.relative_to(REPO_ROOT)}")
     ap.add_argument("--fit-csv", type=Path, default=FIT_CSV, help="the built fit_csv example")
     ap.add_argument("--data-dir", type=Path, default=Path("/tmp/peers"))
-    ap.add_argument("--out", type=Path, default=Path("side_by_side.jsonl"),
-                    help="every counted run's JSON line (appended)")
+    ap.add_argument("--out", type=Path,
+                    default=REPO_ROOT / "results" / "peers" / "side_by_side.jsonl",
+                    help="every counted run's JSON line (appended; default under the "
+                         "git-ignored results/)")
     args = ap.parse_args()
     if not args.fit_csv.exists():
         sys.exit(f"{args.fit_csv} not found: cargo build --release -p gpodo-regressors "
@@ -113,6 +115,7 @@ def main():
     if args.pairs < 1:
         sys.exit("--pairs must be at least 1")
     args.data_dir.mkdir(parents=True, exist_ok=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
     print("| row | GPy fit s (evals) | GPy LML | gpodo fit s (evals) | gpodo LML | fit × "
           "| process × | per evaluation × | peak MiB GPy / gpodo |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
