@@ -21,7 +21,7 @@ medians, the median of the per-pair ratios of whole-process wall time, the
 per-evaluation ratio and the peak memory. The rows of bench/README.md
 ("Peers side by side"):
 
-    python bench/peers/side_by_side.py --rows 500x18,500x28,1000x18,1000x28 --pairs 3
+    python bench/peers/side_by_side.py --rows 500x18,500x28,1000x18,1000x28 --warmup 1 --pairs 3
     python bench/peers/side_by_side.py --rows 2000x18,2000x28,exoter --pairs 1
     cargo run --release -p gpodo-experiments -- run experiments/peer-table-sim.yaml  # 4000 rows
     python bench/peers/side_by_side.py --rows 4000x28,4000x18 --pairs 1 --sim
