@@ -295,6 +295,34 @@ fn optimizer_error(settings: &OptimizerSettings, e: impl std::fmt::Display) -> R
     }
 }
 
+/// `log_theta` as the optimiser's coordinates on `bounds`: each clamped into
+/// its bound.
+fn clamped(log_theta: &[f64], bounds: &[LogBounds]) -> Vec<f64> {
+    log_theta
+        .iter()
+        .zip(bounds)
+        .map(|(c, b)| b.from_log(*c))
+        .collect()
+}
+
+/// `base` with every coordinate that `perturb` marks moved by one standard
+/// normal from `rng` and clamped into its bound (one draw per coordinate,
+/// marked or not, so the stream does not depend on `perturb`).
+fn perturbed(
+    base: &[f64],
+    bounds: &[LogBounds],
+    perturb: &[bool],
+    rng: &mut ChaCha8Rng,
+) -> Vec<f64> {
+    base.iter()
+        .zip(bounds.iter().zip(perturb))
+        .map(|(c, (b, &p))| {
+            let z: f64 = StandardNormal.sample(rng);
+            if p { b.from_log(c + z) } else { *c }
+        })
+        .collect()
+}
+
 /// Maximises `objective` from `coords.start` and `settings.restarts` seeded
 /// perturbations of it. `value_scale` normalises the objective (e.g.
 /// `1/(n·p)` for a likelihood of `n·p` values) so that the tolerances mean
@@ -310,30 +338,17 @@ pub fn maximize(
     settings: &OptimizerSettings,
     progress: Option<&std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 ) -> Result<Maximized, RegressorError> {
-    let start0: Vec<f64> = coords
-        .start
-        .iter()
-        .zip(&coords.bounds)
-        .map(|(c, b)| b.from_log(*c))
-        .collect();
+    let start0 = clamped(&coords.start, &coords.bounds);
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let mut best: Option<(Vec<f64>, f64)> = None;
     let mut start_values = Vec::new();
     let (mut evaluations, mut iterations) = (0, 0);
     let mut last_error = None;
     for start in 0..=settings.restarts {
-        let start_u: Vec<f64> = if start == 0 {
+        let start_u = if start == 0 {
             start0.clone()
         } else {
-            start0
-                .iter()
-                .zip(&coords.bounds)
-                .zip(&coords.perturb)
-                .map(|((c, b), &perturb)| {
-                    let z: f64 = StandardNormal.sample(&mut rng);
-                    if perturb { b.from_log(c + z) } else { *c }
-                })
-                .collect()
+            perturbed(&start0, &coords.bounds, &coords.perturb, &mut rng)
         };
         let mut run = match Run::start(objective, &coords.bounds, start_u, value_scale, settings) {
             Ok(run) => run,
@@ -384,7 +399,8 @@ mod tests {
         }
     }
 
-    fn settings(optimizer: Optimizer) -> OptimizerSettings {
+    /// Settings for the tests of this module and its submodules.
+    pub(super) fn settings(optimizer: Optimizer) -> OptimizerSettings {
         OptimizerSettings {
             optimizer,
             max_iters: 100,

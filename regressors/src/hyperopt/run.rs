@@ -163,13 +163,11 @@ mod tests {
 
     fn settings(optimizer: Optimizer) -> OptimizerSettings {
         OptimizerSettings {
-            optimizer,
             max_iters: 40,
             restarts: 0,
-            seed: 0,
             gradient_tolerance: 1e-12,
-            relative_cost_tolerance: 0.0,
             lbfgs_memory: 5,
+            ..crate::hyperopt::tests::settings(optimizer)
         }
     }
 

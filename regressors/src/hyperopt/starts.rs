@@ -11,7 +11,6 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use faer::MatRef;
@@ -19,7 +18,8 @@ use gpodo_traits::StartRecord;
 
 use super::run::Run;
 use super::{
-    Coordinates, LogBounds, Maximized, Objective, OptimizerSettings, ProgressSink, maximize,
+    Coordinates, LogBounds, Maximized, Objective, OptimizerSettings, ProgressSink, clamped,
+    maximize, perturbed,
 };
 use crate::RegressorError;
 use crate::kernels::{KernelExpr, KernelInit, ParamKind, median_pairwise_distance};
@@ -149,20 +149,9 @@ pub fn with_perturbations(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(bases.len() * (1 + perturbations));
     for (label, base) in bases {
-        let base: Vec<f64> = base
-            .iter()
-            .zip(bounds)
-            .map(|(c, b)| b.from_log(*c))
-            .collect();
+        let base = clamped(&base, bounds);
         for k in 1..=perturbations {
-            let moved: Vec<f64> = base
-                .iter()
-                .zip(bounds.iter().zip(perturb))
-                .map(|(c, (b, &p))| {
-                    let z: f64 = StandardNormal.sample(&mut rng);
-                    if p { b.from_log(c + z) } else { *c }
-                })
-                .collect();
+            let moved = perturbed(&base, bounds, perturb, &mut rng);
             out.push((format!("{label}{PERTURBED}{k}"), moved));
         }
         out.insert(out.len() - perturbations, (label, base));
@@ -312,11 +301,7 @@ pub fn maximize_best(
         };
         let mut racers = Vec::with_capacity(runs.len());
         for (i, start) in runs {
-            let u: Vec<f64> = start
-                .iter()
-                .zip(bounds)
-                .map(|(c, b)| b.from_log(*c))
-                .collect();
+            let u = clamped(&start, bounds);
             let sink = numbered(progress, run_number);
             run_number += 1;
             match Run::start(objective, bounds, u, value_scale, &short) {
