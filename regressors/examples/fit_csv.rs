@@ -35,6 +35,21 @@ impl FitProgress for Trace {
     }
 }
 
+/// The environment variable `name` parsed, when it is set.
+fn env<T>(name: &str) -> anyhow::Result<Option<T>>
+where
+    T: std::str::FromStr,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    std::env::var(name)
+        .ok()
+        .map(|v| {
+            v.parse()
+                .with_context(|| format!("{name}={v}: not a number"))
+        })
+        .transpose()
+}
+
 fn main() -> anyhow::Result<()> {
     let Some(path) = std::env::args().nth(1) else {
         bail!("usage: fit_csv FILE.csv (written by bench/peers/fit_peers.py --write-data)");
@@ -68,32 +83,32 @@ fn main() -> anyhow::Result<()> {
         max_iters: 1000,
         ..ExactGpParams::default()
     };
-    if let Ok(tol) = std::env::var("GPODO_GRAD_TOL") {
-        params.gradient_tolerance = tol.parse()?;
+    if let Some(tol) = env("GPODO_GRAD_TOL")? {
+        params.gradient_tolerance = tol;
     }
-    if let Ok(l) = std::env::var("GPODO_LENGTHSCALE") {
-        params.init.lengthscale = Some(l.parse()?);
+    if let Some(l) = env("GPODO_LENGTHSCALE")? {
+        params.init.lengthscale = Some(l);
     }
-    if let Ok(tol) = std::env::var("GPODO_COST_TOL") {
-        params.relative_cost_tolerance = tol.parse()?;
+    if let Some(tol) = env("GPODO_COST_TOL")? {
+        params.relative_cost_tolerance = tol;
     }
-    if let Ok(m) = std::env::var("GPODO_LBFGS_MEMORY") {
-        params.lbfgs_memory = m.parse()?;
+    if let Some(m) = env("GPODO_LBFGS_MEMORY")? {
+        params.lbfgs_memory = m;
     }
     if let Ok(expr) = std::env::var("GPODO_KERNEL") {
         params.kernel = gpodo_regressors::kernels::KernelExpr::parse(&expr)?;
     }
-    if let Ok(r) = std::env::var("GPODO_RACE") {
-        params.start.race_iterations = r.parse()?;
+    if let Some(r) = env("GPODO_RACE")? {
+        params.start.race_iterations = r;
     }
-    if let Ok(m) = std::env::var("GPODO_MAX_ITERS") {
-        params.max_iters = m.parse()?;
+    if let Some(m) = env("GPODO_MAX_ITERS")? {
+        params.max_iters = m;
     }
-    if let Ok(h) = std::env::var("GPODO_HALVE") {
-        params.start.halve_after = Some(h.parse()?);
+    if let Some(h) = env("GPODO_HALVE")? {
+        params.start.halve_after = Some(h);
     }
-    if let Ok(k) = std::env::var("GPODO_PERTURBATIONS") {
-        params.start.perturbations = k.parse()?;
+    if let Some(k) = env("GPODO_PERTURBATIONS")? {
+        params.start.perturbations = k;
     }
     let mut gp = ExactGp::new(params)?;
     if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {
