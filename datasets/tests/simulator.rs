@@ -46,6 +46,7 @@ fn perfect_soil() -> Soil {
         lateral_slip_gain: 0.0,
         turn_slip: 0.0,
         vibration_mps2: 0.0,
+        texture: 1.0,
     }
 }
 

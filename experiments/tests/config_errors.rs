@@ -291,3 +291,55 @@ fn a_missing_base_and_a_base_chain_are_reported() {
     let e = error_of(d, "c.yaml", "base: bad-base.yaml\nname: c\n");
     assert!(e.contains("bad-base.yaml:2:"), "{e}");
 }
+
+#[test]
+fn the_trackers_error_model_and_terrain_fields_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_vo = |vo: &str| {
+        format!(
+            "{GOOD}frontend:\n  vo: {{ kind: simulated, {vo} }}\nschemes:\n  - {{ label: a, selector: {{ kind: fixed_rate, fps: 1.0 }} }}\n"
+        )
+    };
+    let file = dir.path().join("vo.yaml");
+    let file = file.display().to_string();
+    let e = error_of(dir.path(), "vo.yaml", &with_vo("error_model: sharde"));
+    check(
+        &e,
+        "unknown error_model `sharde`",
+        &file,
+        8,
+        39,
+        "shared or independent",
+    );
+    let e = error_of(dir.path(), "vo.yaml", &with_vo("map_error_share: 1.5"));
+    check(
+        &e,
+        "invalid `vo.map_error_share`",
+        &file,
+        8,
+        43,
+        "a fraction in [0, 1]",
+    );
+    let e = error_of(dir.path(), "vo.yaml", &with_vo("features_per_frame: -3"));
+    check(
+        &e,
+        "invalid `vo.features_per_frame`",
+        &file,
+        8,
+        46,
+        "a positive number",
+    );
+    let e = error_of(
+        dir.path(),
+        "vo.yaml",
+        &with_vo("camera: { exposure_secs: 2.0 }"),
+    );
+    check(
+        &e,
+        "invalid `vo.camera.exposure_secs`",
+        &file,
+        8,
+        51,
+        "an exposure time in [0, 1] s",
+    );
+}

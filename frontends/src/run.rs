@@ -4,9 +4,19 @@
 //! reference keyframe by the visual odometry, become keyframes when they
 //! share too little with it, close loops, and relocalise after a loss only
 //! where the map already is; an online residual source learns from the VO
-//! (§VI). At the end the pose graph of processed frames is optimised and
-//! the trajectory at every sensor sample is the optimised pose of the last
-//! processed frame composed with the odometry since.
+//! (§VI).
+//!
+//! Which frames enter the pose graph follows the odometry's
+//! [`ErrorStructure`]. When frames tracked against one keyframe share its
+//! map error (ORB-SLAM), only keyframes become nodes, linked by the wheel
+//! odometry between them and by their visual edges (to the reference
+//! keyframe, relocalisation, loop closure), as in ORB-SLAM's local bundle
+//! adjustment; any other processed frame is placed by its tracked pose
+//! relative to its keyframe (or, lost, by the odometry from the frame
+//! before). When every measurement is independent, every processed frame
+//! is a node. At the end the graph is optimised and the trajectory at every
+//! sensor sample is the pose of the last processed frame composed with the
+//! odometry since.
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -20,7 +30,8 @@ use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::traverse::Traverse;
 use crate::vo::{
-    FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry, VoMeasurement,
+    ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
+    VoMeasurement,
 };
 
 /// One processed frame, as the learning curve records it.
@@ -71,13 +82,28 @@ pub struct FrontendRun {
     pub trajectory: Vec<Isometry3<f64>>,
 }
 
-/// A node of the pose graph.
+/// Where a processed frame's final pose comes from.
+#[derive(Debug, Clone, Copy)]
+enum Placement {
+    /// A pose-graph node.
+    Graph(usize),
+    /// Another processed frame's final pose composed with a relative pose.
+    Relative {
+        parent: usize,
+        relative: Isometry3<f64>,
+    },
+}
+
+/// A processed frame (the first is the start pose).
 #[derive(Debug, Clone, Copy)]
 struct Node {
     frame: Option<FrameRef>,
-    /// The node's pose according to the visual map (keyframe chain), when
+    /// The frame's pose according to the visual map (keyframe chain), when
     /// it was tracked.
     map_pose: Option<Isometry3<f64>>,
+    /// The odometry chain's estimate (the graph's initial value).
+    initial: Isometry3<f64>,
+    placement: Placement,
 }
 
 /// The interval an online target is accumulated over.
@@ -104,13 +130,20 @@ struct Session<'a> {
     source: &'a mut dyn ResidualSource,
     vo: &'a mut dyn VisualOdometry,
     integrator: OdometryIntegrator,
+    /// Whether only keyframes are pose-graph nodes.
+    keyframe_graph: bool,
+    /// Odometry since the last pose-graph node (keyframe graph only).
+    graph_integrator: OdometryIntegrator,
+    /// The processed frame that is the last pose-graph node.
+    last_graph_node: usize,
     time: f64,
     step: usize,
     next_window: usize,
     epoch: usize,
     prediction: ResidualPrediction,
     predictions: Vec<(f64, ResidualPrediction)>,
-    /// Per sample: the node it hangs from and the odometry since.
+    /// Per sample: the processed frame it hangs from and the odometry
+    /// since.
     anchors: Vec<(usize, Isometry3<f64>)>,
     /// Step → window index, for the regressor inputs of a step.
     step_window: Vec<Option<usize>>,
@@ -145,13 +178,18 @@ impl<'a> Session<'a> {
         let prediction = ResidualPrediction::uninformed(params.initial_residual_variance);
         let t0 = traverse.times_secs()[0];
         let mut graph = PoseGraph::default();
-        graph.add_node(traverse.ground_truth()[0]);
+        let start = traverse.ground_truth()[0];
+        let origin = graph.add_node(start);
+        let keyframe_graph = vo.error_structure() == ErrorStructure::SharedPerKeyframe;
         Self {
             traverse,
             params,
             source,
             vo,
             integrator: OdometryIntegrator::new(params.odometry),
+            keyframe_graph,
+            graph_integrator: OdometryIntegrator::new(params.odometry),
+            last_graph_node: 0,
             time: t0,
             step: 0,
             next_window: 0,
@@ -164,6 +202,8 @@ impl<'a> Session<'a> {
             nodes: vec![Node {
                 frame: None,
                 map_pose: None,
+                initial: start,
+                placement: Placement::Graph(origin),
             }],
             last_node: 0,
             last_processed_secs: None,
@@ -211,6 +251,15 @@ impl<'a> Session<'a> {
                 &self.prediction,
                 inputs,
             );
+            if self.keyframe_graph {
+                self.graph_integrator.advance(
+                    &self.traverse.twists()[self.step],
+                    end - self.time,
+                    self.epoch,
+                    &self.prediction,
+                    inputs,
+                );
+            }
             self.time = end;
             if self.time >= times[self.step + 1] {
                 self.step += 1;
@@ -268,7 +317,20 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// The pose-graph node of processed frame `node`, if it is one.
+    fn graph_node(&self, node: usize) -> Option<usize> {
+        match self.nodes[node].placement {
+            Placement::Graph(g) => Some(g),
+            Placement::Relative { .. } => None,
+        }
+    }
+
+    /// Adds a visual edge between two processed frames that are graph
+    /// nodes (a keyframe always is).
     fn add_vo_edge(&mut self, from: usize, to: usize, m: &VoMeasurement, kind: EdgeKind) {
+        let (Some(from), Some(to)) = (self.graph_node(from), self.graph_node(to)) else {
+            return;
+        };
         self.graph.add_edge(PoseGraphEdge {
             from,
             to,
@@ -278,22 +340,38 @@ impl<'a> Session<'a> {
         });
     }
 
+    /// Makes processed frame `node` a pose-graph node, linked to the last
+    /// one by the wheel odometry between them.
+    fn add_graph_node(&mut self, node: usize, odometry: &OdometryInterval) {
+        let Some(from) = self.graph_node(self.last_graph_node) else {
+            return;
+        };
+        let to = self.graph.add_node(self.nodes[node].initial);
+        self.graph.add_edge(PoseGraphEdge {
+            from,
+            to,
+            measurement: odometry.relative,
+            covariance: odometry.covariance,
+            kind: EdgeKind::Odometry,
+        });
+        self.nodes[node].placement = Placement::Graph(to);
+        self.last_graph_node = node;
+    }
+
     fn make_keyframe(&mut self, node: usize) {
         self.keyframes.push(node);
         self.reference_kf = Some(node);
         self.run.keyframes += 1;
     }
 
-    /// Matches `node` (frame `current`) without a prior against the
-    /// keyframes place recognition proposes among those older than
-    /// `before_secs`, best first; the first match becomes an edge of `kind`.
+    /// Matches frame `current` without a prior against the keyframes
+    /// place recognition proposes among those older than `before_secs`,
+    /// best first; the first match and its keyframe.
     fn match_recognised(
         &mut self,
-        node: usize,
         current: FrameRef,
         before_secs: f64,
         purpose: TrackPurpose,
-        kind: EdgeKind,
     ) -> Option<(usize, VoMeasurement)> {
         let known: Vec<FrameRef> = self
             .keyframes
@@ -311,7 +389,6 @@ impl<'a> Session<'a> {
             if let TrackOutcome::Tracked(m) = self.vo.track(&request)
                 && let Some(kf) = self.node_of_frame(candidate.index)
             {
-                self.add_vo_edge(kf, node, &m, kind);
                 return Some((kf, m));
             }
         }
@@ -327,16 +404,8 @@ impl<'a> Session<'a> {
             return;
         };
         let horizon = time_secs - self.params.loop_closure.min_separation_secs;
-        if self
-            .match_recognised(
-                node,
-                current,
-                horizon,
-                TrackPurpose::LoopClosure,
-                EdgeKind::LoopClosure,
-            )
-            .is_some()
-        {
+        if let Some((kf, m)) = self.match_recognised(current, horizon, TrackPurpose::LoopClosure) {
+            self.add_vo_edge(kf, node, &m, EdgeKind::LoopClosure);
             self.run.loop_closures += 1;
         }
     }
@@ -348,15 +417,9 @@ impl<'a> Session<'a> {
             .find(|&k| self.nodes[k].frame.is_some_and(|f| f.index == frame))
     }
 
-    /// Tries to relocalise `node` against a recognised keyframe.
-    fn relocalise(&mut self, node: usize, current: FrameRef) -> Option<(usize, VoMeasurement)> {
-        self.match_recognised(
-            node,
-            current,
-            f64::INFINITY,
-            TrackPurpose::Relocalisation,
-            EdgeKind::Relocalisation,
-        )
+    /// Tries to relocalise frame `current` against a recognised keyframe.
+    fn relocalise(&mut self, current: FrameRef) -> Option<(usize, VoMeasurement)> {
+        self.match_recognised(current, f64::INFINITY, TrackPurpose::Relocalisation)
     }
 
     /// Learns from the VO over the interval since the target anchor.
@@ -426,36 +489,41 @@ impl<'a> Session<'a> {
     /// Processes camera frame `frame` with the selector's decision.
     fn process(&mut self, frame: FrameRef, keyframe_scale: f64) -> Result<(), FrontendError> {
         let interval = self.integrator.take();
-        let previous_pose = self.graph.initial[self.last_node];
-        let node = self.graph.add_node(previous_pose * interval.relative);
+        let previous = self.last_node;
+        let node = self.nodes.len();
         self.nodes.push(Node {
             frame: Some(frame),
             map_pose: None,
+            initial: self.nodes[previous].initial * interval.relative,
+            placement: Placement::Relative {
+                parent: previous,
+                relative: interval.relative,
+            },
         });
-        self.graph.add_edge(PoseGraphEdge {
-            from: self.last_node,
-            to: node,
-            measurement: interval.relative,
-            covariance: interval.covariance,
-            kind: EdgeKind::Odometry,
-        });
+        if !self.keyframe_graph {
+            self.add_graph_node(node, &interval);
+        }
         let gap = frame.time_secs - self.last_processed_secs.unwrap_or(frame.time_secs);
-        let previous = self.last_node;
         self.last_node = node;
         self.last_processed_secs = Some(frame.time_secs);
         self.run.frames += 1;
         let mut became_keyframe = false;
-        let mut tracked = false;
+        // The visual edge that places the frame: from its keyframe, and of
+        // which kind.
+        let mut placed_by: Option<(usize, VoMeasurement, EdgeKind)> = None;
         // A target interval starts here (map initialised or relocalised).
         let mut fresh_anchor = false;
         if self.tracking {
             match self.reference_kf {
                 None => {
                     // The first processed frame initialises the map.
-                    self.nodes[node].map_pose = Some(self.graph.initial[node]);
+                    self.nodes[node].map_pose = Some(self.nodes[node].initial);
+                    if self.keyframe_graph {
+                        let span = self.graph_integrator.take();
+                        self.add_graph_node(node, &span);
+                    }
                     self.make_keyframe(node);
                     became_keyframe = true;
-                    tracked = true;
                     fresh_anchor = true;
                 }
                 Some(kf) => {
@@ -473,55 +541,41 @@ impl<'a> Session<'a> {
                     };
                     match self.vo.track(&request) {
                         TrackOutcome::Tracked(m) => {
-                            self.add_vo_edge(kf, node, &m, EdgeKind::VisualOdometry);
                             self.nodes[node].map_pose =
                                 self.nodes[kf].map_pose.map(|p| p * m.relative);
-                            tracked = true;
+                            placed_by = Some((kf, m, EdgeKind::VisualOdometry));
                             became_keyframe =
                                 self.keyframe_due(&m, reference, frame, keyframe_scale);
                         }
-                        TrackOutcome::Lost => {
-                            tracing::debug!(
-                                time_secs = frame.time_secs,
-                                gap_secs = gap,
-                                since_keyframe_secs = frame.time_secs - reference.time_secs,
-                                success_probability = self.vo.success_probability(&request),
-                                prior_error_m = request.prior.map(|p| {
-                                    let truth = self
-                                        .traverse
-                                        .ground_truth_at(reference.time_secs)
-                                        .inverse()
-                                        * self.traverse.ground_truth_at(frame.time_secs);
-                                    (p.inverse() * truth).translation.vector.norm()
-                                }),
-                                prior_error_rad = request.prior.map(|p| {
-                                    let truth = self
-                                        .traverse
-                                        .ground_truth_at(reference.time_secs)
-                                        .inverse()
-                                        * self.traverse.ground_truth_at(frame.time_secs);
-                                    (p.inverse() * truth).rotation.angle()
-                                }),
-                                "tracking lost"
-                            );
-                            self.tracking = false;
-                            self.lost_since = frame.time_secs;
-                            self.run.tracking_losses += 1;
-                            self.target_anchor = None;
-                        }
+                        TrackOutcome::Lost => self.lose_track(&request, gap),
                     }
                 }
             }
-        } else if let Some((kf, m)) = self.relocalise(node, frame) {
+        } else if let Some((kf, m)) = self.relocalise(frame) {
             self.tracking = true;
             self.run.relocalisations += 1;
             self.run.lost_secs += frame.time_secs - self.lost_since;
             self.nodes[node].map_pose = self.nodes[kf].map_pose.map(|p| p * m.relative);
             self.reference_kf = Some(kf);
-            tracked = true;
+            placed_by = Some((kf, m, EdgeKind::Relocalisation));
             let reference = self.frame_of(kf).unwrap_or(frame);
             became_keyframe = self.keyframe_due(&m, reference, frame, keyframe_scale);
             fresh_anchor = true;
+        }
+        let tracked = placed_by.is_some() || fresh_anchor;
+        if let Some((kf, m, kind)) = placed_by {
+            if !self.keyframe_graph {
+                self.add_vo_edge(kf, node, &m, kind);
+            } else if became_keyframe {
+                let span = self.graph_integrator.take();
+                self.add_graph_node(node, &span);
+                self.add_vo_edge(kf, node, &m, kind);
+            } else {
+                self.nodes[node].placement = Placement::Relative {
+                    parent: kf,
+                    relative: m.relative,
+                };
+            }
         }
         if tracked {
             self.tracked_history = [self.tracked_history[1], Some((node, frame.time_secs))];
@@ -547,6 +601,30 @@ impl<'a> Session<'a> {
             tracked,
         });
         Ok(())
+    }
+
+    /// Tracking `request` failed: the tracker is lost from here.
+    fn lose_track(&mut self, request: &TrackRequest, gap: f64) {
+        let (reference, frame) = (request.reference, request.current);
+        let truth = self.traverse.ground_truth_at(reference.time_secs).inverse()
+            * self.traverse.ground_truth_at(frame.time_secs);
+        tracing::debug!(
+            time_secs = frame.time_secs,
+            gap_secs = gap,
+            since_keyframe_secs = frame.time_secs - reference.time_secs,
+            success_probability = self.vo.success_probability(request),
+            prior_error_m = request
+                .prior
+                .map(|p| (p.inverse() * truth).translation.vector.norm()),
+            prior_error_rad = request
+                .prior
+                .map(|p| (p.inverse() * truth).rotation.angle()),
+            "tracking lost"
+        );
+        self.tracking = false;
+        self.lost_since = frame.time_secs;
+        self.run.tracking_losses += 1;
+        self.target_anchor = None;
     }
 
     fn keyframe_due(
@@ -577,10 +655,19 @@ impl<'a> Session<'a> {
             );
         }
         self.run.graph_error = (optimized.initial_error, optimized.final_error);
+        let mut poses: Vec<Isometry3<f64>> = Vec::with_capacity(self.nodes.len());
+        for node in &self.nodes {
+            let pose = match node.placement {
+                Placement::Graph(g) => optimized.poses[g],
+                // A parent is always processed before its children.
+                Placement::Relative { parent, relative } => poses[parent] * relative,
+            };
+            poses.push(pose);
+        }
         self.run.trajectory = self
             .anchors
             .iter()
-            .map(|(node, relative)| optimized.poses[*node] * relative)
+            .map(|(node, relative)| poses[*node] * relative)
             .collect();
         self.run.metrics = trajectory_metrics(
             &self.run.trajectory,

@@ -43,6 +43,10 @@ pub struct Traverse {
     /// Whether the windows' inputs are z-scored (see
     /// [`Traverse::with_standardized_inputs`]).
     inputs_standardized: bool,
+    /// Feature supply at each camera frame (see
+    /// [`Traverse::with_feature_supply`]); `None` is neutral.
+    #[serde(default)]
+    feature_supply: Option<Vec<f64>>,
 }
 
 /// Stride over which the path length is measured (s): summing sample-to-
@@ -154,6 +158,7 @@ impl Traverse {
             camera_times_secs,
             cumulative_m,
             inputs_standardized: false,
+            feature_supply: None,
         })
     }
 
@@ -164,6 +169,45 @@ impl Traverse {
     pub fn with_standardized_inputs(mut self, standardized: bool) -> Self {
         self.inputs_standardized = standardized;
         self
+    }
+
+    /// The same traverse with a feature supply per camera frame: the
+    /// matchable features the terrain and the motion leave, relative to
+    /// the reference texture (1; see `frontends/README.md`). A traverse
+    /// without one (a replayed or recorded run) is neutral.
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidTraverse`] when the length differs from the
+    /// camera frames' or a value is not positive and finite.
+    pub fn with_feature_supply(mut self, supply: Vec<f64>) -> Result<Self, FrontendError> {
+        let bad = |detail: String| FrontendError::InvalidTraverse {
+            traverse: self.name.clone(),
+            detail,
+        };
+        if supply.len() != self.camera_times_secs.len() {
+            return Err(bad(format!(
+                "{} feature-supply values for {} camera frames",
+                supply.len(),
+                self.camera_times_secs.len()
+            )));
+        }
+        if let Some(i) = supply.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(bad(format!(
+                "feature supply {} at camera frame {i}, expected a positive number",
+                supply[i]
+            )));
+        }
+        self.feature_supply = Some(supply);
+        Ok(self)
+    }
+
+    /// The feature supply of camera frame `index` (1 without one, or
+    /// outside the camera stream).
+    pub fn feature_supply_at(&self, index: usize) -> f64 {
+        self.feature_supply
+            .as_ref()
+            .and_then(|s| s.get(index).copied())
+            .unwrap_or(1.0)
     }
 
     /// Whether the window inputs are z-scored.

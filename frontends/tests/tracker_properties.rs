@@ -4,9 +4,10 @@
 //! * the view overlap falls as the camera turns further or drives further;
 //! * tracking success (with an exact prior, and without one) never rises
 //!   as the gap to the reference keyframe grows, by turning or driving;
-//! * the expected measurement error never falls as that gap grows — so at
-//!   fixed keyframes, processing more frames (each tracked over a shorter
-//!   gap) never raises the expected error of a tracked frame.
+//! * the expected measurement error never falls as that gap grows.
+//!
+//! What many frames tracked against one keyframe are worth together is
+//! not a property of one measurement: see `map_error.rs`.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 

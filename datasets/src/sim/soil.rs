@@ -45,6 +45,12 @@ pub struct Soil {
     /// Standard deviation of the extra body vibration this soil causes at
     /// typical driving speed, m/s² (for the accelerometer model).
     pub vibration_mps2: f64,
+    /// Matchable image features this soil offers per frame, relative to
+    /// compact soil's (dimensionless, > 0): what the simulated tracker's
+    /// feature supply reads under the camera's footprint. An assumption:
+    /// no published per-soil feature counts were found (see
+    /// `frontends/README.md`).
+    pub texture: f64,
 }
 
 impl Default for Soil {
@@ -57,7 +63,8 @@ impl Default for Soil {
 impl Soil {
     /// Compact, cohesive soil: good traction (≈ 6% slip at 5°, 10% at 10°,
     /// 32% at 20°). `slip_base` 0.03, `slope_slip_gain` 0.04,
-    /// `lateral_slip_gain` 0.15, `turn_slip` 0.05, `vibration_mps2` 0.02.
+    /// `lateral_slip_gain` 0.15, `turn_slip` 0.05, `vibration_mps2` 0.02,
+    /// `texture` 1 (the reference).
     pub fn compact() -> Self {
         Self {
             name: "compact".to_owned(),
@@ -66,6 +73,7 @@ impl Soil {
             lateral_slip_gain: 0.15,
             turn_slip: 0.05,
             vibration_mps2: 0.02,
+            texture: 1.0,
         }
     }
 
@@ -73,7 +81,8 @@ impl Soil {
     /// slip-versus-slope curves of Mars rovers (≈ 16% at 5°, 30% at 10°, 54%
     /// at 15°, the 0.9 clamp at 20° with the default slope rate). `slip_base`
     /// 0.08, `slope_slip_gain` 0.12, `lateral_slip_gain` 0.45, `turn_slip`
-    /// 0.15, `vibration_mps2` 0.03.
+    /// 0.15, `vibration_mps2` 0.03, `texture` 0.25 (fine, uniform grains:
+    /// few corners).
     pub fn loose_sand() -> Self {
         Self {
             name: "loose_sand".to_owned(),
@@ -82,12 +91,14 @@ impl Soil {
             lateral_slip_gain: 0.45,
             turn_slip: 0.15,
             vibration_mps2: 0.03,
+            texture: 0.25,
         }
     }
 
     /// Gravel: intermediate traction, rough ride (≈ 10% slip at 5°, 18% at
     /// 10°, 55% at 20°). `slip_base` 0.05, `slope_slip_gain` 0.07,
-    /// `lateral_slip_gain` 0.25, `turn_slip` 0.10, `vibration_mps2` 0.06.
+    /// `lateral_slip_gain` 0.25, `turn_slip` 0.10, `vibration_mps2` 0.06,
+    /// `texture` 1.2 (stones of many sizes: corners at every scale).
     pub fn gravel() -> Self {
         Self {
             name: "gravel".to_owned(),
@@ -96,6 +107,7 @@ impl Soil {
             lateral_slip_gain: 0.25,
             turn_slip: 0.10,
             vibration_mps2: 0.06,
+            texture: 1.2,
         }
     }
 
@@ -131,6 +143,11 @@ impl Soil {
                 "vibration_mps2",
                 in_range(self.vibration_mps2, 0.0, 100.0),
                 "a value in [0, 100)",
+            ),
+            (
+                "texture",
+                self.texture.is_finite() && self.texture > 0.0 && self.texture <= 10.0,
+                "a value in (0, 10]",
             ),
         ];
         for (field, ok, expected) in checks {

@@ -89,6 +89,9 @@ pub(crate) struct PreparedData {
     /// Visual odometry recorded with the test runs (a bag's `vo` topic),
     /// by test run name.
     pub(crate) recorded_vo: BTreeMap<String, Vec<StampedPose>>,
+    /// Where each soil lies (a simulated testbed only), for the simulated
+    /// tracker's feature supply.
+    pub(crate) soils: Option<gpodo_datasets::sim::soil::SoilMap>,
 }
 
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
@@ -156,6 +159,7 @@ fn from_logs(
         test_logs,
         model: Some((model, radius)),
         recorded_vo: BTreeMap::new(),
+        soils: None,
     })
 }
 
@@ -184,14 +188,16 @@ pub(crate) fn prepare(
             tracing::info!(seed, "simulating the testbed");
             let testbed = sim.simulate()?;
             let source = format!("simulated `{}` testbed, seed {seed}", preset.name());
-            from_logs(
+            let mut prepared = from_logs(
                 config,
                 base,
                 &testbed.train,
                 &testbed.test,
                 source,
                 Some(testbed.terrain.max_slope_deg()),
-            )
+            )?;
+            prepared.soils = Some(testbed.soils);
+            Ok(prepared)
         }
         DatasetSpec::Logs { train, test } => {
             let read = |paths: &[PathBuf]| {
@@ -298,6 +304,7 @@ pub(crate) fn prepare(
                 test_logs: Vec::new(),
                 model: None,
                 recorded_vo: BTreeMap::new(),
+                soils: None,
             })
         }
     }

@@ -12,6 +12,7 @@
 pub mod bench;
 pub mod calibration;
 pub mod data;
+pub mod feature_supply;
 pub mod fit;
 pub mod models;
 pub mod odometry;

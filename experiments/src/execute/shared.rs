@@ -23,6 +23,7 @@ use crate::error::PipelineError;
 use crate::execute::calibration::{ResidualStatistics, residual_statistics};
 use crate::execute::code_version;
 use crate::execute::data::{PreparedData, model_rows, prepare, reference_statistics};
+use crate::execute::feature_supply::feature_supply;
 use crate::execute::fit::fit_and_score;
 use crate::execute::results::{ExperimentResults, ModelRows, RegressorResult};
 use crate::execute::schemes::{SchemeInputs, run_schemes};
@@ -287,10 +288,11 @@ impl SharedWork {
                 runs = p.traverses.len(),
                 "running Table II"
             );
+            let traverses = with_feature_supply(config, p)?;
             run_schemes(&SchemeInputs {
                 config,
                 base,
-                traverses: &p.traverses,
+                traverses: &traverses,
                 predictions: &predictions,
                 regressor_labels: &labels,
                 recorded_vo: &p.data.recorded_vo,
@@ -349,6 +351,31 @@ impl gpodo_traits::FitProgress for FitSpinner {
             self.label
         ));
     }
+}
+
+/// The test traverses as the run's simulated tracker sees them: with the
+/// feature supply of its camera over the testbed's soils (a borrowed copy
+/// of the shared ones when there is no soil map or the tracker ignores it).
+fn with_feature_supply<'a>(
+    config: &ExperimentConfig,
+    p: &'a Prepared,
+) -> Result<std::borrow::Cow<'a, [Traverse]>, PipelineError> {
+    use gpodo_frontends::params::VoSpec;
+    let (Some(soils), VoSpec::Simulated(vo)) = (&p.data.soils, &config.frontend.vo) else {
+        return Ok(std::borrow::Cow::Borrowed(p.traverses.as_slice()));
+    };
+    if !vo.terrain_features {
+        return Ok(std::borrow::Cow::Borrowed(p.traverses.as_slice()));
+    }
+    let traverses = p
+        .traverses
+        .iter()
+        .map(|t| {
+            let supply = feature_supply(soils, &vo.camera, t);
+            t.clone().with_feature_supply(supply)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(std::borrow::Cow::Owned(traverses))
 }
 
 /// The test traverses of a dataset.

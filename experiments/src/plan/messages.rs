@@ -23,6 +23,7 @@ pub(crate) fn split_serde_message(message: &str, path: &str) -> (String, String)
             ),
         },
     };
+    let field = path.rsplit('.').next().unwrap_or(path);
     let what =
         if path.ends_with("selector") || path.contains("selector.") || path.ends_with("inner") {
             "selector kind"
@@ -30,10 +31,12 @@ pub(crate) fn split_serde_message(message: &str, path: &str) -> (String, String)
             "regressor kind"
         } else if path.starts_with("dataset") {
             "dataset kind"
-        } else if path.contains("vo") {
+        } else if path.ends_with(".vo") || path.ends_with(".vo.kind") {
             "visual odometry kind"
         } else if path.starts_with("motion_model") {
             "motion model kind"
+        } else if !field.is_empty() && field.chars().all(|c| c.is_ascii_lowercase() || c == '_') {
+            field
         } else {
             "variant"
         };

@@ -38,6 +38,11 @@ pub struct CameraParams {
     pub mean_depth_m: f64,
     /// Focal length (pixels; default 500).
     pub focal_px: f64,
+    /// Exposure time (s; default 0.01), for the motion blur.
+    pub exposure_secs: f64,
+    /// Blur length at which the detected features halve (pixels; default
+    /// 3, the radius of ORB's FAST circle).
+    pub blur_half_px: f64,
 }
 
 impl Default for CameraParams {
@@ -51,6 +56,8 @@ impl Default for CameraParams {
             footprint_width_m: 2.5,
             mean_depth_m: 2.0,
             focal_px: 500.0,
+            exposure_secs: 0.01,
+            blur_half_px: 3.0,
         }
     }
 }
@@ -68,6 +75,7 @@ impl CameraParams {
             ("footprint_width_m", self.footprint_width_m),
             ("mean_depth_m", self.mean_depth_m),
             ("focal_px", self.focal_px),
+            ("blur_half_px", self.blur_half_px),
         ];
         for (field, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -76,6 +84,12 @@ impl CameraParams {
                     expected: "a positive number".into(),
                 });
             }
+        }
+        if !(self.exposure_secs.is_finite() && (0.0..=1.0).contains(&self.exposure_secs)) {
+            return Err(FrontendError::InvalidConfig {
+                field: format!("{prefix}.exposure_secs"),
+                expected: "an exposure time in [0, 1] s".into(),
+            });
         }
         if !(self.position_m.iter().all(|v| v.is_finite()) && self.pitch_down_rad.is_finite()) {
             return Err(FrontendError::InvalidConfig {
@@ -144,6 +158,42 @@ impl CameraParams {
     }
 }
 
+impl CameraParams {
+    /// Nine points of the seen ground in the body frame: a 3 × 3 grid
+    /// across the footprint (`±footprint_width_m / 3` sideways) and along
+    /// the optical axis (`mean_depth_m` and `± depth_range_m / 3`), where
+    /// the terrain's texture is read.
+    pub fn footprint_body(&self) -> [Vector3<f64>; 9] {
+        let body_from_camera = self.body_from_camera();
+        let (across, along) = (self.footprint_width_m / 3.0, self.depth_range_m / 3.0);
+        std::array::from_fn(|i| {
+            let x = across * (i % 3) as f64 - across;
+            let z = (self.mean_depth_m + along * (i / 3) as f64 - along).max(0.0);
+            body_from_camera * nalgebra::Point3::new(x, 0.0, z)
+        })
+        .map(|p| p.coords)
+    }
+
+    /// The motion blur (pixels) of a frame taken while the body moves by
+    /// `body_motion` per second: the image displacement
+    /// ([`CameraParams::image_error_px`]) of the motion during the
+    /// exposure.
+    pub fn motion_blur_px(&self, body_motion_per_sec: &Isometry3<f64>) -> f64 {
+        let s = self.exposure_secs;
+        let during = Isometry3::from_parts(
+            Translation3::from(body_motion_per_sec.translation.vector * s),
+            UnitQuaternion::from_scaled_axis(body_motion_per_sec.rotation.scaled_axis() * s),
+        );
+        self.image_error_px(&during)
+    }
+
+    /// The share of features a blur of `blur_px` leaves,
+    /// `1 / (1 + blur_px / blur_half_px)`.
+    pub fn blur_factor(&self, blur_px: f64) -> f64 {
+        1.0 / (1.0 + blur_px.max(0.0) / self.blur_half_px)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,6 +231,33 @@ mod tests {
         // Symmetric in the direction of the turn.
         let back = Isometry3::rotation(Vector3::z() * -0.23);
         assert!((cam.body_overlap(&back) - o).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_footprint_lies_ahead_and_across_the_optical_axis() {
+        let cam = CameraParams::default();
+        let points = cam.footprint_body();
+        // The centre: 2 m along an axis pitched 0.35 rad down from 1 m up
+        // on the mast 0.3 m ahead.
+        let centre = points[4];
+        let expected = Vector3::new(0.3 + 2.0 * 0.35f64.cos(), 0.0, 1.0 - 2.0 * 0.35f64.sin());
+        assert!((centre - expected).norm() < 1e-12, "{centre}");
+        // Sideways points are 2.5/3 m to either side.
+        assert!((points[3].y - points[5].y - 2.0 * 2.5 / 3.0).abs() < 1e-12);
+        assert!(points[0].x < centre.x && points[6].x > centre.x);
+    }
+
+    #[test]
+    fn blur_is_focal_times_the_angle_turned_during_the_exposure() {
+        let cam = CameraParams::default();
+        // 0.2 rad/s about the optical axis' perpendicular for 10 ms at
+        // 500 px: 1 px, plus the mast's swing.
+        let turn = Isometry3::rotation(Vector3::z() * 0.2);
+        let b = cam.motion_blur_px(&turn);
+        let swing = 0.3 * 0.2 * 0.01 / 2.0;
+        assert!((b - 500.0 * (0.2 * 0.01 + swing)).abs() < 1e-3, "{b}");
+        assert!((cam.blur_factor(3.0) - 0.5).abs() < 1e-15);
+        assert_eq!(cam.blur_factor(0.0), 1.0);
     }
 
     #[test]

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub use camera::CameraParams;
 pub use replay::{ReplayVo, ReplayVoParams};
-pub use simulated::{SimulatedVo, SimulatedVoParams};
+pub use simulated::{SimulatedVo, SimulatedVoParams, TrackerErrorModel};
 
 /// A camera frame: its index in the traverse's camera stream and its time.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -80,10 +80,33 @@ pub enum TrackOutcome {
     Lost,
 }
 
+/// How the errors of frames tracked against one keyframe relate, and so
+/// which frames the pose graph may treat as independent measurements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorStructure {
+    /// Frames tracked against one keyframe share that keyframe's map
+    /// error (ORB-SLAM): only keyframes become pose-graph nodes, as in
+    /// ORB-SLAM's local bundle adjustment, and the other processed frames
+    /// hang from their reference keyframe.
+    #[default]
+    SharedPerKeyframe,
+    /// Every measurement has its own error: every processed frame becomes
+    /// a pose-graph node (what a replayed log, whose errors are unknown,
+    /// and `error_model: independent` use).
+    Independent,
+}
+
 /// A visual odometry front end.
 pub trait VisualOdometry: Send {
     /// A short name for reports.
     fn name(&self) -> &str;
+
+    /// How the errors of this odometry's measurements relate (default
+    /// [`ErrorStructure::Independent`]).
+    fn error_structure(&self) -> ErrorStructure {
+        ErrorStructure::Independent
+    }
 
     /// Estimates `reference_from_current`, or fails.
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome;

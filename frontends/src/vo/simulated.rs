@@ -1,27 +1,36 @@
 //! A feature tracker simulated from ground truth, in which skipping frames
-//! costs something, as in a real one (ORB-SLAM-like):
+//! costs something, as in a real one (ORB-SLAM-like); the equations and
+//! the source of every default are in `frontends/README.md`.
 //!
-//! * **Overlap.** Two views share the fraction of the image that
-//!   [`CameraParams::overlap`] leaves after the camera's rotation and
-//!   translation between them.
+//! * **Overlap.** Two views share the fraction `o` of the image that
+//!   [`CameraParams::overlap`] leaves after the camera's motion between
+//!   them.
 //! * **Tracking.** A frame is tracked against its reference keyframe by
 //!   projecting the keyframe's features with a motion prior and searching a
 //!   window of `search_radius_px` around each projection. Guided tracking
-//!   succeeds with probability `R((o − min_overlap)/s_o) · R((r − e)/s_e)`,
-//!   `o` the overlap, `e` the prior's error in pixels
-//!   ([`CameraParams::image_error_px`]), `r` the search radius, and
-//!   `R(x) = clamp(½ + x/2, 0, 1)` a linear ramp: sure success when the
-//!   overlap is at least `s_o` above its threshold and the prior error `s_e`
-//!   inside the window, sure failure as far on the other side, even odds at
-//!   the thresholds. A prior from wheel odometry that stays close to the
-//!   truth lets the tracker bridge a longer gap. Without a prior, or when
-//!   guided tracking fails, matching against the reference keyframe without
-//!   a prior (bag of words) needs a larger overlap: `R((o −
+//!   succeeds geometrically with probability `R((o − min_overlap)/s_o) ·
+//!   R((r − e)/s_e)`, `e` the prior's error in pixels
+//!   ([`CameraParams::image_error_px`]), `r` the search radius, and `R(x) =
+//!   clamp(½ + x/2, 0, 1)` a linear ramp. Without a prior, or when guided
+//!   tracking fails, matching against the reference keyframe without a
+//!   prior (bag of words) needs a larger overlap: `R((o −
 //!   prior_free_min_overlap)/s_o)`.
-//! * **Error.** The estimated relative pose is the truth perturbed by
-//!   `N(0, σ²)` with `σ_t = (σ_t0 + k_t ‖t‖) / o^p` and
-//!   `σ_r = (σ_r0 + k_r |θ|) / o^p`: larger motions and smaller overlaps
-//!   give worse estimates.
+//! * **Features.** Each camera frame has a feature supply `s` (the
+//!   terrain's texture under the camera's footprint times what the motion
+//!   blur leaves, 1 for compact soil without blur, carried on the
+//!   [`Traverse`]). A match of two frames finds `N ~ Poisson(F · min(s_ref,
+//!   s_cur) · o)` features and succeeds only with `N ≥ n_min` (30 to track,
+//!   50 to relocalise or close a loop, ORB-SLAM2's inlier thresholds): the
+//!   success probability is the geometric one times `P(N ≥ n_min)`.
+//! * **Error.** The estimated relative pose is the truth perturbed on the
+//!   right by `δ = σ ⊙ z` with `σ_t = (σ_t0 + k_t ‖t‖) / (o^p √s_m)`,
+//!   `σ_r = (σ_r0 + k_r |θ|) / (o^p √s_m)`, `s_m = min(s_ref, s_cur)`.
+//!   Under `error_model: shared`, `z = √ρ z_k + √(1 − ρ) z_j`: `z_k ~ N(0,
+//!   I)` is drawn once per reference keyframe `k` (its map's error, shared
+//!   by every frame matched against it) and `z_j ~ N(0, I)` per request, so
+//!   each measurement keeps the variance `σ²` and two frames of one
+//!   keyframe correlate by `ρ` (`map_error_share`). Under `independent`,
+//!   `z = z_j`.
 //! * **Relocalisation and loop closing.** Only keyframes the current view
 //!   overlaps by at least `recognition_min_overlap` are recognised (each
 //!   with probability `recognition_probability`); matching against them is
@@ -29,8 +38,9 @@
 //!   before.
 //!
 //! Every draw comes from a generator seeded by `(seed, purpose, reference,
-//! current)`, so a run's result does not depend on the order or the thread
-//! in which requests are made.
+//! current)`, and a keyframe's map error by `(seed, reference)`, so a run's
+//! result does not depend on the order or the thread in which requests
+//! are made.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
@@ -39,8 +49,8 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    CameraParams, ErrorModel, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
-    VoMeasurement, isotropic_covariance,
+    CameraParams, ErrorModel, ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest,
+    VisualOdometry, VoMeasurement, isotropic_covariance,
 };
 use crate::FrontendError;
 use crate::traverse::Traverse;
@@ -55,8 +65,8 @@ pub struct SimulatedVoParams {
     pub min_overlap: f64,
     /// Half-width of the overlap thresholds' transition (default 0.05).
     pub overlap_softness: f64,
-    /// Search radius of guided matching (pixels; default 15, ORB-SLAM's
-    /// stereo window).
+    /// Search radius of guided matching (pixels; default 15, ORB-SLAM2's
+    /// monocular and RGB-D window; its stereo window is 7, retried at 14).
     pub search_radius_px: f64,
     /// Half-width of the search radius' transition (pixels; default 3).
     pub search_softness_px: f64,
@@ -82,8 +92,46 @@ pub struct SimulatedVoParams {
     pub rotation_sigma_per_rad: f64,
     /// Exponent p of the overlap in the error (default 1).
     pub overlap_exponent: f64,
+    /// How the errors of frames tracked against one keyframe relate
+    /// (default `shared`: they share the keyframe's map error).
+    pub error_model: TrackerErrorModel,
+    /// Under `error_model: shared`, the fraction ρ of a measurement's
+    /// error variance that is its reference keyframe's map error, shared
+    /// by every frame tracked against that keyframe (default 0.5; 0: no
+    /// sharing, 1: fully shared).
+    pub map_error_share: f64,
+    /// Whether features are counted: the traverse's per-frame feature
+    /// supply (terrain texture and motion blur; a traverse without one is
+    /// neutral) sets how many a match finds, which must reach the
+    /// thresholds below, and scales the error by `1/√supply` (default
+    /// true).
+    pub terrain_features: bool,
+    /// Features F a match finds at full overlap on the reference texture
+    /// (compact soil, no blur; default 300).
+    pub features_per_frame: f64,
+    /// Features tracking needs (default 30, ORB-SLAM2's local-map
+    /// inliers).
+    pub min_tracked_features: u32,
+    /// Features relocalisation and loop closing need (default 50,
+    /// ORB-SLAM2's inliers after relocalisation).
+    pub min_relocalisation_features: u32,
     /// Seed of every draw (default 0).
     pub seed: u64,
+}
+
+/// How the simulated tracker's errors are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackerErrorModel {
+    /// Every frame tracked against keyframe `k` carries `k`'s map error
+    /// (a fraction `map_error_share` of its variance) plus its own; only
+    /// keyframes enter the pose graph (ORB-SLAM).
+    #[default]
+    Shared,
+    /// Every measurement draws its own error and every processed frame
+    /// enters the pose graph: the model of gpodo's results before
+    /// 2026-11-25 (with `terrain_features: false`, the same numbers).
+    Independent,
 }
 
 impl Default for SimulatedVoParams {
@@ -103,6 +151,12 @@ impl Default for SimulatedVoParams {
             rotation_sigma_rad: 0.001,
             rotation_sigma_per_rad: 0.01,
             overlap_exponent: 1.0,
+            error_model: TrackerErrorModel::Shared,
+            map_error_share: 0.5,
+            terrain_features: true,
+            features_per_frame: 300.0,
+            min_tracked_features: 30,
+            min_relocalisation_features: 50,
             seed: 0,
         }
     }
@@ -138,6 +192,7 @@ impl SimulatedVoParams {
             ("prior_free_min_overlap", self.prior_free_min_overlap),
             ("recognition_min_overlap", self.recognition_min_overlap),
             ("recognition_probability", self.recognition_probability),
+            ("map_error_share", self.map_error_share),
         ] {
             if !fraction(v) {
                 return bad(field, "a fraction in [0, 1]");
@@ -147,6 +202,7 @@ impl SimulatedVoParams {
             ("overlap_softness", self.overlap_softness),
             ("search_radius_px", self.search_radius_px),
             ("search_softness_px", self.search_softness_px),
+            ("features_per_frame", self.features_per_frame),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(field, "a positive number");
@@ -165,6 +221,24 @@ fn ramp(x: f64) -> f64 {
     (0.5 + 0.5 * x).clamp(0.0, 1.0)
 }
 
+/// `P(N ≥ k)` for `N ~ Poisson(λ)`: one minus the first `k` terms, each
+/// from the one before.
+pub fn poisson_at_least(k: u32, lambda: f64) -> f64 {
+    if k == 0 {
+        return 1.0;
+    }
+    if lambda.is_nan() || lambda <= 0.0 {
+        return 0.0;
+    }
+    let mut term = (-lambda).exp();
+    let mut below = term;
+    for i in 1..k {
+        term *= lambda / f64::from(i);
+        below += term;
+    }
+    (1.0 - below).clamp(0.0, 1.0)
+}
+
 /// SplitMix64: mixes request keys into a generator seed.
 fn mix(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -173,12 +247,18 @@ fn mix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The generator key of a keyframe's map error (apart from the request
+/// purposes 1–3 and place recognition's 0).
+const MAP_ERROR_KEY: u64 = 16;
+
 /// The simulated tracker over one traverse.
 #[derive(Debug, Clone)]
 pub struct SimulatedVo {
     params: SimulatedVoParams,
     /// Ground-truth `world_from_body` at each camera frame.
     frames: Vec<Isometry3<f64>>,
+    /// Feature supply at each camera frame (1 = the reference texture).
+    supply: Vec<f64>,
 }
 
 impl SimulatedVo {
@@ -188,12 +268,25 @@ impl SimulatedVo {
     /// As [`SimulatedVoParams::validate`].
     pub fn new(params: SimulatedVoParams, traverse: &Traverse) -> Result<Self, FrontendError> {
         params.validate()?;
-        let frames = traverse
+        let frames: Vec<Isometry3<f64>> = traverse
             .camera_times_secs()
             .iter()
             .map(|&t| traverse.ground_truth_at(t))
             .collect();
-        Ok(Self { params, frames })
+        let supply = (0..frames.len())
+            .map(|i| {
+                if params.terrain_features {
+                    traverse.feature_supply_at(i)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        Ok(Self {
+            params,
+            frames,
+            supply,
+        })
     }
 
     /// The settings.
@@ -214,15 +307,64 @@ impl SimulatedVo {
         ChaCha8Rng::seed_from_u64(mix(key))
     }
 
+    /// The feature supply limiting a match of the two frames: the poorer
+    /// of the two views, `min(s_ref, s_cur)`.
+    fn supply_of(&self, request: &TrackRequest) -> Option<f64> {
+        let (a, b) = (
+            self.supply.get(request.reference.index)?,
+            self.supply.get(request.current.index)?,
+        );
+        Some(a.min(*b))
+    }
+
+    /// The share of the reference keyframe's features found again in the
+    /// current frame, `o · min(1, s_cur / s_ref)`: what the keyframe rule
+    /// reads (ORB-SLAM compares tracked points with the reference's).
+    fn refound_share(&self, request: &TrackRequest, overlap: f64) -> f64 {
+        let (a, b) = (
+            self.supply[request.reference.index],
+            self.supply[request.current.index],
+        );
+        overlap * (b / a).min(1.0)
+    }
+
+    /// The feature supply of camera frame `index` (1 outside the traverse).
+    pub fn feature_supply(&self, index: usize) -> f64 {
+        self.supply.get(index).copied().unwrap_or(1.0)
+    }
+
+    /// The expected number of features a match of `request` finds at
+    /// geometric overlap `overlap`: `n̄ = F · min(s_ref, s_cur) · o`.
+    pub fn expected_features(&self, request: &TrackRequest, overlap: f64) -> f64 {
+        self.params.features_per_frame * self.supply_of(request).unwrap_or(1.0) * overlap
+    }
+
+    /// The probability that the features found suffice: `P(N ≥ n_min)`
+    /// for `N ~ Poisson(n̄)`, `n_min` the tracking or the relocalisation
+    /// threshold by purpose; 1 when `terrain_features` is off.
+    fn enough_features(&self, request: &TrackRequest, overlap: f64) -> f64 {
+        let p = &self.params;
+        if !p.terrain_features {
+            return 1.0;
+        }
+        let needed = match request.purpose {
+            TrackPurpose::Tracking => p.min_tracked_features,
+            TrackPurpose::Relocalisation | TrackPurpose::LoopClosure => {
+                p.min_relocalisation_features
+            }
+        };
+        poisson_at_least(needed, self.expected_features(request, overlap))
+    }
+
     /// The probability that `request` succeeds (what [`VisualOdometry::track`]
-    /// draws against), and the overlap of the two views; `None` for frames
-    /// outside the traverse.
+    /// draws against), and the geometric overlap of the two views; `None`
+    /// for frames outside the traverse.
     pub fn success_and_overlap(&self, request: &TrackRequest) -> Option<(f64, f64)> {
         let truth = self.truth(request.reference, request.current)?;
         let p = &self.params;
         let overlap = p.camera.body_overlap(&truth);
         let free = ramp((overlap - p.prior_free_min_overlap) / p.overlap_softness);
-        let success = match (request.purpose, request.prior) {
+        let geometric = match (request.purpose, request.prior) {
             (TrackPurpose::Tracking, Some(prior)) => {
                 let error_px = p.camera.image_error_px(&(prior.inverse() * truth));
                 let guided = ramp((overlap - p.min_overlap) / p.overlap_softness)
@@ -231,19 +373,44 @@ impl SimulatedVo {
             }
             _ => free,
         };
-        Some((success, overlap))
+        Some((geometric * self.enough_features(request, overlap), overlap))
     }
 
     /// The error standard deviations `(rotation, translation)` of a
-    /// measurement of `truth` at `overlap`.
+    /// measurement of `truth` at geometric `overlap` on the reference
+    /// texture.
     pub fn error_sigmas(&self, truth: &Isometry3<f64>, overlap: f64) -> (f64, f64) {
         self.params.error_model().sigmas(truth, overlap)
+    }
+
+    /// The same for `request`: divided by `√min(s_ref, s_cur)` (a pose
+    /// fitted to `n` features errs as `1/√n`).
+    pub fn request_sigmas(
+        &self,
+        request: &TrackRequest,
+        truth: &Isometry3<f64>,
+        overlap: f64,
+    ) -> (f64, f64) {
+        let (r, t) = self.error_sigmas(truth, overlap);
+        let supply = self.supply_of(request).unwrap_or(1.0);
+        if supply == 1.0 {
+            return (r, t);
+        }
+        let k = supply.sqrt().recip();
+        (r * k, t * k)
     }
 }
 
 impl VisualOdometry for SimulatedVo {
     fn name(&self) -> &str {
         "simulated"
+    }
+
+    fn error_structure(&self) -> ErrorStructure {
+        match self.params.error_model {
+            TrackerErrorModel::Shared => ErrorStructure::SharedPerKeyframe,
+            TrackerErrorModel::Independent => ErrorStructure::Independent,
+        }
     }
 
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome {
@@ -258,18 +425,28 @@ impl VisualOdometry for SimulatedVo {
         if rng.random::<f64>() >= success {
             return TrackOutcome::Lost;
         }
-        let (sigma_r, sigma_t) = self.error_sigmas(&truth, overlap);
-        let mut draw =
-            |sigma: f64| Vector3::from_fn(|_, _| sigma * rng.sample::<f64, _>(StandardNormal));
-        let (omega, v) = (draw(sigma_r), draw(sigma_t));
+        let (sigma_r, sigma_t) = self.request_sigmas(request, &truth, overlap);
+        let draw =
+            |rng: &mut ChaCha8Rng| Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+        let (own_r, own_t) = (draw(&mut rng), draw(&mut rng));
+        let (z_r, z_t) = match self.params.error_model {
+            TrackerErrorModel::Independent => (own_r, own_t),
+            TrackerErrorModel::Shared => {
+                let mut map = self.rng(MAP_ERROR_KEY, request.reference.index, 0);
+                let (map_r, map_t) = (draw(&mut map), draw(&mut map));
+                let rho = self.params.map_error_share;
+                let (shared, own) = (rho.sqrt(), (1.0 - rho).sqrt());
+                (shared * map_r + own * own_r, shared * map_t + own * own_t)
+            }
+        };
         let noise = Isometry3::from_parts(
-            Translation3::from(v),
-            UnitQuaternion::from_scaled_axis(omega),
+            Translation3::from(z_t * sigma_t),
+            UnitQuaternion::from_scaled_axis(z_r * sigma_r),
         );
         TrackOutcome::Tracked(VoMeasurement {
             relative: truth * noise,
             covariance: isotropic_covariance(sigma_r, sigma_t),
-            overlap,
+            overlap: self.refound_share(request, overlap),
         })
     }
 

@@ -1,0 +1,146 @@
+//! The terrain reaches the simulated tracker: on loose sand a match finds
+//! fewer features than on gravel, and so fails more often. The expected
+//! values are computed here from the documented parameters
+//! (`frontends/README.md`: F = 300 features at full overlap on compact
+//! soil, the soils' textures, the blur `f · T · v / d̄` of a forward drive,
+//! the overlap of a forward drive, tracking's 30 features) and the
+//! regularised incomplete gamma function, `P(N ≥ k) = P(k, λ)` for
+//! `N ~ Poisson(λ)` (statrs), not from the code path under test.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use gpodo_datasets::sim::soil::{Soil, SoilMap};
+use gpodo_experiments::execute::feature_supply::feature_supply;
+use gpodo_frontends::traverse::Traverse;
+use gpodo_frontends::vo::{
+    CameraParams, FrameRef, SimulatedVo, SimulatedVoParams, TrackOutcome, TrackPurpose,
+    TrackRequest, VisualOdometry,
+};
+use gpodo_traits::BodyTwist;
+use nalgebra::{Isometry3, Vector3};
+use statrs::function::gamma::gamma_lr;
+
+const DT: f64 = 0.08;
+const SPEED_MPS: f64 = 0.05;
+/// The keyframe and the tracked frame: 1.4 m apart.
+const REFERENCE: usize = 13;
+const CURRENT: usize = REFERENCE + 350;
+
+/// A 40-s straight drive at 5 cm/s, a camera frame on every sample.
+fn straight_drive() -> Traverse {
+    let n = (40.0 / DT) as usize + 1;
+    let times: Vec<f64> = (0..n).map(|k| k as f64 * DT).collect();
+    let gt = times
+        .iter()
+        .map(|t| Isometry3::translation(SPEED_MPS * t, 4.5, 0.0))
+        .collect();
+    let twist = BodyTwist {
+        linear_mps: Vector3::new(SPEED_MPS, 0.0, 0.0),
+        angular_radps: Vector3::zeros(),
+    };
+    let camera = times[..n - 1].to_vec();
+    Traverse::new("straight", times, gt, vec![twist; n - 1], vec![], camera).unwrap()
+}
+
+/// The tracker on `soil` everywhere, with the supply the experiment runner
+/// computes for it.
+fn tracker_on(soil: Soil, seed: u64) -> (SimulatedVo, Traverse) {
+    let soils = SoilMap::uniform(soil, 9.0).unwrap();
+    let params = SimulatedVoParams {
+        seed,
+        ..SimulatedVoParams::default()
+    };
+    let traverse = straight_drive();
+    let supply = feature_supply(&soils, &params.camera, &traverse);
+    let traverse = traverse.with_feature_supply(supply).unwrap();
+    (SimulatedVo::new(params, &traverse).unwrap(), traverse)
+}
+
+fn request(traverse: &Traverse) -> TrackRequest {
+    let frame = |index: usize| FrameRef {
+        index,
+        time_secs: traverse.camera_times_secs()[index],
+    };
+    let (a, b) = (frame(REFERENCE), frame(CURRENT));
+    let truth =
+        traverse.ground_truth_at(a.time_secs).inverse() * traverse.ground_truth_at(b.time_secs);
+    TrackRequest {
+        reference: a,
+        current: b,
+        prior: Some(truth),
+        purpose: TrackPurpose::Tracking,
+    }
+}
+
+/// Expected features and success probability from the documented
+/// parameters alone.
+fn expected(texture: f64) -> (f64, f64) {
+    let camera = CameraParams::default();
+    let (pitch, f, exposure) = (0.35f64, 500.0, 0.01);
+    assert_eq!(camera.pitch_down_rad, pitch);
+    assert_eq!(camera.focal_px, f);
+    assert_eq!(camera.exposure_secs, exposure);
+    // A forward drive of d: along the optical axis by d cos(pitch) over the
+    // 3 m depth range, across the image by d sin(pitch) over the 2.5 m
+    // footprint.
+    let d = SPEED_MPS * (CURRENT - REFERENCE) as f64 * DT;
+    let overlap = (1.0 - d * pitch.cos() / 3.0) * (1.0 - d * pitch.sin() / 2.5);
+    // Blur: the 5 cm/s drive over the exposure, seen at the 2 m mean
+    // depth; features halve at 3 px.
+    let blur_px = f * SPEED_MPS * exposure / 2.0;
+    let blur_factor = 1.0 / (1.0 + blur_px / 3.0);
+    let features = 300.0 * texture * blur_factor * overlap;
+    // Guided tracking with an exact prior at this overlap (0.45, above the
+    // 0.3 ± 0.05 ramp) succeeds geometrically; prior-free matching (0.7)
+    // does not; the rest is the count.
+    assert!(overlap > 0.35 && overlap < 0.65, "overlap {overlap}");
+    (features, gamma_lr(30.0, features))
+}
+
+#[test]
+fn loose_sand_tracks_fewer_features_and_fails_more_often_than_gravel() {
+    let mut failure = Vec::new();
+    for soil in [Soil::loose_sand(), Soil::gravel()] {
+        let (features, success) = expected(soil.texture);
+        let (vo, traverse) = tracker_on(soil.clone(), 0);
+        let r = request(&traverse);
+        let (_, overlap) = vo.success_and_overlap(&r).unwrap();
+        assert!(
+            (vo.expected_features(&r, overlap) / features - 1.0).abs() < 1e-9,
+            "{}: {} features, expected {features}",
+            soil.name,
+            vo.expected_features(&r, overlap)
+        );
+        assert!(
+            (vo.success_probability(&r) - success).abs() < 1e-9,
+            "{}: success {}, expected {success}",
+            soil.name,
+            vo.success_probability(&r)
+        );
+        // The draws follow: the failure rate over seeds within four
+        // standard errors of 1 − P(N ≥ 30).
+        let seeds = 2000;
+        let lost = (0..seeds)
+            .filter(|&seed| {
+                let (mut vo, traverse) = tracker_on(soil.clone(), seed);
+                matches!(vo.track(&request(&traverse)), TrackOutcome::Lost)
+            })
+            .count() as f64
+            / seeds as f64;
+        let p = 1.0 - success;
+        let se = (p * (1.0 - p) / seeds as f64).sqrt().max(1e-3);
+        assert!(
+            (lost - p).abs() < 4.0 * se,
+            "{}: lost {lost}, expected {p} ± {se}",
+            soil.name
+        );
+        failure.push((features, p));
+    }
+    let ((sand_features, sand_failure), (gravel_features, gravel_failure)) =
+        (failure[0], failure[1]);
+    assert!(sand_features < gravel_features);
+    assert!(
+        sand_failure > 0.1 && gravel_failure < 1e-6,
+        "sand fails {sand_failure}, gravel {gravel_failure}"
+    );
+}
