@@ -332,7 +332,7 @@ pub fn plan_frames(
                     reference: a,
                     current: b,
                     prior: None,
-                    purpose: TrackPurpose::Relocalisation,
+                    purpose: TrackPurpose::Tracking,
                 });
                 let p = guided.min(unaided);
                 if p >= params.min_track_probability && within_limits {
