@@ -82,13 +82,15 @@ pub struct SimulatedVoParams {
     pub recognition_probability: f64,
     /// At most this many recognised keyframes are proposed (default 3).
     pub max_candidates: usize,
-    /// Translation error floor σ_t0 (m; default 0.002).
+    /// Translation error floor σ_t0 (m; default 0.0007).
     pub translation_sigma_m: f64,
-    /// Translation error per metre of relative translation k_t (default 0.02).
+    /// Translation error per metre of relative translation k_t (default
+    /// 0.007; the four error defaults are calibrated on the paper's
+    /// ORB-SLAM 2.5 fps row, see `frontends/README.md`).
     pub translation_sigma_per_m: f64,
-    /// Rotation error floor σ_r0 (rad; default 0.001).
+    /// Rotation error floor σ_r0 (rad; default 0.00035).
     pub rotation_sigma_rad: f64,
-    /// Rotation error per radian of relative rotation k_r (default 0.01).
+    /// Rotation error per radian of relative rotation k_r (default 0.0035).
     pub rotation_sigma_per_rad: f64,
     /// Exponent p of the overlap in the error (default 1).
     pub overlap_exponent: f64,
@@ -146,10 +148,10 @@ impl Default for SimulatedVoParams {
             recognition_min_overlap: 0.5,
             recognition_probability: 0.9,
             max_candidates: 3,
-            translation_sigma_m: 0.002,
-            translation_sigma_per_m: 0.02,
-            rotation_sigma_rad: 0.001,
-            rotation_sigma_per_rad: 0.01,
+            translation_sigma_m: 0.0007,
+            translation_sigma_per_m: 0.007,
+            rotation_sigma_rad: 0.00035,
+            rotation_sigma_per_rad: 0.0035,
             overlap_exponent: 1.0,
             error_model: TrackerErrorModel::Shared,
             map_error_share: 0.5,
