@@ -343,3 +343,18 @@ fn the_trackers_error_model_and_terrain_fields_are_checked() {
         "an exposure time in [0, 1] s",
     );
 }
+
+#[test]
+fn every_shipped_experiment_file_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut loaded = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "yaml") {
+            let plan = load_plan(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert!(!plan.runs.is_empty(), "{}", path.display());
+            loaded += 1;
+        }
+    }
+    assert!(loaded >= 15, "{loaded} files");
+}
