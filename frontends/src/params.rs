@@ -150,6 +150,10 @@ pub struct FrontendParams {
     pub cost: ComputeCost,
     /// Online learning targets.
     pub online: OnlineTargetParams,
+    /// While tracking is lost, every gated policy processes a frame this
+    /// often (s; default 0.4, the authors' 2.5 fps stream; null: the
+    /// policy alone decides). Fixed-rate baselines keep their rate.
+    pub lost_frame_period_secs: Option<f64>,
 }
 
 impl Default for FrontendParams {
@@ -164,6 +168,7 @@ impl Default for FrontendParams {
             backend: BackendParams::default(),
             cost: ComputeCost::default(),
             online: OnlineTargetParams::default(),
+            lost_frame_period_secs: Some(crate::gating::AUTHORS_LOST_PERIOD_SECS),
         }
     }
 }
@@ -232,6 +237,11 @@ impl FrontendParams {
                 "online.max_interval_secs",
                 "a duration at least min_interval_secs",
             );
+        }
+        if let Some(p) = self.lost_frame_period_secs
+            && !(p.is_finite() && p > 0.0)
+        {
+            return bad("lost_frame_period_secs", "a positive period in s, or null");
         }
         Ok(())
     }

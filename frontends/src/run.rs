@@ -288,6 +288,7 @@ impl<'a> Session<'a> {
             residual_variance: self.prediction.variance.iter().copied().collect(),
             drift_since_processed: self.integrator.drift_m2(),
             drift_variance_since_processed: self.integrator.drift_variance_m2(),
+            tracking_lost: !self.tracking,
         }
     }
 

@@ -11,7 +11,7 @@ use std::time::Instant;
 use gpodo_traits::ResidualRegressor;
 use serde::{Deserialize, Serialize};
 
-use crate::gating::Planned;
+use crate::gating::{Planned, WhileLost};
 use crate::hindsight::{SearchSummary, search_frames};
 use crate::online::{OnlineLearner, OnlineMode};
 use crate::oracle::plan_frames;
@@ -207,6 +207,12 @@ pub fn run_scheme(
     let (run, residuals, oracle) = match scheme.selector.oracle() {
         None => {
             let mut selector = scheme.selector.build()?;
+            if let (true, Some(period)) = (
+                scheme.selector.reads_residuals(),
+                ctx.params.lost_frame_period_secs,
+            ) {
+                selector = Box::new(WhileLost::new(selector, period)?);
+            }
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
             let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
             let run = run_frontend(

@@ -109,7 +109,8 @@ impl SelectorSpec {
     }
 
     /// Whether the selector needs the regressor's predictions (every kind
-    /// but the fixed rate and the oracle reads them).
+    /// but the fixed rate and the oracle reads them): a gated policy, which
+    /// a scheme wraps in [`crate::gating::WhileLost`].
     pub fn reads_residuals(&self) -> bool {
         match self {
             Self::FixedRate { .. } | Self::Oracle(_) => false,

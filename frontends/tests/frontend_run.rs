@@ -549,3 +549,78 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
     assert!(searched.run.metrics.rmse_m <= policy.run.metrics.rmse_m);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate() {
+    use gpodo_frontends::SelectorSpec;
+    use gpodo_frontends::scheme::{SchemeContext, SchemeResiduals, SchemeSpecRef, run_scheme};
+
+    // The quarter turn on the spot of the relocalisation test above.
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let path = move |t: f64| match t {
+        t if t < 20.0 => (0.05 * t, 0.0, 0.0),
+        t if t < 30.0 => (1.0, 0.0, quarter * (t - 20.0) / 10.0),
+        t if t < 40.0 => (1.0, 0.0, quarter * (40.0 - t) / 10.0),
+        t => (1.0 + 0.05 * (t - 40.0), 0.0, 0.0),
+    };
+    let t = traverse(60.0, path, Vector3::zeros(), &[0.0]);
+    let p = params(SimulatedVoParams::default());
+    let ctx = SchemeContext {
+        params: &p,
+        base: std::path::Path::new("."),
+        matched_frames: None,
+        matched_times: None,
+        recorded_vo: None,
+    };
+    let residuals = || SchemeResiduals::Trained {
+        label: "zero".into(),
+        predictions: vec![ResidualPrediction::uninformed(1e-6); t.windows().len()],
+    };
+    let run = |selector: &SelectorSpec| {
+        run_scheme(
+            &SchemeSpecRef {
+                label: "s",
+                selector,
+                motion_prior: None,
+            },
+            &t,
+            residuals(),
+            &ctx,
+        )
+        .unwrap()
+        .run
+    };
+    // A budget nothing reaches, guarded every 5 s: 0.2 fps while tracking.
+    let gated = SelectorSpec::MaxGap {
+        inner: Box::new(SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
+            budget_m2: 1.0,
+            ..UncertaintyBudgetParams::default()
+        })),
+        max_gap_secs: Some(5.0),
+        max_distance_m: None,
+        max_rotation_rad: None,
+    };
+    let fixed = SelectorSpec::FixedRate { fps: 0.2 };
+    // Gaps between consecutive processed frames from a lost tracker.
+    let lost_gaps = |run: &gpodo_frontends::FrontendRun| -> Vec<f64> {
+        run.processed
+            .windows(2)
+            .filter(|w| !w[0].tracked)
+            .map(|w| w[1].time_secs - w[0].time_secs)
+            .collect()
+    };
+    let gated_run = run(&gated);
+    let fixed_run = run(&fixed);
+    assert!(gated_run.tracking_losses >= 1 && fixed_run.tracking_losses >= 1);
+    let (g, f) = (lost_gaps(&gated_run), lost_gaps(&fixed_run));
+    assert!(
+        !g.is_empty() && g.iter().all(|d| (d - 0.4).abs() < 0.05),
+        "{g:?}"
+    );
+    assert!(
+        !f.is_empty() && f.iter().all(|d| (d - 5.0).abs() < 0.05),
+        "{f:?}"
+    );
+    // Looking every 0.4 s, the gated scheme is found again sooner.
+    assert!(gated_run.lost_secs < fixed_run.lost_secs);
+}

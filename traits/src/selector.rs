@@ -29,6 +29,11 @@ pub struct FrameContext {
     /// The same with the variance alone, `Σ_w (Σ σ²_w) τ_w²` (m²): the drift
     /// left when the odometry is corrected by the predicted mean.
     pub drift_variance_since_processed: f64,
+    /// Whether visual tracking is lost (the last processed frame was
+    /// neither tracked nor relocalised): a policy may look more often
+    /// until the tracker has relocalised.
+    #[serde(default)]
+    pub tracking_lost: bool,
 }
 
 /// A selector's decision for one frame.

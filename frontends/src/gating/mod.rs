@@ -10,19 +10,23 @@
 //! * [`Hysteresis`]: switches to a fast fixed period when the residual
 //!   crosses a high threshold and back only below a lower one;
 //! * [`Planned`]: processes a precomputed set of frames (the offline
-//!   oracle's plan, or a replayed schedule).
+//!   oracle's plan, or a replayed schedule);
+//! * [`WhileLost`]: while tracking is lost, a frame every 0.4 s (the
+//!   authors' 2.5 fps stream), around every gated policy of a scheme.
 
 mod hysteresis;
 mod max_gap;
 mod planned;
 mod residual_schedule;
 mod uncertainty_budget;
+mod while_lost;
 
 pub use hysteresis::{Hysteresis, HysteresisParams};
 pub use max_gap::{MaxGap, MaxGapParams};
 pub use planned::Planned;
 pub use residual_schedule::{ResidualSchedule, ResidualScheduleParams};
 pub use uncertainty_budget::{UncertaintyBudget, UncertaintyBudgetParams};
+pub use while_lost::{AUTHORS_LOST_PERIOD_SECS, WhileLost};
 
 use gpodo_traits::FrameContext;
 use serde::{Deserialize, Serialize};
@@ -90,6 +94,7 @@ pub(crate) mod test_support {
                 residual_variance: vec![0.0; 3],
                 drift_since_processed: drift,
                 drift_variance_since_processed: 0.0,
+                tracking_lost: false,
             };
             if selector.decide(&ctx).is_process() {
                 processed.push(t);
