@@ -12,7 +12,9 @@
 //! `(‖μ_w‖² + Σ σ²_w) τ_w²` to the drift a policy budgets (the expected
 //! squared displacement error of uncorrected odometry over the `τ_w`
 //! seconds spent in the window). A floor `q_t τ` (translation) and a random
-//! walk `q_r τ` (rotation, gyro) are added per second.
+//! walk `q_r τ` (rotation, gyro noise) are added per second, and a gyro bias
+//! `b` held over the whole interval adds `σ_b² τ²` to each rotation axis
+//! (it grows with the square of the gap, not linearly).
 
 use gpodo_traits::BodyTwist;
 use nalgebra::{Isometry3, Matrix3, Matrix6};
@@ -33,8 +35,14 @@ pub struct OdometryNoise {
     /// does not describe.
     pub translation_m2_per_s: f64,
     /// Rotation variance per second, each axis (rad²/s; default 1e-6:
-    /// 1 mrad after one second, a gyro's angle random walk and bias).
+    /// 1 mrad after one second, a gyro's angle random walk).
     pub rotation_rad2_per_s: f64,
+    /// Standard deviation σ_b of the gyro's bias, each axis (rad/s): adds
+    /// `σ_b² τ²` over an interval of `τ` seconds. Default null: derived
+    /// from the simulator's sensor noise on simulated data
+    /// (`SensorNoise::gyro_bias_sigma_radps`, 6e-4 rad/s), 0 otherwise;
+    /// set it from the IMU's datasheet for a recording.
+    pub rotation_bias_radps: Option<f64>,
 }
 
 impl Default for OdometryNoise {
@@ -42,6 +50,7 @@ impl Default for OdometryNoise {
         Self {
             translation_m2_per_s: 1e-7,
             rotation_rad2_per_s: 1e-6,
+            rotation_bias_radps: None,
         }
     }
 }
@@ -214,9 +223,10 @@ impl OdometryIntegrator {
         // Start-frame translation covariance → end-frame right perturbation.
         let translation = r.transpose() * self.translation_cov * r;
         let mut covariance = Matrix6::zeros();
+        let bias = self.noise.rotation_bias_radps.unwrap_or(0.0) * self.duration;
         covariance
             .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(Matrix3::identity() * self.rotation_var));
+            .copy_from(&(Matrix3::identity() * (self.rotation_var + bias * bias)));
         covariance
             .fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&(0.5 * (translation + translation.transpose())));
@@ -284,6 +294,7 @@ mod tests {
         let noise = OdometryNoise {
             translation_m2_per_s: 0.0,
             rotation_rad2_per_s: 0.0,
+            rotation_bias_radps: None,
         };
         let p = prediction(0.0, 4e-6);
         // Two seconds under one prediction: σ_x = 2 s · 2 mm/s = 4 mm.
@@ -316,6 +327,7 @@ mod tests {
         let noise = OdometryNoise {
             translation_m2_per_s: 0.0,
             rotation_rad2_per_s: 1e-6,
+            rotation_bias_radps: None,
         };
         // Drive 1 s along x, then turn 90° in place: the x uncertainty of
         // the start frame is the end frame's −y uncertainty.
@@ -357,5 +369,38 @@ mod tests {
         let m = out.mean_inputs.unwrap();
         assert!((m[0] - 2.0).abs() < 1e-12 && (m[1] - 1.0).abs() < 1e-12);
         assert!(odo.take().mean_inputs.is_none());
+    }
+
+    #[test]
+    fn a_gyro_bias_grows_the_rotation_variance_with_the_square_of_the_gap() {
+        let noise = OdometryNoise {
+            rotation_bias_radps: Some(6e-4),
+            ..OdometryNoise::default()
+        };
+        let rotation_variance = |secs: f64| {
+            let mut odo = OdometryIntegrator::new(noise);
+            for _ in 0..100 {
+                odo.advance(
+                    &twist(0.0, 0.0),
+                    secs / 100.0,
+                    0,
+                    &prediction(0.0, 0.0),
+                    None,
+                );
+            }
+            odo.take().covariance[(2, 2)]
+        };
+        for secs in [1.0f64, 3.0, 10.0] {
+            // q_r τ + σ_b² τ² + the floor.
+            let expected = 1e-6 * secs + (6e-4 * secs).powi(2) + COVARIANCE_FLOOR;
+            let got = rotation_variance(secs);
+            assert!(
+                (got / expected - 1.0).abs() < 1e-9,
+                "{secs} s: {got} vs {expected}"
+            );
+        }
+        // Beyond (q_r / σ_b²) ≈ 2.8 s the bias term dominates.
+        assert!((6e-4f64 * 3.0).powi(2) > 1e-6 * 3.0);
+        assert!((6e-4f64 * 2.0).powi(2) < 1e-6 * 2.0);
     }
 }

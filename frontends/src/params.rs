@@ -216,6 +216,14 @@ impl FrontendParams {
         if !(o.rotation_rad2_per_s.is_finite() && o.rotation_rad2_per_s > 0.0) {
             return bad("odometry.rotation_rad2_per_s", "a positive variance rate");
         }
+        if let Some(b) = o.rotation_bias_radps
+            && !(b.is_finite() && b >= 0.0)
+        {
+            return bad(
+                "odometry.rotation_bias_radps",
+                "a non-negative bias in rad/s, or null",
+            );
+        }
         if !(self.initial_residual_variance.is_finite() && self.initial_residual_variance > 0.0) {
             return bad("initial_residual_variance", "a positive variance in (m/s)²");
         }

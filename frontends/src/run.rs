@@ -73,6 +73,10 @@ pub struct FrontendRun {
     /// Weighted squared error of the pose graph before and after
     /// optimisation.
     pub graph_error: (f64, f64),
+    /// Nodes of the pose graph (the start pose and the keyframes, or every
+    /// processed frame; see the module documentation).
+    #[serde(default)]
+    pub graph_nodes: usize,
     /// Every processed frame, in order.
     pub processed: Vec<ProcessedFrame>,
     /// The prediction in force from each time on (time, prediction).
@@ -224,6 +228,7 @@ impl<'a> Session<'a> {
                 online_targets: 0,
                 metrics: TrajectoryMetrics::default(),
                 graph_error: (0.0, 0.0),
+                graph_nodes: 0,
                 processed: Vec::new(),
                 predictions: Vec::new(),
                 trajectory: Vec::new(),
@@ -330,6 +335,10 @@ impl<'a> Session<'a> {
     /// nodes (a keyframe always is).
     fn add_vo_edge(&mut self, from: usize, to: usize, m: &VoMeasurement, kind: EdgeKind) {
         let (Some(from), Some(to)) = (self.graph_node(from), self.graph_node(to)) else {
+            debug_assert!(
+                false,
+                "a visual edge between frames that are not graph nodes"
+            );
             return;
         };
         self.graph.add_edge(PoseGraphEdge {
@@ -345,6 +354,7 @@ impl<'a> Session<'a> {
     /// one by the wheel odometry between them.
     fn add_graph_node(&mut self, node: usize, odometry: &OdometryInterval) {
         let Some(from) = self.graph_node(self.last_graph_node) else {
+            debug_assert!(false, "the last graph node is not a graph node");
             return;
         };
         let to = self.graph.add_node(self.nodes[node].initial);
@@ -656,6 +666,7 @@ impl<'a> Session<'a> {
             );
         }
         self.run.graph_error = (optimized.initial_error, optimized.final_error);
+        self.run.graph_nodes = self.graph.initial.len();
         let mut poses: Vec<Isometry3<f64>> = Vec::with_capacity(self.nodes.len());
         for node in &self.nodes {
             let pose = match node.placement {

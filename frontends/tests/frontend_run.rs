@@ -419,14 +419,17 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
             // tracker streams), so the search starts no worse than it.
             assert_eq!(search.start_rmse_m[0], causal.run.metrics.rmse_m);
             assert_eq!(oracle.run.frames, causal.run.frames, "seed {seed}");
+            // On the draws it searched, never worse than where it started.
             assert!(
-                oracle.run.metrics.rmse_m <= causal.run.metrics.rmse_m,
+                search.rmse_m <= causal.run.metrics.rmse_m,
                 "seed {seed}, budget {budget_m2}: {} > {}",
-                oracle.run.metrics.rmse_m,
+                search.rmse_m,
                 causal.run.metrics.rmse_m
             );
-            assert_eq!(search.rmse_m, oracle.run.metrics.rmse_m);
-            improved += usize::from(oracle.run.metrics.rmse_m < causal.run.metrics.rmse_m);
+            // The row reports the schedule on other draws.
+            assert_eq!(search.fresh_draws_rmse_m, Some(oracle.run.metrics.rmse_m));
+            assert_ne!(search.rmse_m, oracle.run.metrics.rmse_m, "seed {seed}");
+            improved += usize::from(search.rmse_m < causal.run.metrics.rmse_m);
         }
     }
     // The search does find better schedules, not only keep the start.
@@ -623,4 +626,38 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
     );
     // Looking every 0.4 s, the gated scheme is found again sooner.
     assert!(gated_run.lost_secs < fixed_run.lost_secs);
+}
+
+#[test]
+fn with_shared_errors_only_keyframes_are_graph_nodes_and_frames_follow_their_keyframe() {
+    use gpodo_frontends::vo::TrackerErrorModel;
+
+    let t = traverse(120.0, s_curve, Vector3::zeros(), &[0.0]);
+    let run = |error_model: TrackerErrorModel, vo_params: SimulatedVoParams| {
+        let vo_params = SimulatedVoParams {
+            error_model,
+            ..vo_params
+        };
+        let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
+        let mut selector = FixedRate::new(2.5).unwrap();
+        let mut source = zero_predictions(&t, 1e-6);
+        run_frontend(&t, &params(vo_params), &mut selector, &mut source, &mut vo).unwrap()
+    };
+    let shared = run(TrackerErrorModel::Shared, SimulatedVoParams::default());
+    let independent = run(TrackerErrorModel::Independent, SimulatedVoParams::default());
+    // The start pose and the keyframes; or the start pose and every frame.
+    assert_eq!(shared.graph_nodes, shared.keyframes + 1);
+    assert_eq!(independent.graph_nodes, independent.frames + 1);
+    assert!(
+        shared.keyframes * 5 < shared.frames,
+        "{} of {}",
+        shared.keyframes,
+        shared.frames
+    );
+    // A precise tracker: every frame between keyframes is placed by its
+    // keyframe's pose and its own measurement, so the trajectory is exact
+    // up to the odometry since the last frame (exact here).
+    let precise = run(TrackerErrorModel::Shared, precise_vo());
+    assert_eq!(precise.graph_nodes, precise.keyframes + 1);
+    assert!(precise.metrics.rmse_m < 1e-4, "{}", precise.metrics.rmse_m);
 }

@@ -66,6 +66,14 @@ impl Default for SensorNoise {
 }
 
 impl SensorNoise {
+    /// Standard deviation of each gyro axis' bias at the start of a run
+    /// (rad/s): the stationary draw the simulator starts the bias random
+    /// walk from, `30 s^½ × gyro_bias_walk` (6e-4 rad/s by default). What an
+    /// odometry covariance should allow for a bias held over an interval.
+    pub fn gyro_bias_sigma_radps(&self) -> f64 {
+        self.gyro_bias_walk * 30.0
+    }
+
     /// Checks that every level is finite and non-negative and every time
     /// positive.
     ///
@@ -153,7 +161,7 @@ impl SensorErrors {
         let walk = |rng: &mut R| {
             RandomWalk::new(
                 noise.gyro_bias_walk,
-                normal(rng, noise.gyro_bias_walk * 30.0),
+                normal(rng, noise.gyro_bias_sigma_radps()),
             )
         };
         let ou = |sigma: f64, secs: f64, rng: &mut R| {

@@ -92,6 +92,9 @@ pub(crate) struct PreparedData {
     /// Where each soil lies (a simulated testbed only), for the simulated
     /// tracker's feature supply.
     pub(crate) soils: Option<gpodo_datasets::sim::soil::SoilMap>,
+    /// The gyro bias the simulator drew from (rad/s), for the odometry's
+    /// covariance when the experiment leaves it unset.
+    pub(crate) gyro_bias_radps: Option<f64>,
 }
 
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
@@ -160,6 +163,7 @@ fn from_logs(
         model: Some((model, radius)),
         recorded_vo: BTreeMap::new(),
         soils: None,
+        gyro_bias_radps: None,
     })
 }
 
@@ -197,6 +201,7 @@ pub(crate) fn prepare(
                 Some(testbed.terrain.max_slope_deg()),
             )?;
             prepared.soils = Some(testbed.soils);
+            prepared.gyro_bias_radps = Some(sim.sensors.gyro_bias_sigma_radps());
             Ok(prepared)
         }
         DatasetSpec::Logs { train, test } => {
@@ -305,6 +310,7 @@ pub(crate) fn prepare(
                 model: None,
                 recorded_vo: BTreeMap::new(),
                 soils: None,
+                gyro_bias_radps: None,
             })
         }
     }

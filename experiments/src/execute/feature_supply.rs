@@ -35,9 +35,13 @@ pub fn footprint_texture(
 
 /// The true body motion per second around time `t`.
 fn body_rate(traverse: &Traverse, t: f64) -> Isometry3<f64> {
-    let (a, b) = (t - RATE_HALF_WINDOW_SECS, t + RATE_HALF_WINDOW_SECS);
+    // Clamped to the sampled span, as the ground truth is.
+    let times = traverse.times_secs();
+    let (first, last) = (times[0], times[times.len() - 1]);
+    let a = (t - RATE_HALF_WINDOW_SECS).max(first);
+    let b = (t + RATE_HALF_WINDOW_SECS).min(last);
     let motion = traverse.ground_truth_at(a).inverse() * traverse.ground_truth_at(b);
-    let per_sec = 1.0 / (b - a);
+    let per_sec = if b > a { 1.0 / (b - a) } else { 0.0 };
     Isometry3::from_parts(
         Translation3::from(motion.translation.vector * per_sec),
         UnitQuaternion::from_scaled_axis(motion.rotation.scaled_axis() * per_sec),

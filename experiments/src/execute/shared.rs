@@ -289,6 +289,7 @@ impl SharedWork {
                 "running Table II"
             );
             let traverses = with_feature_supply(config, p)?;
+            let config = &with_derived_odometry(config, p);
             run_schemes(&SchemeInputs {
                 config,
                 base,
@@ -376,6 +377,26 @@ fn with_feature_supply<'a>(
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(std::borrow::Cow::Owned(traverses))
+}
+
+/// The run's configuration with what the dataset tells of its odometry:
+/// the gyro bias of a simulated testbed when the experiment leaves
+/// `frontend.odometry.rotation_bias_radps` unset.
+fn with_derived_odometry<'a>(
+    config: &'a ExperimentConfig,
+    p: &Prepared,
+) -> std::borrow::Cow<'a, ExperimentConfig> {
+    match (
+        config.frontend.odometry.rotation_bias_radps,
+        p.data.gyro_bias_radps,
+    ) {
+        (None, Some(bias)) => {
+            let mut resolved = config.clone();
+            resolved.frontend.odometry.rotation_bias_radps = Some(bias);
+            std::borrow::Cow::Owned(resolved)
+        }
+        _ => std::borrow::Cow::Borrowed(config),
+    }
 }
 
 /// The test traverses of a dataset.

@@ -159,10 +159,13 @@ impl CameraParams {
 }
 
 impl CameraParams {
-    /// Nine points of the seen ground in the body frame: a 3 × 3 grid
-    /// across the footprint (`±footprint_width_m / 3` sideways) and along
-    /// the optical axis (`mean_depth_m` and `± depth_range_m / 3`), where
-    /// the terrain's texture is read.
+    /// Nine points of the footprint in the body frame, where the
+    /// terrain's texture is read (at their x–y position): a 3 × 3 grid
+    /// across it (`±footprint_width_m / 3` sideways) and along the optical
+    /// axis (`mean_depth_m` and `± depth_range_m / 3`), the extent the
+    /// overlap model gives the seen ground (1.2–3.2 m ahead of the body by
+    /// default). They lie on the optical axis' plane, not on the terrain:
+    /// the overlap model has no ground height.
     pub fn footprint_body(&self) -> [Vector3<f64>; 9] {
         let body_from_camera = self.body_from_camera();
         let (across, along) = (self.footprint_width_m / 3.0, self.depth_range_m / 3.0);

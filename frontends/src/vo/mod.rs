@@ -63,8 +63,9 @@ pub struct VoMeasurement {
     /// Its covariance as a right perturbation `relative · Exp(δ)`,
     /// `δ = [rotation; translation]` (factrs' order).
     pub covariance: Matrix6<f64>,
-    /// The fraction of the reference view seen in the current one, in
-    /// `[0, 1]` (what keyframe decisions read).
+    /// The share of the reference keyframe's features found again in the
+    /// current frame, in `[0, 1]` (what keyframe decisions read): the view
+    /// overlap, times `min(1, s_cur / s_ref)` when features are counted.
     pub overlap: f64,
 }
 
@@ -82,14 +83,13 @@ pub enum TrackOutcome {
 
 /// How the errors of frames tracked against one keyframe relate, and so
 /// which frames the pose graph may treat as independent measurements.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ErrorStructure {
     /// Frames tracked against one keyframe share that keyframe's map
     /// error (ORB-SLAM): only keyframes become pose-graph nodes, as in
     /// ORB-SLAM's local bundle adjustment, and the other processed frames
     /// hang from their reference keyframe.
-    #[default]
     SharedPerKeyframe,
     /// Every measurement has its own error: every processed frame becomes
     /// a pose-graph node (what a replayed log, whose errors are unknown,

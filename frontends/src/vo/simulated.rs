@@ -132,7 +132,8 @@ pub enum TrackerErrorModel {
     Shared,
     /// Every measurement draws its own error and every processed frame
     /// enters the pose graph: the model of gpodo's results before
-    /// 2026-11-25 (with `terrain_features: false`, the same numbers).
+    /// 2026-11-25 (`experiments/paper-independent.yaml` sets it with the
+    /// earlier error scales and reproduces them).
     Independent,
 }
 
@@ -232,11 +233,13 @@ pub fn poisson_at_least(k: u32, lambda: f64) -> f64 {
     if lambda.is_nan() || lambda <= 0.0 {
         return 0.0;
     }
-    let mut term = (-lambda).exp();
-    let mut below = term;
+    // Each term's logarithm, so that e^−λ does not underflow for large λ.
+    let log_lambda = lambda.ln();
+    let mut log_term = -lambda;
+    let mut below = log_term.exp();
     for i in 1..k {
-        term *= lambda / f64::from(i);
-        below += term;
+        log_term += log_lambda - f64::from(i).ln();
+        below += log_term.exp();
     }
     (1.0 - below).clamp(0.0, 1.0)
 }
