@@ -158,3 +158,49 @@ fn the_curves_file_pairs_each_policy_with_its_controls() {
         }
     }
 }
+
+/// The controls differ from their rows in frame selection only: the
+/// paper's fixed-rate baselines track with the odometry prior, as the
+/// authors' code did (the constant-velocity rows are extras and say so);
+/// while lost, gated policies look every 0.4 s and fixed rates keep
+/// theirs; no curve rescales keyframe thresholds.
+#[test]
+fn the_baselines_track_as_the_authors_did_and_differ_in_selection_only() {
+    for file in ["paper.yaml", "table2-curves.yaml"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+        let plan = match gpodo_experiments::plan::load_plan(&path) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        let config = &plan.runs[0].config;
+        assert_eq!(config.frontend.lost_frame_period_secs, Some(0.4), "{file}");
+        for s in &config.schemes {
+            let prior = s.motion_prior.unwrap_or(config.frontend.motion_prior);
+            let says_cv = s.label.contains("constant-velocity prior");
+            assert_eq!(
+                prior == MotionPrior::ConstantVelocity,
+                says_cv,
+                "{file}: `{}` tracks with {prior:?}",
+                s.label
+            );
+            if s.label.starts_with("ORB-SLAM") && fps(s).is_some() && !says_cv {
+                assert_eq!(prior, MotionPrior::Odometry, "{file}: `{}`", s.label);
+            }
+            if file == "table2-curves.yaml" {
+                match &s.selector {
+                    SelectorSpec::ResidualSchedule(p) => {
+                        assert!(!p.scale_keyframes, "{file}: `{}` rescales", s.label);
+                    }
+                    SelectorSpec::Hysteresis {
+                        alert_keyframe_scale,
+                        ..
+                    } => assert_eq!(*alert_keyframe_scale, 1.0, "{file}: `{}`", s.label),
+                    _ => {}
+                }
+            }
+        }
+        // The report divides by the first scheme: the authors' baseline.
+        assert_eq!(config.schemes[0].label, "ORB-SLAM 2.5 fps", "{file}");
+        assert_eq!(fps(&config.schemes[0]), Some(2.5));
+    }
+}
