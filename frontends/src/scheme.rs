@@ -8,10 +8,10 @@
 use std::path::Path;
 use std::time::Instant;
 
-use gpodo_traits::ResidualRegressor;
+use gpodo_traits::{FrameSelector, ResidualRegressor};
 use serde::{Deserialize, Serialize};
 
-use crate::gating::{Planned, WhileLost};
+use crate::gating::{Planned, RescaleKeyframes, ResidualScheduleParams, WhileLost};
 use crate::hindsight::{SearchSummary, search_frames};
 use crate::online::{OnlineLearner, OnlineMode};
 use crate::oracle::plan_frames;
@@ -89,6 +89,10 @@ pub struct SchemeSpecRef<'a> {
     pub selector: &'a SelectorSpec,
     /// The scheme's tracking prior; `None`, the front end's.
     pub motion_prior: Option<MotionPrior>,
+    /// Keyframe thresholds rescaled as this schedule of the authors' would
+    /// ([`crate::gating::RescaleKeyframes`]), whatever selects the frames;
+    /// `None`, only as the selector says.
+    pub rescale_keyframes: Option<&'a ResidualScheduleParams>,
 }
 
 /// What every scheme on a traverse shares.
@@ -231,6 +235,9 @@ pub fn run_scheme(
             ) {
                 selector = Box::new(WhileLost::new(selector, period)?);
             }
+            if let Some(rescale) = scheme.rescale_keyframes {
+                selector = Box::new(RescaleKeyframes::new(selector, *rescale)?);
+            }
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
             let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
             let run = run_frontend(
@@ -267,11 +274,25 @@ pub fn run_scheme(
                 params,
                 budget,
             )?;
+            let planned = |times: &[f64]| -> Result<Box<dyn FrameSelector>, FrontendError> {
+                let selector: Box<dyn FrameSelector> =
+                    Box::new(Planned::new("oracle", times.to_vec()));
+                Ok(match scheme.rescale_keyframes {
+                    Some(rescale) => Box::new(RescaleKeyframes::new(selector, *rescale)?),
+                    None => selector,
+                })
+            };
             let evaluate = |times: &[f64]| {
-                let mut selector = Planned::new("oracle", times.to_vec());
+                let mut selector = planned(times)?;
                 let mut source = Precomputed::new(label.clone(), predictions.clone());
                 let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
-                run_frontend(traverse, &frontend, &mut selector, &mut source, vo.as_mut())
+                run_frontend(
+                    traverse,
+                    &frontend,
+                    selector.as_mut(),
+                    &mut source,
+                    vo.as_mut(),
+                )
             };
             let mut summary = OraclePlanSummary {
                 budget,
@@ -291,7 +312,7 @@ pub fn run_scheme(
                     let found = search_frames(traverse, starts, search, evaluate)?;
                     // The search chose its frames on these tracker draws;
                     // its score comes from an independent set.
-                    let mut selector = Planned::new("oracle", found.times_secs.clone());
+                    let mut selector = planned(&found.times_secs)?;
                     let mut source = Precomputed::new(label.clone(), predictions.clone());
                     let mut fresh_vo = ctx.params.vo.with_fresh_draws().build(
                         traverse,
@@ -301,7 +322,7 @@ pub fn run_scheme(
                     let fresh = run_frontend(
                         traverse,
                         &frontend,
-                        &mut selector,
+                        selector.as_mut(),
                         &mut source,
                         fresh_vo.as_mut(),
                     )?;

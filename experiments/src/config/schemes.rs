@@ -92,14 +92,21 @@ pub struct SchemeSpec {
     /// knob); the sweep report draws and tabulates each curve over seeds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub curve: Option<String>,
+    /// Rescale the keyframe thresholds as this schedule of the authors'
+    /// would (`T(r) / T_max`), whatever selects the frames: part of the
+    /// back end, so a rescaled policy is compared with fixed rates that
+    /// rescale alike. Omitted, only as the selector says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rescale_keyframes: Option<gpodo_frontends::gating::ResidualScheduleParams>,
 }
 
 impl SchemeSpec {
     /// The scheme's back end, as the reports compare it: its tracking
     /// prior (`default_prior` when the scheme sets none) and where its
     /// residuals come from (a trained regressor's label from
-    /// `regressor_labels`, or the online regressor). Fixed-rate controls
-    /// and a gated scheme are comparable when their back ends are equal.
+    /// `regressor_labels`, or the online regressor), and the keyframe
+    /// rescaling when it has one. Fixed-rate controls and a gated scheme
+    /// are comparable when their back ends are equal.
     pub fn back_end(&self, default_prior: MotionPrior, regressor_labels: &[String]) -> String {
         let prior = self.motion_prior.unwrap_or(default_prior);
         let residuals = match &self.online {
@@ -115,7 +122,13 @@ impl SchemeSpec {
             MotionPrior::ConstantVelocity => "constant-velocity",
             MotionPrior::None => "no",
         };
-        format!("{residuals}, {prior} prior")
+        match &self.rescale_keyframes {
+            None => format!("{residuals}, {prior} prior"),
+            Some(r) => format!(
+                "{residuals}, {prior} prior, keyframes rescaled ({}–{} s)",
+                r.t_cam_secs, r.t_max_secs
+            ),
+        }
     }
 
     /// The index of the scheme's trained regressor among `labels`.

@@ -235,6 +235,11 @@ impl ExperimentConfig {
                 .selector
                 .validate()
                 .map_err(|e| Issue::from_frontend(&at("selector"), e))?;
+            if let Some(rescale) = &scheme.rescale_keyframes {
+                rescale
+                    .validate()
+                    .map_err(|e| Issue::from_frontend(&at("rescale_keyframes"), e))?;
+            }
             match (&scheme.online, &scheme.regressor) {
                 (Some(_), Some(_)) => {
                     return Err(Issue::new(

@@ -93,6 +93,7 @@ impl SchemeInputs<'_> {
             label: &scheme.label,
             selector: &scheme.selector,
             motion_prior: scheme.motion_prior,
+            rescale_keyframes: scheme.rescale_keyframes.as_ref(),
         };
         Ok(run_scheme(
             &spec,

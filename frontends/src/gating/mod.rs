@@ -11,12 +11,15 @@
 //!   crosses a high threshold and back only below a lower one;
 //! * [`Planned`]: processes a precomputed set of frames (the offline
 //!   oracle's plan, or a replayed schedule);
+//! * [`RescaleKeyframes`]: the authors' keyframe rescaling around any
+//!   policy (a property of a scheme's back end);
 //! * [`WhileLost`]: while tracking is lost, a frame every 0.4 s (the
 //!   authors' 2.5 fps stream), around every gated policy of a scheme.
 
 mod hysteresis;
 mod max_gap;
 mod planned;
+mod rescale_keyframes;
 mod residual_schedule;
 mod uncertainty_budget;
 mod while_lost;
@@ -24,6 +27,7 @@ mod while_lost;
 pub use hysteresis::{Hysteresis, HysteresisParams};
 pub use max_gap::{MaxGap, MaxGapParams};
 pub use planned::Planned;
+pub use rescale_keyframes::RescaleKeyframes;
 pub use residual_schedule::{ResidualSchedule, ResidualScheduleParams};
 pub use uncertainty_budget::{UncertaintyBudget, UncertaintyBudgetParams};
 pub use while_lost::{AUTHORS_LOST_PERIOD_SECS, WhileLost};
