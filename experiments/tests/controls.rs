@@ -204,3 +204,28 @@ fn the_baselines_track_as_the_authors_did_and_differ_in_selection_only() {
         assert_eq!(fps(&config.schemes[0]), Some(2.5));
     }
 }
+
+/// The seeds and curves files drive a route per seed; the paper's run
+/// keeps the paper's route.
+#[test]
+fn the_seeds_and_curves_files_draw_a_route_per_seed() {
+    use gpodo_datasets::sim::route::Route;
+    use gpodo_experiments::config::DatasetSpec;
+    for (file, want) in [
+        ("paper.yaml", Route::Paper),
+        ("paper-seeds.yaml", Route::Random),
+        ("table2-curves.yaml", Route::Random),
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+        let plan = match gpodo_experiments::plan::load_plan(&path) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        for run in &plan.runs {
+            match &run.config.dataset {
+                DatasetSpec::Simulated { route, .. } => assert_eq!(*route, want, "{file}"),
+                other => panic!("{file}: {other:?}"),
+            }
+        }
+    }
+}

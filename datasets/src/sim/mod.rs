@@ -5,6 +5,7 @@ pub mod driver;
 pub mod manoeuvre;
 pub mod noise;
 pub mod preset;
+pub mod route;
 pub mod rover;
 pub mod sensors;
 pub mod slip;

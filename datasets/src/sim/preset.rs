@@ -17,14 +17,17 @@ use serde::{Deserialize, Serialize};
 use crate::DatasetError;
 use crate::log::RoverLog;
 use crate::sim::driver::Driver;
-use crate::sim::manoeuvre::{
-    DriverParams, PlanarPose, test_traverse_start_pose, test_traverse_waypoints,
-};
+use crate::sim::manoeuvre::{DriverParams, PlanarPose};
+use crate::sim::route::{Route, route_start_pose, route_waypoints};
 use crate::sim::rover::World;
 use crate::sim::sensors::SensorNoise;
 use crate::sim::slip::SlipParams;
 use crate::sim::soil::{SoilMap, SoilMapSpec};
 use crate::sim::terrain::{Terrain, TerrainSpec};
+
+/// The random stream of the test route (the runs use streams 0 to
+/// `training_runs + 1`).
+const ROUTE_STREAM: u64 = 1 << 40;
 
 /// Longest run the simulator accepts (s): one day.
 pub const MAX_RUN_SECS: f64 = 86_400.0;
@@ -93,6 +96,8 @@ pub struct SimulatorConfig {
     pub driver: DriverParams,
     /// Sensor noise.
     pub sensors: SensorNoise,
+    /// The test traverse's route. Default the paper's.
+    pub route: Route,
 }
 
 impl Default for SimulatorConfig {
@@ -146,6 +151,7 @@ impl SimulatorConfig {
                     mocap_jitter_m: 5e-4,
                     ..SensorNoise::default()
                 },
+                route: Route::Paper,
             },
         }
     }
@@ -226,14 +232,15 @@ impl SimulatorConfig {
             sinkage_length_m: self.sinkage_length_m,
         };
         let size = self.terrain.size_m;
+        // The route draws from a stream of its own, apart from the runs'.
+        let route = route_waypoints(self.route, size, &mut self.rng(ROUTE_STREAM))?;
         // Run `i` draws from stream `i + 1` whatever thread runs it, so the
         // runs are simulated in parallel with the same result as in series.
         let run = |i: usize| -> Result<RoverLog, DatasetError> {
             let mut rng = self.rng(i as u64 + 1);
             if i == self.training_runs {
-                let waypoints = test_traverse_waypoints(size);
-                let mut driver = Driver::follow(self.driver.clone(), &waypoints)?;
-                let start = test_traverse_start_pose(size);
+                let mut driver = Driver::follow(self.driver.clone(), &route)?;
+                let start = route_start_pose(&route);
                 return world.run("test", &mut driver, start, self.test_max_secs, &mut rng);
             }
             let mut driver = Driver::training(self.driver.clone(), size)?;

@@ -101,6 +101,11 @@ pub enum DatasetSpec {
         /// value cuts the traverse (quick runs, tests).
         #[serde(default)]
         test_max_secs: Option<f64>,
+        /// The test traverse's route: `paper` (the fixed 42.3 m route,
+        /// default) or `random` (drawn per seed with the same length and
+        /// terrain statistics).
+        #[serde(default)]
+        route: gpodo_datasets::sim::route::Route,
     },
     /// Rover logs in gpodo's trajectory CSV format (paths relative to the
     /// experiment file).

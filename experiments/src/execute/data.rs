@@ -178,8 +178,10 @@ pub(crate) fn prepare(
             training_runs,
             training_run_secs,
             test_max_secs,
+            route,
         } => {
             let mut sim = SimulatorConfig::preset(*preset, *seed);
+            sim.route = *route;
             if let Some(n) = training_runs {
                 sim.training_runs = *n;
             }
