@@ -55,7 +55,7 @@ fn every_gated_scheme_has_fixed_rate_and_zero_residual_controls() {
     let gated: Vec<&SchemeSpec> = config
         .schemes
         .iter()
-        .filter(|s| fps(s).is_none() && s.selector.oracle().is_none())
+        .filter(|s| fps(s).is_none() && s.selector.same_as().is_none())
         .collect();
     assert!(gated.len() >= 8, "{} gated schemes", gated.len());
     for s in gated {
@@ -227,5 +227,32 @@ fn the_seeds_and_curves_files_draw_a_route_per_seed() {
                 other => panic!("{file}: {other:?}"),
             }
         }
+    }
+}
+
+/// The online learner's control: a front-loaded fixed schedule (dense
+/// early, sparse late) with the learner's frames and its back end.
+#[test]
+fn the_online_learner_has_a_front_loaded_control_with_its_frames() {
+    let config = paper();
+    let learners: Vec<&SchemeSpec> = config
+        .schemes
+        .iter()
+        .filter(|s| s.online.is_some() && fps(s).is_none() && s.selector.same_as().is_none())
+        .collect();
+    assert!(!learners.is_empty());
+    for learner in learners {
+        let control = config.schemes.iter().find(
+            |c| matches!(&c.selector, SelectorSpec::FrontLoaded(p) if p.same_as == learner.label),
+        );
+        let Some(control) = control else {
+            panic!("`{}`: no front-loaded control", learner.label);
+        };
+        assert_eq!(
+            back_end_of(&config, control),
+            back_end_of(&config, learner),
+            "`{}`",
+            control.label
+        );
     }
 }

@@ -11,7 +11,7 @@ use std::time::Instant;
 use gpodo_traits::{FrameSelector, ResidualRegressor};
 use serde::{Deserialize, Serialize};
 
-use crate::gating::{Planned, RescaleKeyframes, ResidualScheduleParams, WhileLost};
+use crate::gating::{FrontLoaded, Planned, RescaleKeyframes, ResidualScheduleParams, WhileLost};
 use crate::hindsight::{SearchSummary, search_frames};
 use crate::online::{OnlineLearner, OnlineMode};
 use crate::oracle::plan_frames;
@@ -228,7 +228,29 @@ pub fn run_scheme(
     frontend.motion_prior = motion_prior;
     let (run, residuals, oracle) = match scheme.selector.oracle() {
         None => {
-            let mut selector = scheme.selector.build()?;
+            let mut selector = match scheme.selector {
+                SelectorSpec::FrontLoaded(p) => {
+                    let frames = ctx
+                        .matched_frames
+                        .ok_or_else(|| FrontendError::InvalidSpec {
+                            selector: "front_loaded".into(),
+                            field: "same_as".into(),
+                            expected: format!(
+                                "the frames of `{}` on `{}` (run that scheme first)",
+                                p.same_as,
+                                traverse.name()
+                            ),
+                        })?;
+                    let camera = traverse.camera_times_secs();
+                    let duration = match (camera.first(), camera.last()) {
+                        (Some(a), Some(b)) => b - a,
+                        _ => 0.0,
+                    };
+                    let late = p.late_fps_for(frames, duration);
+                    Box::new(FrontLoaded::new(p.early_fps, p.early_secs, late)?)
+                }
+                spec => spec.build()?,
+            };
             if let (true, Some(period)) = (
                 scheme.selector.reads_residuals(),
                 ctx.params.lost_frame_period_secs,

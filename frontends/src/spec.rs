@@ -13,8 +13,8 @@ use gpodo_traits::FrameSelector;
 use serde::{Deserialize, Serialize};
 
 use crate::gating::{
-    Hysteresis, HysteresisParams, MaxGap, MaxGapParams, ResidualSchedule, ResidualScheduleParams,
-    ResidualSignal, UncertaintyBudget, UncertaintyBudgetParams,
+    FrontLoadedParams, Hysteresis, HysteresisParams, MaxGap, MaxGapParams, ResidualSchedule,
+    ResidualScheduleParams, ResidualSignal, UncertaintyBudget, UncertaintyBudgetParams,
 };
 use crate::oracle::OracleParams;
 use crate::{FixedRate, FrontendError};
@@ -72,6 +72,9 @@ pub enum SelectorSpec {
     },
     /// The offline oracle (sees ground truth; planned by the runner).
     Oracle(OracleParams),
+    /// A fixed schedule, dense early and sparse late, with the frames of
+    /// another scheme (the control of an online learner).
+    FrontLoaded(FrontLoadedParams),
 }
 
 impl SelectorSpec {
@@ -100,6 +103,10 @@ impl SelectorSpec {
                 exit_mps,
                 ..
             } => format!("{} + hysteresis {exit_mps}/{enter_mps} m/s", inner.label()),
+            Self::FrontLoaded(p) => format!(
+                "front-loaded ({} fps for {} s, then the frames of {})",
+                p.early_fps, p.early_secs, p.same_as
+            ),
             Self::Oracle(p) => match (&p.frames, &p.same_as) {
                 (Some(n), _) => format!("oracle ({n} frames)"),
                 (None, Some(s)) => format!("oracle (frames of {s})"),
@@ -113,9 +120,19 @@ impl SelectorSpec {
     /// a scheme wraps in [`crate::gating::WhileLost`].
     pub fn reads_residuals(&self) -> bool {
         match self {
-            Self::FixedRate { .. } | Self::Oracle(_) => false,
+            Self::FixedRate { .. } | Self::Oracle(_) | Self::FrontLoaded(_) => false,
             Self::MaxGap { inner, .. } => inner.reads_residuals(),
             _ => true,
+        }
+    }
+
+    /// The scheme whose frames this selector matches (an oracle's or a
+    /// front-loaded schedule's `same_as`): the runner runs that one first.
+    pub fn same_as(&self) -> Option<&String> {
+        match self {
+            Self::Oracle(p) => p.same_as.as_ref(),
+            Self::FrontLoaded(p) => Some(&p.same_as),
+            _ => None,
         }
     }
 
@@ -134,6 +151,7 @@ impl SelectorSpec {
     pub fn validate(&self) -> Result<(), FrontendError> {
         match self {
             Self::Oracle(p) => p.validate(),
+            Self::FrontLoaded(p) => p.validate(),
             _ => self.build().map(|_| ()),
         }
     }
@@ -183,6 +201,14 @@ impl SelectorSpec {
                     selector: "oracle".into(),
                     field: "kind".into(),
                     expected: "a causal selector here; the oracle is planned offline by the runner"
+                        .into(),
+                });
+            }
+            Self::FrontLoaded(_) => {
+                return Err(FrontendError::InvalidSpec {
+                    selector: "front_loaded".into(),
+                    field: "kind".into(),
+                    expected: "a selector here; a front-loaded schedule takes its frame count from the scheme it matches, in the runner"
                         .into(),
                 });
             }

@@ -276,18 +276,16 @@ impl ExperimentConfig {
                     "a trained `regressor` (the oracle plans with its predictions)",
                 ));
             }
-            if let Some(oracle) = scheme.selector.oracle()
-                && let Some(other) = &oracle.same_as
-            {
+            if let Some(other) = scheme.selector.same_as() {
                 let found = self
                     .schemes
                     .iter()
-                    .any(|s| &s.label == other && s.selector.oracle().is_none());
+                    .any(|s| &s.label == other && s.selector.same_as().is_none());
                 if !found {
                     return Err(Issue::new(
                         &at("selector.same_as"),
                         format!("no scheme `{other}`"),
-                        "the label of a scheme that is not an oracle",
+                        "the label of a scheme that takes no other's frames",
                     ));
                 }
             }

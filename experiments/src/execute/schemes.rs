@@ -72,14 +72,10 @@ impl SchemeInputs<'_> {
         done: &[SchemeResult],
     ) -> Result<SchemeResult, PipelineError> {
         let traverse = &self.traverses[t];
-        let matched = scheme
-            .selector
-            .oracle()
-            .and_then(|o| o.same_as.as_ref())
-            .and_then(|other| {
-                done.iter()
-                    .find(|r| &r.label == other && r.traverse == traverse.name())
-            });
+        let matched = scheme.selector.same_as().and_then(|other| {
+            done.iter()
+                .find(|r| &r.label == other && r.traverse == traverse.name())
+        });
         let matched_times: Option<Vec<f64>> =
             matched.map(|r| r.run.processed.iter().map(|p| p.time_secs).collect());
         let ctx = SchemeContext {
@@ -117,10 +113,14 @@ pub fn run_schemes(inputs: &SchemeInputs<'_>) -> Result<Vec<SchemeResult>, Pipel
     let jobs: Vec<(usize, usize)> = (0..inputs.traverses.len())
         .flat_map(|t| (0..schemes.len()).map(move |s| (t, s)))
         .collect();
-    let is_oracle = |s: usize| schemes[s].selector.oracle().is_some();
+    // Schemes that take another's frames (an oracle, a front-loaded
+    // schedule) run after the schemes they match.
+    let is_oracle = |s: usize| {
+        schemes[s].selector.oracle().is_some() || schemes[s].selector.same_as().is_some()
+    };
     let matched: Vec<&String> = schemes
         .iter()
-        .filter_map(|s| s.selector.oracle().and_then(|o| o.same_as.as_ref()))
+        .filter_map(|s| s.selector.same_as())
         .collect();
     let is_matched = |s: usize| !is_oracle(s) && matched.contains(&&schemes[s].label);
     let label = |s: usize, e: PipelineError| PipelineError::Scheme {

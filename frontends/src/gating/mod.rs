@@ -9,6 +9,8 @@
 //!   has passed, composable with any policy;
 //! * [`Hysteresis`]: switches to a fast fixed period when the residual
 //!   crosses a high threshold and back only below a lower one;
+//! * [`FrontLoaded`]: a fixed schedule, dense early and sparse late (the
+//!   control of an online learner);
 //! * [`Planned`]: processes a precomputed set of frames (the offline
 //!   oracle's plan, or a replayed schedule);
 //! * [`RescaleKeyframes`]: the authors' keyframe rescaling around any
@@ -16,6 +18,7 @@
 //! * [`WhileLost`]: while tracking is lost, a frame every 0.4 s (the
 //!   authors' 2.5 fps stream), around every gated policy of a scheme.
 
+mod front_loaded;
 mod hysteresis;
 mod max_gap;
 mod planned;
@@ -24,6 +27,7 @@ mod residual_schedule;
 mod uncertainty_budget;
 mod while_lost;
 
+pub use front_loaded::{FrontLoaded, FrontLoadedParams};
 pub use hysteresis::{Hysteresis, HysteresisParams};
 pub use max_gap::{MaxGap, MaxGapParams};
 pub use planned::Planned;
