@@ -144,3 +144,32 @@ fn loose_sand_tracks_fewer_features_and_fails_more_often_than_gravel() {
         "sand fails {sand_failure}, gravel {gravel_failure}"
     );
 }
+
+#[test]
+fn the_footprint_reads_the_soil_ahead_not_under_the_wheels() {
+    // Sand west of x = 4.5 m, gravel east of it.
+    let soils = SoilMap::from_patches(
+        vec![
+            ((2.0, 4.5), Soil::loose_sand()),
+            ((7.0, 4.5), Soil::gravel()),
+        ],
+        9.0,
+    )
+    .unwrap();
+    let camera = CameraParams::default();
+    let texture = |yaw: f64| {
+        let on_sand = Isometry3::new(Vector3::new(4.2, 4.5, 0.0), Vector3::z() * yaw);
+        gpodo_experiments::execute::feature_supply::footprint_texture(&soils, &camera, &on_sand)
+    };
+    // Standing on sand 0.3 m from the border: the footprint, 1.2–3.2 m ahead
+    // of the body (`CameraParams::footprint_body`), lies on gravel when
+    // the rover faces east, on sand when it faces west.
+    assert_eq!(texture(0.0), Soil::gravel().texture);
+    assert_eq!(texture(std::f64::consts::PI), Soil::loose_sand().texture);
+    // Facing north along the border, the footprint's columns lie 0.83 m
+    // either side of the body: the eastern column of three points is on
+    // gravel, the other six on sand.
+    let across = texture(std::f64::consts::FRAC_PI_2);
+    let expected = (6.0 * Soil::loose_sand().texture + 3.0 * Soil::gravel().texture) / 9.0;
+    assert!((across - expected).abs() < 1e-12, "{across} vs {expected}");
+}

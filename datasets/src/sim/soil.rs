@@ -305,6 +305,44 @@ impl SoilMap {
         })
     }
 
+    /// A map of given patches: `patches` are (seed point, soil) pairs, each
+    /// soil's area the points nearer its seed than any other's.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] when a soil, a seed or `size_m` is
+    /// invalid, or there is no patch.
+    pub fn from_patches(
+        patches: Vec<((f64, f64), Soil)>,
+        size_m: f64,
+    ) -> Result<Self, DatasetError> {
+        require(!patches.is_empty(), "patches", "at least one patch")?;
+        require(
+            size_m.is_finite() && size_m > 0.0,
+            "size_m",
+            "a finite value > 0",
+        )?;
+        let mut soils = Vec::with_capacity(patches.len());
+        let mut cells = Vec::with_capacity(patches.len());
+        for (i, ((x, y), soil)) in patches.into_iter().enumerate() {
+            soil.validate()?;
+            require(
+                x.is_finite() && y.is_finite(),
+                "patches",
+                "finite seed points",
+            )?;
+            soils.push(soil);
+            cells.push(Cell {
+                seed: Vector2::new(x, y),
+                soil: i,
+            });
+        }
+        Ok(Self {
+            size_m,
+            soils,
+            cells,
+        })
+    }
+
     /// The soil under world `(x, y)`.
     pub fn soil_at(&self, x: f64, y: f64) -> &Soil {
         &self.soils[self.soil_index_at(x, y)]
@@ -409,6 +447,24 @@ mod tests {
         for &(x, y) in &[(0.5, 0.5), (4.5, 4.5), (-20.0, 3.0), (f64::NAN, 1.0)] {
             assert_eq!(map.soil_at(x, y), &map.soils()[map.soil_index_at(x, y)]);
         }
+    }
+
+    #[test]
+    fn a_map_from_patches_puts_each_soil_nearest_its_seed() {
+        let map = SoilMap::from_patches(
+            vec![
+                ((2.0, 4.5), Soil::loose_sand()),
+                ((7.0, 4.5), Soil::gravel()),
+            ],
+            9.0,
+        )
+        .unwrap();
+        assert_eq!(map.soil_at(4.4, 1.0).name, "loose_sand");
+        assert_eq!(map.soil_at(4.6, 8.0).name, "gravel");
+        let err = SoilMap::from_patches(Vec::new(), 9.0).unwrap_err();
+        assert!(err.to_string().contains("patches"), "{err}");
+        let bad = SoilMap::from_patches(vec![((f64::NAN, 0.0), Soil::compact())], 9.0);
+        assert!(bad.is_err());
     }
 
     #[test]
