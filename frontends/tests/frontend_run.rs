@@ -150,10 +150,10 @@ fn vo_corrects_biased_wheels_and_more_frames_correct_more() {
     assert!(dense.metrics.rmse_m < sparse.metrics.rmse_m);
 }
 
-#[test]
-fn a_fast_turn_between_sparse_frames_loses_track_and_relocalises_at_a_mapped_place() {
-    // 1 m east in 20 s, a quarter turn left on the spot in 10 s, back to
-    // east in 10 s, then 1 m further east.
+/// 1 m east in 20 s, a quarter turn left on the spot in 10 s, back to
+/// east in 10 s, then 1 m further east: sparse frames lose track in the
+/// turn.
+fn quarter_turn() -> Traverse {
     let quarter = std::f64::consts::FRAC_PI_2;
     let path = move |t: f64| match t {
         t if t < 20.0 => (0.05 * t, 0.0, 0.0),
@@ -161,7 +161,12 @@ fn a_fast_turn_between_sparse_frames_loses_track_and_relocalises_at_a_mapped_pla
         t if t < 40.0 => (1.0, 0.0, quarter * (40.0 - t) / 10.0),
         t => (1.0 + 0.05 * (t - 40.0), 0.0, 0.0),
     };
-    let t = traverse(60.0, path, Vector3::zeros(), &[0.0]);
+    traverse(60.0, path, Vector3::zeros(), &[0.0])
+}
+
+#[test]
+fn a_fast_turn_between_sparse_frames_loses_track_and_relocalises_at_a_mapped_place() {
+    let t = quarter_turn();
     let vo_params = SimulatedVoParams::default();
     let p = params(vo_params);
     let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
@@ -561,15 +566,7 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
     use gpodo_frontends::SelectorSpec;
     use gpodo_frontends::scheme::{SchemeContext, SchemeResiduals, SchemeSpecRef, run_scheme};
 
-    // The quarter turn on the spot of the relocalisation test above.
-    let quarter = std::f64::consts::FRAC_PI_2;
-    let path = move |t: f64| match t {
-        t if t < 20.0 => (0.05 * t, 0.0, 0.0),
-        t if t < 30.0 => (1.0, 0.0, quarter * (t - 20.0) / 10.0),
-        t if t < 40.0 => (1.0, 0.0, quarter * (40.0 - t) / 10.0),
-        t => (1.0 + 0.05 * (t - 40.0), 0.0, 0.0),
-    };
-    let t = traverse(60.0, path, Vector3::zeros(), &[0.0]);
+    let t = quarter_turn();
     let p = params(SimulatedVoParams::default());
     let ctx = SchemeContext {
         params: &p,

@@ -6,7 +6,7 @@
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 use serde::{Deserialize, Serialize};
 
-use super::{TIME_TOLERANCE_SECS, since_processed};
+use super::{TIME_TOLERANCE_SECS, process_if_due, since_processed};
 use crate::FrontendError;
 
 /// Limits of [`MaxGap`]; each is off when `null`.
@@ -107,11 +107,7 @@ impl FrameSelector for MaxGap {
 
     fn decide(&mut self, ctx: &FrameContext) -> FrameDecision {
         let inner = self.inner.decide(ctx);
-        if inner.is_process() || !self.exceeded(ctx) {
-            inner
-        } else {
-            FrameDecision::PROCESS
-        }
+        process_if_due(inner, self.exceeded(ctx))
     }
 
     fn reset(&mut self) {

@@ -36,7 +36,7 @@ pub use residual_schedule::{ResidualSchedule, ResidualScheduleParams};
 pub use uncertainty_budget::{UncertaintyBudget, UncertaintyBudgetParams};
 pub use while_lost::{AUTHORS_LOST_PERIOD_SECS, WhileLost};
 
-use gpodo_traits::FrameContext;
+use gpodo_traits::{FrameContext, FrameDecision};
 use serde::{Deserialize, Serialize};
 
 /// Which scalar of the predicted residual a policy reads (m/s).
@@ -62,6 +62,16 @@ impl ResidualSignal {
             Self::Std => var.max(0.0).sqrt(),
             Self::Rms => (mean_sq + var.max(0.0)).sqrt(),
         }
+    }
+}
+
+/// The inner policy's decision, or a frame processed when `due` and the
+/// inner policy would skip it: what a guard around a policy returns.
+pub(crate) fn process_if_due(inner: FrameDecision, due: bool) -> FrameDecision {
+    if inner.is_process() || !due {
+        inner
+    } else {
+        FrameDecision::PROCESS
     }
 }
 

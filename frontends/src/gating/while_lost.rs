@@ -9,7 +9,7 @@
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 
-use super::{TIME_TOLERANCE_SECS, since_processed};
+use super::{TIME_TOLERANCE_SECS, process_if_due, since_processed};
 use crate::FrontendError;
 
 /// The authors' camera period while lost (s): their 2.5 fps input stream.
@@ -52,11 +52,7 @@ impl FrameSelector for WhileLost {
         let inner = self.inner.decide(ctx);
         let due =
             ctx.tracking_lost && since_processed(ctx) + TIME_TOLERANCE_SECS >= self.period_secs;
-        if inner.is_process() || !due {
-            inner
-        } else {
-            FrameDecision::PROCESS
-        }
+        process_if_due(inner, due)
     }
 
     fn reset(&mut self) {
