@@ -115,14 +115,14 @@ pub fn run_schemes(inputs: &SchemeInputs<'_>) -> Result<Vec<SchemeResult>, Pipel
         .collect();
     // Schemes that take another's frames (an oracle, a front-loaded
     // schedule) run after the schemes they match.
-    let is_oracle = |s: usize| {
+    let takes_frames = |s: usize| {
         schemes[s].selector.oracle().is_some() || schemes[s].selector.same_as().is_some()
     };
     let matched: Vec<&String> = schemes
         .iter()
         .filter_map(|s| s.selector.same_as())
         .collect();
-    let is_matched = |s: usize| !is_oracle(s) && matched.contains(&&schemes[s].label);
+    let is_matched = |s: usize| !takes_frames(s) && matched.contains(&&schemes[s].label);
     let label = |s: usize, e: PipelineError| PipelineError::Scheme {
         label: schemes[s].label.clone(),
         source: Box::new(e),
@@ -149,11 +149,11 @@ pub fn run_schemes(inputs: &SchemeInputs<'_>) -> Result<Vec<SchemeResult>, Pipel
     let rest: Vec<(usize, usize)> = jobs
         .iter()
         .copied()
-        .filter(|&(_, s)| is_oracle(s))
+        .filter(|&(_, s)| takes_frames(s))
         .chain(
             jobs.iter()
                 .copied()
-                .filter(|&(_, s)| !is_oracle(s) && !is_matched(s)),
+                .filter(|&(_, s)| !takes_frames(s) && !is_matched(s)),
         )
         .collect();
     let second = run_all(rest, &finished)?;

@@ -2,7 +2,7 @@
 //! apart from its frame selection: whatever policy decides to process a
 //! frame, its keyframe threshold is scaled by `T(r) / T_max`, `T(r)` the
 //! authors' schedule's period for the predicted residual `r`
-//! ([`ResidualSchedule::period_secs`]). Around a fixed rate it gives the
+//! ([`ResidualSchedule::keyframe_scale`]). Around a fixed rate it gives the
 //! control that rescales as the authors' schedule does
 //! (`slam-orogen-adaptive_slam`: `scale_keyframes`), so a policy and its
 //! fixed-rate control still differ in frame selection only.
@@ -16,7 +16,6 @@ use crate::FrontendError;
 pub struct RescaleKeyframes {
     inner: Box<dyn FrameSelector>,
     schedule: ResidualSchedule,
-    params: ResidualScheduleParams,
     name: String,
 }
 
@@ -34,7 +33,6 @@ impl RescaleKeyframes {
         Ok(Self {
             inner,
             schedule,
-            params,
             name,
         })
     }
@@ -49,13 +47,10 @@ impl FrameSelector for RescaleKeyframes {
         match self.inner.decide(ctx) {
             FrameDecision::Process {
                 keyframe_threshold_scale,
-            } => {
-                let period = self.schedule.period_secs(self.params.signal.of(ctx));
-                FrameDecision::Process {
-                    keyframe_threshold_scale: keyframe_threshold_scale
-                        * (period / self.params.t_max_secs),
-                }
-            }
+            } => FrameDecision::Process {
+                keyframe_threshold_scale: keyframe_threshold_scale
+                    * self.schedule.keyframe_scale(ctx),
+            },
             FrameDecision::Skip => FrameDecision::Skip,
         }
     }

@@ -81,6 +81,16 @@ impl ResidualSchedule {
         Ok(Self { params })
     }
 
+    /// The authors' keyframe threshold scale `T(r) / T_max` for the
+    /// residual in `ctx`, whether or not this schedule applies it.
+    pub fn keyframe_scale(&self, ctx: &FrameContext) -> f64 {
+        self.keyframe_scale_for_period(self.period_secs(self.params.signal.of(ctx)))
+    }
+
+    fn keyframe_scale_for_period(&self, period_secs: f64) -> f64 {
+        period_secs / self.params.t_max_secs
+    }
+
     /// The period for a residual `r` (m/s).
     pub fn period_secs(&self, r: f64) -> f64 {
         let p = &self.params;
@@ -100,7 +110,7 @@ impl FrameSelector for ResidualSchedule {
             return FrameDecision::Skip;
         }
         let scale = if self.params.scale_keyframes {
-            period / self.params.t_max_secs
+            self.keyframe_scale_for_period(period)
         } else {
             1.0
         };

@@ -397,11 +397,8 @@ impl SimulatedVo {
         overlap: f64,
     ) -> (f64, f64) {
         let (r, t) = self.error_sigmas(truth, overlap);
-        let supply = self.supply_of(request).unwrap_or(1.0);
-        if supply == 1.0 {
-            return (r, t);
-        }
-        let k = supply.sqrt().recip();
+        // Exact for a neutral supply: 1/√1 = 1.
+        let k = self.supply_of(request).unwrap_or(1.0).sqrt().recip();
         (r * k, t * k)
     }
 }
