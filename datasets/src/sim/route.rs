@@ -69,7 +69,7 @@ pub fn central_share(points: &[(f64, f64)], area_size_m: f64) -> f64 {
 ///
 /// # Errors
 /// [`DatasetError::Simulation`] when no random route meets the limits in
-/// [`MAX_DRAWS`] draws.
+/// 100 000 draws.
 pub fn route_waypoints<R: Rng + ?Sized>(
     route: Route,
     area_size_m: f64,
