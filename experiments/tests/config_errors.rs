@@ -254,7 +254,116 @@ fn schemes_and_selectors_are_checked() {
         "b.yaml",
         9,
         16,
-        "one of: `parametric only`, `exact GP: rbf`",
+        "one of `regressors`: `parametric only`, `exact GP: rbf`",
+    );
+}
+
+/// A scheme's `odometry`: the regressors it names exist in their lists, it
+/// does not come with `regressor` or `online`, and a drift budget's
+/// explicit `count_mean` agrees with it.
+#[test]
+fn a_schemes_odometry_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let with_absolute =
+        format!("{GOOD}absolute_regressors:\n  - kind: exact_gp\n    kernel: rbf\n");
+    let scheme = |odometry: &str, selector: &str| {
+        format!(
+            "{with_absolute}schemes:\n  - label: a\n    odometry: {odometry}\n    selector: {selector}\n"
+        )
+    };
+    let authors = "{ mean: none, covariance: { absolute: 0 } }";
+    // Loads: the authors' odometry with a budget left to follow it, and
+    // with one that states the same.
+    for selector in [
+        "{ kind: uncertainty_budget }",
+        "{ kind: uncertainty_budget, count_mean: true }",
+    ] {
+        let path = d.join("ok.yaml");
+        std::fs::write(&path, scheme(authors, selector)).unwrap();
+        load_plan(&path).unwrap();
+    }
+    // The authors' odometry is uncorrected: a budget of the variance alone
+    // contradicts it.
+    let e = error_of(
+        d,
+        "c.yaml",
+        &scheme(
+            authors,
+            "{ kind: max_gap, inner: { kind: uncertainty_budget, count_mean: false } }",
+        ),
+    );
+    check(
+        &e,
+        "invalid `inner.count_mean`",
+        "c.yaml",
+        13,
+        79,
+        "true (or no value) for odometry uncorrected, |residual|² covariance",
+    );
+    // And a corrected odometry with a budget of the uncorrected error.
+    let e = error_of(
+        d,
+        "d.yaml",
+        &format!(
+            "{GOOD}schemes:\n  - label: a\n    regressor: 1\n    selector: {{ kind: uncertainty_budget, count_mean: true }}\n"
+        ),
+    );
+    check(
+        &e,
+        "invalid `count_mean`",
+        "d.yaml",
+        10,
+        55,
+        "false (or no value)",
+    );
+    // An absolute index into `regressors`' list is out of range there.
+    let e = error_of(
+        d,
+        "e.yaml",
+        &scheme(
+            "{ mean: none, covariance: { absolute: 3 } }",
+            "{ kind: residual_schedule }",
+        ),
+    );
+    check(
+        &e,
+        "regressor index 3 out of range",
+        "e.yaml",
+        12,
+        53,
+        "an index into `absolute_regressors` (0..1)",
+    );
+    let e = error_of(
+        d,
+        "f.yaml",
+        &scheme(
+            "{ mean: exact GP, covariance: { variance: 1 } }",
+            "{ kind: residual_schedule }",
+        ),
+    );
+    check(
+        &e,
+        "unknown regressor `exact GP`",
+        "f.yaml",
+        12,
+        23,
+        "one of `regressors`",
+    );
+    let e = error_of(
+        d,
+        "g.yaml",
+        &format!(
+            "{with_absolute}schemes:\n  - label: a\n    regressor: 1\n    odometry: {authors}\n    selector: {{ kind: residual_schedule }}\n"
+        ),
+    );
+    check(
+        &e,
+        "both `regressor` and `odometry`",
+        "g.yaml",
+        13,
+        15,
+        "either `regressor`",
     );
 }
 

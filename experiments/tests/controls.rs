@@ -21,12 +21,16 @@ fn paper() -> ExperimentConfig {
 /// source (the trained regressor's spec, or the online learner's).
 fn back_end_of(config: &ExperimentConfig, s: &SchemeSpec) -> (MotionPrior, String) {
     let prior = s.motion_prior.unwrap_or(config.frontend.motion_prior);
-    let source = match &s.online {
-        Some(online) => format!(
+    let source = match (&s.online, &s.odometry) {
+        (Some(online), _) => format!(
             "online {}",
             serde_json::to_string(online).unwrap_or_default()
         ),
-        None => {
+        (None, Some(odometry)) => format!(
+            "odometry {}",
+            serde_json::to_string(odometry).unwrap_or_default()
+        ),
+        (None, None) => {
             let labels = config.regressor_labels();
             let i = s.regressor_index(&labels).unwrap_or(usize::MAX);
             serde_json::to_string(&config.regressors[i]).unwrap_or_default()
@@ -45,6 +49,7 @@ fn fps(s: &SchemeSpec) -> Option<f64> {
 fn uses_zero(config: &ExperimentConfig, s: &SchemeSpec) -> bool {
     let labels = config.regressor_labels();
     s.online.is_none()
+        && s.odometry.is_none()
         && s.regressor_index(&labels)
             .is_ok_and(|i| matches!(config.regressors[i], RegressorSpec::Zero { .. }))
 }
@@ -105,8 +110,6 @@ fn the_curves_file_pairs_each_policy_with_its_controls() {
         let reseeded = run.config.clone().with_seed(0);
         assert_eq!(reseeded, config.clone().with_seed(0), "{}", run.key);
     }
-    let labels = config.regressor_labels();
-    let prior = config.frontend.motion_prior;
     let mut curves: Vec<(&str, Vec<&SchemeSpec>)> = Vec::new();
     for s in &config.schemes {
         let name = s
@@ -121,15 +124,15 @@ fn the_curves_file_pairs_each_policy_with_its_controls() {
     assert!(curves.len() >= 8, "{} curves", curves.len());
     for (name, schemes) in &curves {
         assert!(schemes.len() >= 4, "`{name}`: {} points", schemes.len());
-        let back_end = schemes[0].back_end(prior, &labels);
+        let back_end = schemes[0].back_end(config);
         for s in schemes {
-            assert_eq!(s.back_end(prior, &labels), back_end, "`{}`", s.label);
+            assert_eq!(s.back_end(config), back_end, "`{}`", s.label);
             assert_eq!(back_end_of(config, s), back_end_of(config, schemes[0]));
         }
         let fixed: Vec<f64> = config
             .schemes
             .iter()
-            .filter(|f| f.back_end(prior, &labels) == back_end)
+            .filter(|f| f.back_end(config) == back_end)
             .filter_map(fps)
             .collect();
         assert!(
@@ -255,4 +258,51 @@ fn the_online_learner_has_a_front_loaded_control_with_its_frames() {
             control.label
         );
     }
+}
+
+/// The budget inside a selector, if any.
+fn budget_of(spec: &SelectorSpec) -> Option<gpodo_frontends::gating::UncertaintyBudgetParams> {
+    match spec {
+        SelectorSpec::UncertaintyBudget(p) => Some(*p),
+        SelectorSpec::MaxGap { inner, .. } | SelectorSpec::Hysteresis { inner, .. } => {
+            budget_of(inner)
+        }
+        _ => None,
+    }
+}
+
+/// Each scheme's odometry as `paper.yaml` resolves it: the authors' row
+/// runs uncorrected with the |residual| GP's covariance, and every drift
+/// budget counts the drift of the odometry its scheme's graph uses (the
+/// corrected odometry's variance on gpodo's odometry).
+#[test]
+fn the_drift_budgets_count_the_odometry_the_graph_uses() {
+    use gpodo_frontends::odometry_mode::OdometryMode;
+    let config = paper();
+    let labels = config.regressor_labels();
+    let absolute = config.absolute_regressor_labels();
+    let mode = |s: &SchemeSpec| {
+        s.resolve_odometry(&labels, &absolute)
+            .unwrap_or_else(|e| panic!("{}: {e:?}", s.label))
+            .map(|r| r.mode)
+            .unwrap_or_default()
+    };
+    let authors: Vec<&SchemeSpec> = config
+        .schemes
+        .iter()
+        .filter(|s| mode(s) == OdometryMode::AUTHORS)
+        .collect();
+    assert!(
+        authors.iter().any(|s| fps(s).is_none()),
+        "no gated scheme on the authors' odometry"
+    );
+    let mut budgets = 0;
+    for s in &config.schemes {
+        let resolved = s.selector.for_odometry(&mode(s)).unwrap();
+        if let Some(b) = budget_of(&resolved) {
+            budgets += 1;
+            assert_eq!(b.count_mean, Some(!mode(s).correct_mean), "{}", s.label);
+        }
+    }
+    assert!(budgets >= 5, "{budgets} budgets");
 }

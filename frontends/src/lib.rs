@@ -12,6 +12,7 @@
 //! * [`online`]: regressors learning from VO targets (§VI);
 //! * [`backend`]: the factrs pose graph;
 //! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
+//!   [`odometry_mode`]: how a scheme's odometry uses the predictions;
 //! * [`tum`]: trajectories in the TUM format;
 //! * [`spec::SelectorSpec`]: the closed set of selector kinds an experiment
 //!   may name.
@@ -23,6 +24,7 @@ pub mod gating;
 pub mod hindsight;
 pub mod metrics;
 pub mod odometry;
+pub mod odometry_mode;
 pub mod online;
 pub mod oracle;
 pub mod params;

@@ -1,26 +1,28 @@
-//! Wheel odometry between processed frames: the parametric model's twists
-//! corrected by the predicted residual mean (eq. 12: `g + f`), integrated
-//! from the last processed frame, with the covariance the residual's
-//! variance implies, and the quantities a gating policy reads (distance,
-//! rotation, accumulated drift).
+//! Wheel odometry between processed frames: the parametric model's twists,
+//! corrected by the predicted residual mean where the scheme's odometry
+//! mode says so (eq. 12: `g + f`; [`crate::odometry_mode`]), integrated
+//! from the last processed frame, with the covariance the mode's variance
+//! implies, and the quantities a gating policy reads (distance, rotation,
+//! accumulated drift).
 //!
 //! The residual prediction is constant over a regressor window, so its
 //! error is fully correlated within the window: a window that contributes
 //! the body-frame displacement matrix `D_w = Σ_k R_k τ_k` (rotations of the
 //! step frames into the interval's start frame, times the step durations)
 //! adds `D_w diag(σ²_w) D_wᵀ` to the translation covariance, and
-//! `(‖μ_w‖² + Σ σ²_w) τ_w²` to the drift a policy budgets (the expected
-//! squared displacement error of uncorrected odometry over the `τ_w`
-//! seconds spent in the window). A floor `q_t τ` (translation) and a random
-//! walk `q_r τ` (rotation, gyro noise) are added per second, and a gyro bias
-//! `b` held over the whole interval adds `σ_b² τ²` to each rotation axis
-//! (it grows with the square of the gap, not linearly).
+//! `e_w τ_w²` to a drift (the expected squared displacement error over the
+//! `τ_w` seconds spent in the window, `e_w` the expected squared velocity
+//! error: `Σ σ²_w` of the odometry as corrected, or `E[r²]` of the
+//! uncorrected odometry). A floor `q_t τ` (translation) and a random walk
+//! `q_r τ` (rotation, gyro noise) are added per second, and a gyro bias `b`
+//! held over the whole interval adds `σ_b² τ²` to each rotation axis (it
+//! grows with the square of the gap, not linearly).
 
 use gpodo_traits::BodyTwist;
 use nalgebra::{Isometry3, Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
-use crate::prediction::ResidualPrediction;
+use crate::odometry_mode::WindowOdometry;
 
 /// Variance added to every diagonal entry of an interval's covariance
 /// (rad², m²): 1 µm, 1 µrad.
@@ -75,6 +77,7 @@ pub struct OdometryInterval {
     /// Expected squared displacement error of the uncorrected odometry
     /// (m²), see the module documentation.
     pub drift_m2: f64,
+
     /// Duration-weighted mean of the regressor inputs of the windows the
     /// interval's steps belong to (`None` if no step was in a window).
     pub mean_inputs: Option<Vec<f64>>,
@@ -93,9 +96,9 @@ pub struct OdometryIntegrator {
     rotation: f64,
     drift: f64,
     drift_variance: f64,
-    /// The prediction in force and the displacement matrix / time spent
-    /// under it since it took over (or since the interval started).
-    epoch: Option<(usize, ResidualPrediction)>,
+    /// The window odometry in force and the displacement matrix / time
+    /// spent under it since it took over (or since the interval started).
+    epoch: Option<(usize, WindowOdometry)>,
     epoch_matrix: Matrix3<f64>,
     epoch_secs: f64,
     inputs_sum: Vec<f64>,
@@ -128,22 +131,22 @@ impl OdometryIntegrator {
         if let Some((_, p)) = self.epoch {
             let d = self.epoch_matrix;
             self.translation_cov += d * Matrix3::from_diagonal(&p.variance) * d.transpose();
-            self.drift += p.expected_sq_error() * self.epoch_secs * self.epoch_secs;
+            self.drift += p.uncorrected_sq_error * self.epoch_secs * self.epoch_secs;
             self.drift_variance += p.variance.sum() * self.epoch_secs * self.epoch_secs;
         }
         self.epoch_matrix = Matrix3::zeros();
         self.epoch_secs = 0.0;
     }
 
-    /// Drives `dt_secs` with the model's `twist` under prediction number
-    /// `epoch` (a new number starts a new fully correlated block) and the
-    /// regressor inputs of the step's window, if any.
+    /// Drives `dt_secs` with the model's `twist` under window odometry
+    /// number `epoch` (a new number starts a new fully correlated block)
+    /// and the regressor inputs of the step's window, if any.
     pub fn advance(
         &mut self,
         twist: &BodyTwist,
         dt_secs: f64,
         epoch: usize,
-        prediction: &ResidualPrediction,
+        window: &WindowOdometry,
         inputs: Option<&[f64]>,
     ) {
         if dt_secs <= 0.0 {
@@ -151,10 +154,10 @@ impl OdometryIntegrator {
         }
         if self.epoch.map(|(e, _)| e) != Some(epoch) {
             self.flush_epoch();
-            self.epoch = Some((epoch, *prediction));
+            self.epoch = Some((epoch, *window));
         }
         let corrected = BodyTwist {
-            linear_mps: twist.linear_mps + prediction.mean,
+            linear_mps: twist.linear_mps + window.correction,
             angular_radps: twist.angular_radps,
         };
         self.epoch_matrix += self.relative.rotation.to_rotation_matrix().matrix() * dt_secs;
@@ -202,12 +205,13 @@ impl OdometryIntegrator {
     /// (m²), including the block in progress.
     pub fn drift_m2(&self) -> f64 {
         let partial = self.epoch.map_or(0.0, |(_, p)| {
-            p.expected_sq_error() * self.epoch_secs * self.epoch_secs
+            p.uncorrected_sq_error * self.epoch_secs * self.epoch_secs
         });
         self.drift + partial
     }
 
-    /// The same with the predicted variance alone (m²).
+    /// The same for the odometry as corrected, from its variance alone
+    /// (m²).
     pub fn drift_variance_m2(&self) -> f64 {
         let partial = self.epoch.map_or(0.0, |(_, p)| {
             p.variance.sum() * self.epoch_secs * self.epoch_secs
@@ -268,10 +272,11 @@ mod tests {
         }
     }
 
-    fn prediction(mean_x: f64, var: f64) -> ResidualPrediction {
-        ResidualPrediction {
-            mean: Vector3::new(mean_x, 0.0, 0.0),
+    fn prediction(mean_x: f64, var: f64) -> WindowOdometry {
+        WindowOdometry {
+            correction: Vector3::new(mean_x, 0.0, 0.0),
             variance: Vector3::repeat(var),
+            uncorrected_sq_error: mean_x * mean_x + 3.0 * var,
         }
     }
 
@@ -331,9 +336,10 @@ mod tests {
         };
         // Drive 1 s along x, then turn 90° in place: the x uncertainty of
         // the start frame is the end frame's −y uncertainty.
-        let p = ResidualPrediction {
-            mean: Vector3::zeros(),
+        let p = WindowOdometry {
+            correction: Vector3::zeros(),
             variance: Vector3::new(1e-6, 0.0, 0.0),
+            uncorrected_sq_error: 1e-6,
         };
         let mut odo = OdometryIntegrator::new(noise);
         odo.advance(&twist(0.04, 0.0), 1.0, 0, &p, None);

@@ -158,6 +158,7 @@ impl ResidualSource for OnlineLearner {
             Ok(p) => Ok(ResidualPrediction {
                 mean: Vector3::from_iterator(p.mean.row(0).iter().copied()),
                 variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
+                absolute: None,
             }),
             Err(Error::NotFitted { .. }) => Ok(uninformed),
             Err(e) => Err(e.into()),

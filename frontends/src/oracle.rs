@@ -36,13 +36,12 @@
 //! plan is refined over the real tracker by [`crate::hindsight`], which is
 //! never worse than the scheme it is matched to.
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::FrontendError;
 use crate::hindsight::HindsightSearchParams;
 use crate::params::MotionPrior;
-use crate::prediction::ResidualPrediction;
 use crate::traverse::Traverse;
 use crate::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
 
@@ -148,16 +147,16 @@ pub struct OraclePlan {
     pub candidates: usize,
 }
 
-/// The prediction in force at time `t` (the last window that ended by
-/// then), as the causal front end has it.
-fn prediction_at(
+/// The velocity correction in force at time `t` (that of the last window
+/// that ended by then), as the causal front end has it.
+fn correction_at(
     traverse: &Traverse,
-    predictions: &[ResidualPrediction],
+    corrections: &[Vector3<f64>],
     t: f64,
-) -> Option<ResidualPrediction> {
+) -> Option<Vector3<f64>> {
     let done = traverse.windows().partition_point(|w| w.end_secs <= t);
     done.checked_sub(1)
-        .and_then(|w| predictions.get(w).copied())
+        .and_then(|w| corrections.get(w).copied())
 }
 
 /// The dynamic programme itself: candidates `0 … n−1`, candidate 0 always
@@ -235,7 +234,9 @@ pub fn fewest_frames(n: usize, g_max: usize, gap_cost: &[f64], tail_cost: &[f64]
         .min()
 }
 
-/// Plans the frames of a budget.
+/// Plans the frames of a budget; `corrections` is the velocity correction
+/// the scheme's odometry applies in each window (zero where it applies
+/// none).
 ///
 /// A budget below the fewest frames the limits allow is raised to that
 /// number (with a warning).
@@ -246,7 +247,7 @@ pub fn fewest_frames(n: usize, g_max: usize, gap_cost: &[f64], tail_cost: &[f64]
 /// motion limits.
 pub fn plan_frames(
     traverse: &Traverse,
-    predictions: &[ResidualPrediction],
+    corrections: &[Vector3<f64>],
     vo: &dyn VisualOdometry,
     motion_prior: MotionPrior,
     params: &OracleParams,
@@ -351,8 +352,8 @@ pub fn plan_frames(
                 .norm_squared();
             let dt = times[k + 1] - t;
             let mut twist = traverse.twists()[k];
-            if let Some(p) = prediction_at(traverse, predictions, t) {
-                twist.linear_mps += p.mean;
+            if let Some(c) = correction_at(traverse, corrections, t) {
+                twist.linear_mps += c;
             }
             odometry *= twist.pose_delta(dt);
             k += 1;

@@ -154,6 +154,10 @@ pub struct FrontendParams {
     /// often (s; default 0.4, the authors' 2.5 fps stream; null: the
     /// policy alone decides). Fixed-rate baselines keep their rate.
     pub lost_frame_period_secs: Option<f64>,
+    /// How the odometry uses the residual predictions: set per scheme (a
+    /// scheme's `odometry`), not in the experiment's `frontend` section.
+    #[serde(skip)]
+    pub odometry_mode: crate::odometry_mode::OdometryMode,
 }
 
 impl Default for FrontendParams {
@@ -169,6 +173,7 @@ impl Default for FrontendParams {
             cost: ComputeCost::default(),
             online: OnlineTargetParams::default(),
             lost_frame_period_secs: Some(crate::gating::AUTHORS_LOST_PERIOD_SECS),
+            odometry_mode: crate::odometry_mode::OdometryMode::default(),
         }
     }
 }

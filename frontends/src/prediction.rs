@@ -19,6 +19,21 @@ pub struct ResidualPrediction {
     /// Variance of the residual ((m/s)², body frame): the odometry's
     /// velocity uncertainty.
     pub variance: Vector3<f64>,
+    /// A regressor of |residual|'s prediction for the same window, when the
+    /// scheme's odometry takes its covariance from one
+    /// ([`crate::odometry_mode`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub absolute: Option<AbsolutePrediction>,
+}
+
+/// A regressor of |residual| (trained on the absolute residual, as the
+/// authors' GP was): its prediction per body axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AbsolutePrediction {
+    /// Predicted |residual| (m/s).
+    pub mean: Vector3<f64>,
+    /// Its predictive variance ((m/s)²).
+    pub variance: Vector3<f64>,
 }
 
 impl ResidualPrediction {
@@ -27,6 +42,7 @@ impl ResidualPrediction {
         Self {
             mean: Vector3::zeros(),
             variance: Vector3::repeat(variance),
+            absolute: None,
         }
     }
 

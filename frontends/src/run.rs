@@ -26,6 +26,7 @@ use crate::FrontendError;
 use crate::backend::{EdgeKind, PoseGraph, PoseGraphEdge};
 use crate::metrics::{TrajectoryMetrics, trajectory_metrics};
 use crate::odometry::{OdometryIntegrator, OdometryInterval};
+use crate::odometry_mode::WindowOdometry;
 use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::traverse::Traverse;
@@ -145,6 +146,8 @@ struct Session<'a> {
     next_window: usize,
     epoch: usize,
     prediction: ResidualPrediction,
+    /// What the prediction in force does to the odometry.
+    window: WindowOdometry,
     predictions: Vec<(f64, ResidualPrediction)>,
     /// Per sample: the processed frame it hangs from and the odometry
     /// since.
@@ -199,6 +202,7 @@ impl<'a> Session<'a> {
             next_window: 0,
             epoch: 0,
             prediction,
+            window: WindowOdometry::uninformed(params.initial_residual_variance),
             predictions: vec![(t0, prediction)],
             anchors: vec![(0, Isometry3::identity())],
             step_window,
@@ -253,7 +257,7 @@ impl<'a> Session<'a> {
                 &self.traverse.twists()[self.step],
                 end - self.time,
                 self.epoch,
-                &self.prediction,
+                &self.window,
                 inputs,
             );
             if self.keyframe_graph {
@@ -261,7 +265,7 @@ impl<'a> Session<'a> {
                     &self.traverse.twists()[self.step],
                     end - self.time,
                     self.epoch,
-                    &self.prediction,
+                    &self.window,
                     inputs,
                 );
             }
@@ -275,6 +279,7 @@ impl<'a> Session<'a> {
                 && w.end_secs <= self.time
             {
                 self.prediction = self.source.on_window(self.next_window, w)?;
+                self.window = self.params.odometry_mode.window(&self.prediction)?;
                 self.epoch += 1;
                 self.next_window += 1;
                 self.predictions.push((self.time, self.prediction));
@@ -284,13 +289,14 @@ impl<'a> Session<'a> {
     }
 
     fn context(&self, time_secs: f64) -> FrameContext {
+        let view = self.params.odometry_mode.policy_view(&self.prediction);
         FrameContext {
             time_secs,
             last_processed_secs: self.last_processed_secs,
             distance_since_processed_m: self.integrator.distance_m(),
             rotation_since_processed_rad: self.integrator.rotation_rad(),
-            residual_mean: self.prediction.mean.iter().copied().collect(),
-            residual_variance: self.prediction.variance.iter().copied().collect(),
+            residual_mean: view.mean.iter().copied().collect(),
+            residual_variance: view.variance.iter().copied().collect(),
             drift_since_processed: self.integrator.drift_m2(),
             drift_variance_since_processed: self.integrator.drift_variance_m2(),
             tracking_lost: !self.tracking,

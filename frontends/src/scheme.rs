@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::gating::{FrontLoaded, Planned, RescaleKeyframes, ResidualScheduleParams, WhileLost};
 use crate::hindsight::{SearchSummary, search_frames};
+use crate::odometry_mode::OdometryMode;
 use crate::online::{OnlineLearner, OnlineMode};
 use crate::oracle::plan_frames;
 use crate::params::{FrontendParams, MotionPrior, VoSpec};
@@ -37,6 +38,9 @@ pub struct SchemeResult {
     /// end: what fixed-rate and zero-residual controls must share).
     #[serde(default)]
     pub motion_prior: MotionPrior,
+    /// How its odometry used the residual predictions.
+    #[serde(default)]
+    pub odometry: OdometryMode,
     /// The oracle's plan, for oracle schemes.
     pub oracle: Option<OraclePlanSummary>,
     /// What the front end did and how well.
@@ -93,6 +97,8 @@ pub struct SchemeSpecRef<'a> {
     /// ([`crate::gating::RescaleKeyframes`]), whatever selects the frames;
     /// `None`, only as the selector says.
     pub rescale_keyframes: Option<&'a ResidualScheduleParams>,
+    /// How the scheme's odometry uses the residual predictions.
+    pub odometry: OdometryMode,
 }
 
 /// What every scheme on a traverse shares.
@@ -226,9 +232,11 @@ pub fn run_scheme(
     let motion_prior = scheme.motion_prior.unwrap_or(ctx.params.motion_prior);
     let mut frontend = ctx.params.clone();
     frontend.motion_prior = motion_prior;
-    let (run, residuals, oracle) = match scheme.selector.oracle() {
+    frontend.odometry_mode = scheme.odometry;
+    let selector_spec = scheme.selector.for_odometry(&scheme.odometry)?;
+    let (run, residuals, oracle) = match selector_spec.oracle() {
         None => {
-            let mut selector = match scheme.selector {
+            let mut selector = match &selector_spec {
                 SelectorSpec::FrontLoaded(p) => {
                     let frames = ctx
                         .matched_frames
@@ -252,7 +260,7 @@ pub fn run_scheme(
                 spec => spec.build()?,
             };
             if let (true, Some(period)) = (
-                scheme.selector.reads_residuals(),
+                selector_spec.reads_residuals(),
                 ctx.params.lost_frame_period_secs,
             ) {
                 selector = Box::new(WhileLost::new(selector, period)?);
@@ -288,9 +296,13 @@ pub fn run_scheme(
                 ));
             };
             let vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
+            let corrections = predictions
+                .iter()
+                .map(|p| scheme.odometry.window(p).map(|w| w.correction))
+                .collect::<Result<Vec<_>, _>>()?;
             let plan = plan_frames(
                 traverse,
-                &predictions,
+                &corrections,
                 vo.as_ref(),
                 motion_prior,
                 params,
@@ -371,6 +383,7 @@ pub fn run_scheme(
         selector: scheme.selector.label(),
         residuals,
         motion_prior,
+        odometry: scheme.odometry,
         oracle,
         run,
         duration_secs: start.elapsed().as_secs_f64(),

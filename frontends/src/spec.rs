@@ -16,6 +16,7 @@ use crate::gating::{
     FrontLoadedParams, Hysteresis, HysteresisParams, MaxGap, MaxGapParams, ResidualSchedule,
     ResidualScheduleParams, ResidualSignal, UncertaintyBudget, UncertaintyBudgetParams,
 };
+use crate::odometry_mode::OdometryMode;
 use crate::oracle::OracleParams;
 use crate::{FixedRate, FrontendError};
 
@@ -144,6 +145,62 @@ impl SelectorSpec {
         }
     }
 
+    /// The same selector with every drift budget counting the drift of the
+    /// odometry `mode` describes: an unset `count_mean` is set, one that
+    /// contradicts the mode is an error.
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidSpec`] naming `count_mean` and the value the
+    /// mode implies.
+    pub fn for_odometry(&self, mode: &OdometryMode) -> Result<Self, FrontendError> {
+        let counts_mean = mode.budget_counts_mean();
+        Ok(match self {
+            Self::UncertaintyBudget(p) => match p.count_mean {
+                Some(c) if c != counts_mean => {
+                    return Err(FrontendError::InvalidSpec {
+                        selector: "uncertainty_budget".into(),
+                        field: "count_mean".into(),
+                        expected: format!(
+                            "{counts_mean} (or no value) for odometry {}: the budget counts the drift of the odometry the graph uses",
+                            mode.label()
+                        ),
+                    });
+                }
+                _ => Self::UncertaintyBudget(UncertaintyBudgetParams {
+                    count_mean: Some(counts_mean),
+                    ..*p
+                }),
+            },
+            Self::MaxGap {
+                inner,
+                max_gap_secs,
+                max_distance_m,
+                max_rotation_rad,
+            } => Self::MaxGap {
+                inner: Box::new(inner_for_odometry(inner, mode)?),
+                max_gap_secs: *max_gap_secs,
+                max_distance_m: *max_distance_m,
+                max_rotation_rad: *max_rotation_rad,
+            },
+            Self::Hysteresis {
+                inner,
+                enter_mps,
+                exit_mps,
+                alert_period_secs,
+                alert_keyframe_scale,
+                signal,
+            } => Self::Hysteresis {
+                inner: Box::new(inner_for_odometry(inner, mode)?),
+                enter_mps: *enter_mps,
+                exit_mps: *exit_mps,
+                alert_period_secs: *alert_period_secs,
+                alert_keyframe_scale: *alert_keyframe_scale,
+                signal: *signal,
+            },
+            other => other.clone(),
+        })
+    }
+
     /// Checks every field (nested ones too).
     ///
     /// # Errors
@@ -214,6 +271,26 @@ impl SelectorSpec {
             }
         })
     }
+}
+
+/// [`SelectorSpec::for_odometry`] of a wrapper's inner selector, an error
+/// naming the field below `inner`.
+fn inner_for_odometry(
+    inner: &SelectorSpec,
+    mode: &OdometryMode,
+) -> Result<SelectorSpec, FrontendError> {
+    inner.for_odometry(mode).map_err(|e| match e {
+        FrontendError::InvalidSpec {
+            selector,
+            field,
+            expected,
+        } => FrontendError::InvalidSpec {
+            selector,
+            field: format!("inner.{field}"),
+            expected,
+        },
+        other => other,
+    })
 }
 
 #[cfg(test)]

@@ -52,6 +52,12 @@ pub struct ExperimentConfig {
     pub residuals: ResidualConfig,
     /// Regressors to train and evaluate, in report order.
     pub regressors: Vec<RegressorSpec>,
+    /// Regressors trained on |residual| targets (the authors' GP), whose
+    /// prediction a scheme's `odometry.covariance` may take as the
+    /// odometry's standard deviation. Labelled `|residual| <label>`; scored
+    /// against |residual| on the test rows, outside Table I.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absolute_regressors: Vec<RegressorSpec>,
     /// A residual table (e.g. the authors' real ExoTeR data) whose
     /// statistics the report shows beside this experiment's, to judge how
     /// close a simulated testbed is to the real rover. Skipped with a warning
@@ -212,5 +218,13 @@ impl ExperimentConfig {
     /// The labels of the regressors, as reports print them.
     pub fn regressor_labels(&self) -> Vec<String> {
         self.regressors.iter().map(RegressorSpec::label).collect()
+    }
+
+    /// The labels of the |residual| regressors, as reports print them.
+    pub fn absolute_regressor_labels(&self) -> Vec<String> {
+        self.absolute_regressors
+            .iter()
+            .map(schemes::absolute_label)
+            .collect()
     }
 }

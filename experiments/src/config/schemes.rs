@@ -16,9 +16,18 @@
 //!   - label: oracle
 //!     regressor: "exact GP: rbf"
 //!     selector: { kind: oracle, same_as: ORB-SLAM with GP }
+//!   - label: authors' odometry
+//!     odometry: { mean: none, covariance: { absolute: 0 } }
+//!     selector: { kind: residual_schedule }
 //! ```
+//!
+//! A scheme's `odometry` names the regressor whose mean corrects the wheel
+//! odometry (or `none`) and the one whose prediction sets its covariance
+//! (see [`gpodo_frontends::odometry_mode`]); without it, `regressor` does
+//! both, with its predictive variance.
 
 use gpodo_frontends::SelectorSpec;
+use gpodo_frontends::odometry_mode::{CovarianceSource, OdometryMode};
 use gpodo_frontends::online::OnlineMode;
 use gpodo_frontends::params::MotionPrior;
 use gpodo_regressors::RegressorSpec;
@@ -33,6 +42,116 @@ pub enum RegressorRef {
     Index(usize),
     /// The regressor's label as the reports print it.
     Label(String),
+}
+
+/// How a scheme's wheel odometry uses the trained regressors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SchemeOdometry {
+    /// The `regressors` entry whose predicted mean corrects the odometry
+    /// (label or index), or `none`: the wheels uncorrected.
+    pub mean: MeanRef,
+    /// What sets the odometry's velocity covariance.
+    pub covariance: CovarianceRef,
+}
+
+/// The regressor whose mean corrects the odometry, or none.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum MeanRef {
+    /// `none`: the odometry is not corrected.
+    Uncorrected(Uncorrected),
+    /// A `regressors` entry.
+    Regressor(RegressorRef),
+}
+
+/// The word `none`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Uncorrected {
+    /// No correction.
+    None,
+}
+
+/// The regressor whose prediction sets the odometry's covariance.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum CovarianceRef {
+    /// A `regressors` entry's predictive variance.
+    Variance(RegressorRef),
+    /// An `absolute_regressors` entry (trained on |residual|): its
+    /// prediction `â` is the standard deviation, the variance `â²`.
+    Absolute(RegressorRef),
+    /// The same regressor read as the authors' code does: `â` itself as
+    /// the variance (dimensionally inconsistent: m/s taken as (m/s)²).
+    AbsoluteAsVariance(RegressorRef),
+}
+
+impl CovarianceRef {
+    /// The referenced regressor, and whether it is an `absolute_regressors`
+    /// entry.
+    pub fn regressor(&self) -> (&RegressorRef, bool) {
+        match self {
+            Self::Variance(r) => (r, false),
+            Self::Absolute(r) | Self::AbsoluteAsVariance(r) => (r, true),
+        }
+    }
+
+    /// The front end's covariance source.
+    pub fn source(&self) -> CovarianceSource {
+        match self {
+            Self::Variance(_) => CovarianceSource::PredictiveVariance,
+            Self::Absolute(_) => CovarianceSource::AbsoluteResidual,
+            Self::AbsoluteAsVariance(_) => CovarianceSource::AbsoluteResidualAsVariance,
+        }
+    }
+}
+
+/// A scheme's odometry resolved to regressor indices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ResolvedOdometry {
+    /// The `regressors` entry whose mean corrects the odometry, if any.
+    pub mean: Option<usize>,
+    /// The `regressors` entry whose variance sets the covariance, or
+    /// (`absolute`) the `absolute_regressors` entry whose |residual| does.
+    pub covariance: usize,
+    /// Whether `covariance` indexes `absolute_regressors`.
+    pub absolute: bool,
+    /// The front end's mode.
+    pub mode: OdometryMode,
+}
+
+/// The label reports give an `absolute_regressors` entry.
+pub fn absolute_label(spec: &RegressorSpec) -> String {
+    format!("|residual| {}", spec.label())
+}
+
+/// The index of `r` among `labels`.
+///
+/// # Errors
+/// What is wrong with the reference, and what would be accepted (`list`
+/// names the list).
+fn resolve(r: &RegressorRef, labels: &[String], list: &str) -> Result<usize, (String, String)> {
+    match r {
+        RegressorRef::Index(i) if *i < labels.len() => Ok(*i),
+        RegressorRef::Index(i) => Err((
+            format!("regressor index {i} out of range"),
+            format!("an index into `{list}` (0..{})", labels.len()),
+        )),
+        RegressorRef::Label(l) => labels.iter().position(|x| x == l).ok_or_else(|| {
+            (
+                format!("unknown regressor `{l}`"),
+                format!(
+                    "one of `{list}`: {}",
+                    labels
+                        .iter()
+                        .map(|x| format!("`{x}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        }),
+    }
 }
 
 /// A regressor that learns online from visual odometry.
@@ -98,6 +217,11 @@ pub struct SchemeSpec {
     /// rescale alike. Omitted, only as the selector says.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rescale_keyframes: Option<gpodo_frontends::gating::ResidualScheduleParams>,
+    /// Which regressors correct the odometry's mean and set its
+    /// covariance; omitted, `regressor` does both (its predictive
+    /// variance). Not with `regressor` or `online`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub odometry: Option<SchemeOdometry>,
 }
 
 impl SchemeSpec {
@@ -107,16 +231,9 @@ impl SchemeSpec {
     /// `regressor_labels`, or the online regressor), and the keyframe
     /// rescaling when it has one. Fixed-rate controls and a gated scheme
     /// are comparable when their back ends are equal.
-    pub fn back_end(&self, default_prior: MotionPrior, regressor_labels: &[String]) -> String {
-        let prior = self.motion_prior.unwrap_or(default_prior);
-        let residuals = match &self.online {
-            Some(online) => format!("online {}", online.regressor.label()),
-            None => self
-                .regressor_index(regressor_labels)
-                .ok()
-                .and_then(|i| regressor_labels.get(i).cloned())
-                .unwrap_or_else(|| "unknown regressor".into()),
-        };
+    pub fn back_end(&self, config: &super::ExperimentConfig) -> String {
+        let prior = self.motion_prior.unwrap_or(config.frontend.motion_prior);
+        let residuals = self.back_end_residuals(config);
         let prior = match prior {
             MotionPrior::Odometry => "odometry",
             MotionPrior::ConstantVelocity => "constant-velocity",
@@ -131,6 +248,99 @@ impl SchemeSpec {
         }
     }
 
+    /// Where the scheme's residuals come from, as the reports name it: the
+    /// online regressor, the trained regressor, or the odometry's mean and
+    /// covariance regressors.
+    pub fn back_end_residuals(&self, config: &super::ExperimentConfig) -> String {
+        let regressor_labels = &config.regressor_labels();
+        let absolute_labels = &config.absolute_regressor_labels();
+        let name = |labels: &[String], r: &RegressorRef| match r {
+            RegressorRef::Index(i) => labels.get(*i).cloned().unwrap_or_else(|| format!("#{i}")),
+            RegressorRef::Label(l) => l.clone(),
+        };
+        match (&self.online, &self.odometry) {
+            (Some(online), _) => format!("online {}", online.regressor.label()),
+            (None, None) => self
+                .regressor_index(regressor_labels)
+                .ok()
+                .and_then(|i| regressor_labels.get(i).cloned())
+                .unwrap_or_else(|| "unknown regressor".into()),
+            (None, Some(o)) => {
+                let mean = match &o.mean {
+                    MeanRef::Uncorrected(_) => "uncorrected odometry".to_string(),
+                    MeanRef::Regressor(r) => format!("mean of {}", name(regressor_labels, r)),
+                };
+                let covariance = match &o.covariance {
+                    CovarianceRef::Variance(r) => {
+                        format!("variance of {}", name(regressor_labels, r))
+                    }
+                    CovarianceRef::Absolute(r) => format!("σ = {}", name(absolute_labels, r)),
+                    CovarianceRef::AbsoluteAsVariance(r) => {
+                        format!("σ² = {}", name(absolute_labels, r))
+                    }
+                };
+                format!("{mean}, {covariance}")
+            }
+        }
+    }
+
+    /// The scheme's odometry: which `regressors` entry corrects the mean,
+    /// which entry (of `labels` or `absolute_labels`) sets the covariance,
+    /// and the front end's mode. Without `odometry`, the scheme's
+    /// `regressor` does both with its predictive variance; an online
+    /// scheme has no trained regressor and gets `None`.
+    ///
+    /// # Errors
+    /// The offending field (below `odometry`, or `regressor`), what is
+    /// wrong and what would be accepted.
+    pub fn resolve_odometry(
+        &self,
+        labels: &[String],
+        absolute_labels: &[String],
+    ) -> Result<Option<ResolvedOdometry>, (&'static str, String, String)> {
+        if self.online.is_some() {
+            return Ok(None);
+        }
+        let Some(odometry) = &self.odometry else {
+            let r = self
+                .regressor_index(labels)
+                .map_err(|(p, e)| ("regressor", p, e))?;
+            return Ok(Some(ResolvedOdometry {
+                mean: Some(r),
+                covariance: r,
+                absolute: false,
+                mode: OdometryMode::CORRECTED,
+            }));
+        };
+        let mean = match &odometry.mean {
+            MeanRef::Uncorrected(_) => None,
+            MeanRef::Regressor(r) => {
+                Some(resolve(r, labels, "regressors").map_err(|(p, e)| ("odometry.mean", p, e))?)
+            }
+        };
+        let (r, absolute) = odometry.covariance.regressor();
+        let field = match &odometry.covariance {
+            CovarianceRef::Variance(_) => "odometry.covariance.variance",
+            CovarianceRef::Absolute(_) => "odometry.covariance.absolute",
+            CovarianceRef::AbsoluteAsVariance(_) => "odometry.covariance.absolute_as_variance",
+        };
+        let covariance = if absolute {
+            resolve(r, absolute_labels, "absolute_regressors")
+        } else {
+            resolve(r, labels, "regressors")
+        }
+        .map_err(|(p, e)| (field, p, e))?;
+        Ok(Some(ResolvedOdometry {
+            mean,
+            covariance,
+            absolute,
+            mode: OdometryMode {
+                correct_mean: mean.is_some(),
+                covariance: odometry.covariance.source(),
+            },
+        }))
+    }
+
     /// The index of the scheme's trained regressor among `labels`.
     ///
     /// # Errors
@@ -138,24 +348,7 @@ impl SchemeSpec {
     pub fn regressor_index(&self, labels: &[String]) -> Result<usize, (String, String)> {
         match &self.regressor {
             None => Ok(0),
-            Some(RegressorRef::Index(i)) if *i < labels.len() => Ok(*i),
-            Some(RegressorRef::Index(i)) => Err((
-                format!("regressor index {i} out of range"),
-                format!("an index into `regressors` (0..{})", labels.len()),
-            )),
-            Some(RegressorRef::Label(l)) => labels.iter().position(|x| x == l).ok_or_else(|| {
-                (
-                    format!("unknown regressor `{l}`"),
-                    format!(
-                        "one of: {}",
-                        labels
-                            .iter()
-                            .map(|x| format!("`{x}`"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                )
-            }),
+            Some(r) => resolve(r, labels, "regressors"),
         }
     }
 }

@@ -32,6 +32,10 @@ impl ExperimentConfig {
             r.validate()
                 .map_err(|e| Issue::from_regressor(&format!("regressors[{i}]"), e))?;
         }
+        for (i, r) in self.absolute_regressors.iter().enumerate() {
+            r.validate()
+                .map_err(|e| Issue::from_regressor(&format!("absolute_regressors[{i}]"), e))?;
+        }
         self.residuals
             .validate()
             .map_err(|e| Issue::from_dataset("", e))?;
@@ -214,6 +218,7 @@ impl ExperimentConfig {
             .validate()
             .map_err(|e| Issue::from_frontend("frontend", e))?;
         let labels = self.regressor_labels();
+        let absolute_labels = self.absolute_regressor_labels();
         let mut seen = std::collections::HashSet::new();
         for (i, scheme) in self.schemes.iter().enumerate() {
             let at = |field: &str| format!("schemes[{i}].{field}");
@@ -240,15 +245,29 @@ impl ExperimentConfig {
                     .validate()
                     .map_err(|e| Issue::from_frontend(&at("rescale_keyframes"), e))?;
             }
-            match (&scheme.online, &scheme.regressor) {
-                (Some(_), Some(_)) => {
+            match (&scheme.online, &scheme.regressor, &scheme.odometry) {
+                (Some(_), Some(_), _) => {
                     return Err(Issue::new(
                         &at("online"),
                         "both `regressor` and `online`",
                         "either `regressor` (trained offline) or `online`, not both",
                     ));
                 }
-                (Some(online), None) => {
+                (Some(_), None, Some(_)) => {
+                    return Err(Issue::new(
+                        &at("odometry"),
+                        "`odometry` on an online scheme",
+                        "no `odometry`: an online learner's mean corrects the odometry and its variance sets the covariance",
+                    ));
+                }
+                (None, Some(_), Some(_)) => {
+                    return Err(Issue::new(
+                        &at("odometry"),
+                        "both `regressor` and `odometry`",
+                        "either `regressor` (its mean and variance) or `odometry` (naming both regressors), not both",
+                    ));
+                }
+                (Some(online), None, None) => {
                     online
                         .regressor
                         .validate()
@@ -261,14 +280,17 @@ impl ExperimentConfig {
                         ));
                     }
                 }
-                (None, _) => {
-                    scheme
-                        .regressor_index(&labels)
-                        .map_err(|(problem, expected)| {
-                            Issue::new(&at("regressor"), problem, expected)
-                        })?;
-                }
+                (None, _, _) => {}
             }
+            let mode = scheme
+                .resolve_odometry(&labels, &absolute_labels)
+                .map_err(|(field, problem, expected)| Issue::new(&at(field), problem, expected))?
+                .map(|r| r.mode)
+                .unwrap_or_default();
+            scheme
+                .selector
+                .for_odometry(&mode)
+                .map_err(|e| Issue::from_frontend(&at("selector"), e))?;
             if scheme.selector.oracle().is_some() && scheme.online.is_some() {
                 return Err(Issue::new(
                     &at("online"),

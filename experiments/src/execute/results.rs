@@ -80,6 +80,10 @@ pub struct ExperimentResults {
     pub reference_statistics: Option<(String, ResidualStatistics)>,
     /// One entry per regressor, in config order.
     pub regressors: Vec<RegressorResult>,
+    /// One entry per |residual| regressor (`absolute_regressors`), scored
+    /// against |residual| on the test rows.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absolute_regressors: Vec<RegressorResult>,
     /// Table II: every scheme on every test run.
     #[serde(default)]
     pub schemes: Vec<SchemeResult>,

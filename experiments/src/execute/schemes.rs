@@ -6,13 +6,16 @@
 
 use std::path::Path;
 
-use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::odometry_mode::OdometryMode;
+use gpodo_frontends::prediction::{AbsolutePrediction, ResidualPrediction};
 use gpodo_frontends::scheme::{
     SchemeContext, SchemeResiduals, SchemeResult, SchemeSpecRef, run_scheme,
 };
 use gpodo_frontends::traverse::Traverse;
+use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::config::schemes::ResolvedOdometry;
 use crate::config::{ExperimentConfig, SchemeSpec};
 use crate::error::PipelineError;
 use crate::execute::fit::build_regressor;
@@ -30,13 +33,21 @@ pub struct SchemeInputs<'a> {
     pub predictions: &'a [Option<Vec<Vec<ResidualPrediction>>>],
     /// The trained regressors' labels.
     pub regressor_labels: &'a [String],
+    /// Each |residual| regressor's predictions on each traverse
+    /// (`[regressor][traverse]`).
+    pub absolute_predictions: &'a [Option<Vec<Vec<ResidualPrediction>>>],
+    /// The |residual| regressors' labels.
+    pub absolute_labels: &'a [String],
     /// Visual odometry recorded with the test runs, by run name.
     pub recorded_vo: &'a std::collections::BTreeMap<String, Vec<gpodo_frontends::tum::StampedPose>>,
 }
 
 impl SchemeInputs<'_> {
     /// The residual source of `scheme` on traverse `t`: a fresh regressor
-    /// learning online, or the trained regressor's window predictions.
+    /// learning online, or the trained regressors' window predictions as
+    /// the scheme's odometry combines them (the mean of the regressor that
+    /// corrects it, or of the one whose variance sets the covariance; the
+    /// |residual| regressor's prediction beside them).
     fn residuals(&self, scheme: &SchemeSpec, t: usize) -> Result<SchemeResiduals, PipelineError> {
         if let Some(online) = &scheme.online {
             return Ok(SchemeResiduals::Online {
@@ -45,22 +56,66 @@ impl SchemeInputs<'_> {
                 mode: online.mode(),
             });
         }
-        let r = scheme
-            .regressor_index(self.regressor_labels)
-            .map_err(|(problem, expected)| {
-                PipelineError::Inconsistent(format!("{problem}; expected {expected}"))
-            })?;
-        let predictions = self.predictions[r]
-            .as_ref()
-            .and_then(|p| p.get(t))
-            .cloned()
+        let resolved = self.odometry(scheme)?;
+        let on = |all, r, list| traverse_predictions(all, r, t, list);
+        let signed_index = match (resolved.mean, resolved.absolute) {
+            (Some(r), _) => Some(r),
+            (None, false) => Some(resolved.covariance),
+            (None, true) => None,
+        };
+        let signed = signed_index
+            .map(|r| on(self.predictions, r, "regressors"))
+            .transpose()?;
+        let variance = (!resolved.absolute)
+            .then(|| on(self.predictions, resolved.covariance, "regressors"))
+            .transpose()?;
+        let absolute = resolved
+            .absolute
+            .then(|| {
+                on(
+                    self.absolute_predictions,
+                    resolved.covariance,
+                    "absolute_regressors",
+                )
+            })
+            .transpose()?;
+        let windows = self.traverses[t].windows().len();
+        let predictions = (0..windows)
+            .map(|w| {
+                let mean = signed
+                    .and_then(|p| p.get(w))
+                    .map_or(Vector3::zeros(), |p| p.mean);
+                let variance = variance
+                    .and_then(|p| p.get(w))
+                    .map_or(Vector3::zeros(), |p| p.variance);
+                let absolute = absolute.and_then(|p| p.get(w)).map(|p| AbsolutePrediction {
+                    mean: p.mean,
+                    variance: p.variance,
+                });
+                ResidualPrediction {
+                    mean,
+                    variance,
+                    absolute,
+                }
+            })
+            .collect();
+        let label = match (&scheme.odometry, signed_index) {
+            (None, Some(r)) => self.regressor_labels[r].clone(),
+            _ => scheme.back_end_residuals(self.config),
+        };
+        Ok(SchemeResiduals::Trained { label, predictions })
+    }
+
+    /// The scheme's odometry, resolved against the experiment's regressors.
+    fn odometry(&self, scheme: &SchemeSpec) -> Result<ResolvedOdometry, PipelineError> {
+        scheme
+            .resolve_odometry(self.regressor_labels, self.absolute_labels)
+            .map_err(|(field, problem, expected)| {
+                PipelineError::Inconsistent(format!("{field}: {problem}; expected {expected}"))
+            })?
             .ok_or_else(|| {
-                PipelineError::Inconsistent(format!("no predictions of regressor {r}"))
-            })?;
-        Ok(SchemeResiduals::Trained {
-            label: self.regressor_labels[r].clone(),
-            predictions,
-        })
+                PipelineError::Inconsistent("an online scheme has no trained odometry".into())
+            })
     }
 
     /// Runs `scheme` on traverse `t`; `done` holds the finished causal
@@ -90,6 +145,10 @@ impl SchemeInputs<'_> {
             selector: &scheme.selector,
             motion_prior: scheme.motion_prior,
             rescale_keyframes: scheme.rescale_keyframes.as_ref(),
+            odometry: match &scheme.online {
+                Some(_) => OdometryMode::CORRECTED,
+                None => self.odometry(scheme)?.mode,
+            },
         };
         Ok(run_scheme(
             &spec,
@@ -98,6 +157,21 @@ impl SchemeInputs<'_> {
             &ctx,
         )?)
     }
+}
+
+/// Regressor `r`'s window predictions on traverse `t` (`list` names the
+/// regressor list in the error).
+fn traverse_predictions<'p>(
+    all: &'p [Option<Vec<Vec<ResidualPrediction>>>],
+    r: usize,
+    t: usize,
+    list: &str,
+) -> Result<&'p [ResidualPrediction], PipelineError> {
+    all.get(r)
+        .and_then(Option::as_ref)
+        .and_then(|p| p.get(t))
+        .map(Vec::as_slice)
+        .ok_or_else(|| PipelineError::Inconsistent(format!("no predictions of {list}[{r}]")))
 }
 
 /// Runs every scheme on every traverse, in parallel: first the causal

@@ -57,6 +57,15 @@ pub struct SharedCounts {
 /// A reference table's statistics (`compare_with`), by table.
 type References = BTreeMap<String, Option<(String, ResidualStatistics)>>;
 
+/// A distinct fit to make: the regressor, whether on |residual| targets,
+/// its data and the folder its paths start from.
+type FitJob<'a> = (
+    &'a gpodo_regressors::RegressorSpec,
+    bool,
+    Arc<Prepared>,
+    &'a Path,
+);
+
 /// A distinct fit, or why it failed: the regressor's label and the error.
 type FitOutcome = Result<Arc<Fitted>, (String, String)>;
 
@@ -92,8 +101,21 @@ fn reference_key(config: &ExperimentConfig, base: &Path) -> String {
     format!("{}|{}", base.display(), json(&config.compare_with))
 }
 
-fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec) -> String {
-    format!("{dataset}|{}", json(spec))
+fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec, absolute: bool) -> String {
+    let targets = if absolute { "|residual|" } else { "residual" };
+    format!("{dataset}|{targets}|{}", json(spec))
+}
+
+/// The rows with every target replaced by its absolute value: what a
+/// |residual| regressor trains on and is scored against.
+fn absolute_rows(rows: &gpodo_traits::ResidualDataset) -> gpodo_traits::ResidualDataset {
+    let mut out = rows.clone();
+    for i in 0..out.targets.nrows() {
+        for v in out.targets.row_mut(i) {
+            *v = v.abs();
+        }
+    }
+    out
 }
 
 /// A rough relative cost of fitting `spec` on `n` rows, to start the
@@ -112,18 +134,31 @@ fn fit_cost(spec: &gpodo_regressors::RegressorSpec, n: usize) -> f64 {
     }
 }
 
-/// Fits one distinct regressor and predicts its windows on the traverses.
+/// Fits one distinct regressor (on |residual| targets when `absolute`) and
+/// predicts its windows on the traverses.
 fn fit_shared(
     spec: &gpodo_regressors::RegressorSpec,
+    absolute: bool,
     base: &Path,
     p: &Prepared,
     progress: Option<&MultiProgress>,
 ) -> Result<Arc<Fitted>, PipelineError> {
-    let spinner = progress.map(|m| FitSpinner::new(m, &spec.label()));
+    let label = if absolute {
+        crate::config::schemes::absolute_label(spec)
+    } else {
+        spec.label()
+    };
+    let spinner = progress.map(|m| FitSpinner::new(m, &label));
     let sink = spinner
         .as_ref()
         .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
-    let (result, model) = fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?;
+    let (mut result, model) = if absolute {
+        let (train, test) = (absolute_rows(&p.rows.train), absolute_rows(&p.rows.test));
+        fit_and_score(spec, base, &train, &test, sink)?
+    } else {
+        fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?
+    };
+    result.label = label;
     if let Some(s) = spinner {
         s.bar.finish_and_clear();
     }
@@ -186,17 +221,22 @@ impl SharedWork {
             })
             .collect::<Result<_, PipelineError>>()?;
         let prepared: BTreeMap<String, Arc<Prepared>> = prepared.into_iter().collect();
-        // Distinct fits.
-        let mut fits: BTreeMap<String, (&gpodo_regressors::RegressorSpec, Arc<Prepared>, &Path)> =
-            BTreeMap::new();
+        // Distinct fits: each regressor, and each |residual| regressor.
+        let mut fits: BTreeMap<String, FitJob<'_>> = BTreeMap::new();
         for (config, base) in runs {
             let key = dataset_key(config, base);
             let Some(p) = prepared.get(&key) else {
                 continue;
             };
-            for spec in &config.regressors {
-                fits.entry(fit_key(&key, spec))
-                    .or_insert((spec, Arc::clone(p), base));
+            let specs = (config.regressors.iter().map(|s| (s, false)))
+                .chain(config.absolute_regressors.iter().map(|s| (s, true)));
+            for (spec, absolute) in specs {
+                fits.entry(fit_key(&key, spec, absolute)).or_insert((
+                    spec,
+                    absolute,
+                    Arc::clone(p),
+                    base,
+                ));
             }
         }
         // A fit that fails fails only the runs that use it (an external
@@ -205,15 +245,15 @@ impl SharedWork {
         // a sweep on two cores can end with one long fit running alone.
         let mut fits: Vec<_> = fits
             .into_iter()
-            .map(|(key, fit)| (fit_cost(fit.0, fit.1.rows.train.len()), key, fit))
+            .map(|(key, fit)| (fit_cost(fit.0, fit.2.rows.train.len()), key, fit))
             .collect();
         fits.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let fitted: Vec<(String, FitOutcome)> = fits
             .into_iter()
             .map(|(_, key, fit)| (key, fit))
             .par_bridge()
-            .map(|(key, (spec, p, base))| {
-                let fitted = fit_shared(spec, base, &p, progress).map_err(|e| {
+            .map(|(key, (spec, absolute, p, base))| {
+                let fitted = fit_shared(spec, absolute, base, &p, progress).map_err(|e| {
                     tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
                     (spec.label(), e.to_string())
                 });
@@ -265,21 +305,29 @@ impl SharedWork {
         let missing =
             || PipelineError::Inconsistent(format!("no shared work for `{}`", config.name));
         let p = self.prepared.get(&key).ok_or_else(missing)?;
-        let fitted: Vec<&Arc<Fitted>> = config
-            .regressors
-            .iter()
-            .map(|spec| match self.fitted.get(&fit_key(&key, spec)) {
-                None => Err(missing()),
-                Some(Ok(f)) => Ok(f),
-                Some(Err((label, reason))) => Err(PipelineError::FitFailed {
-                    label: label.clone(),
-                    reason: reason.clone(),
-                }),
-            })
-            .collect::<Result<_, _>>()?;
+        let fitted_of = |specs: &[gpodo_regressors::RegressorSpec], absolute: bool| {
+            specs
+                .iter()
+                .map(
+                    |spec| match self.fitted.get(&fit_key(&key, spec, absolute)) {
+                        None => Err(missing()),
+                        Some(Ok(f)) => Ok(f),
+                        Some(Err((label, reason))) => Err(PipelineError::FitFailed {
+                            label: label.clone(),
+                            reason: reason.clone(),
+                        }),
+                    },
+                )
+                .collect::<Result<Vec<&Arc<Fitted>>, _>>()
+        };
+        let fitted = fitted_of(&config.regressors, false)?;
+        let absolute = fitted_of(&config.absolute_regressors, true)?;
         let labels = config.regressor_labels();
+        let absolute_labels = config.absolute_regressor_labels();
         let predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>> =
             fitted.iter().map(|f| f.predictions.clone()).collect();
+        let absolute_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>> =
+            absolute.iter().map(|f| f.predictions.clone()).collect();
         let schemes = if config.schemes.is_empty() {
             Vec::new()
         } else {
@@ -296,6 +344,8 @@ impl SharedWork {
                 traverses: &traverses,
                 predictions: &predictions,
                 regressor_labels: &labels,
+                absolute_predictions: &absolute_predictions,
+                absolute_labels: &absolute_labels,
                 recorded_vo: &p.data.recorded_vo,
             })?
         };
@@ -314,6 +364,7 @@ impl SharedWork {
             motion_model: data.motion_model.clone(),
             dead_reckoning: data.dead_reckoning.clone(),
             regressors: fitted.iter().map(|f| f.result.clone()).collect(),
+            absolute_regressors: absolute.iter().map(|f| f.result.clone()).collect(),
             schemes,
             duration_secs: start.elapsed().as_secs_f64(),
             train_rows: Some(data.train.clone()),

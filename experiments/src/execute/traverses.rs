@@ -85,6 +85,7 @@ pub fn window_predictions(
         .map(|i| ResidualPrediction {
             mean: Vector3::from_iterator(p.mean.row(i).iter().copied()),
             variance: Vector3::from_iterator(p.variance.row(i).iter().copied()),
+            absolute: None,
         })
         .collect())
 }

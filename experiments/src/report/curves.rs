@@ -81,7 +81,6 @@ impl Curves {
         let first = records.first()?;
         let config = &first.config;
         let labels = config.regressor_labels();
-        let prior = config.frontend.motion_prior;
         let traverse = first.metrics.schemes.first()?.traverse.clone();
         let metric = |r: &RunRecord, label: &str| {
             r.metrics
@@ -111,9 +110,10 @@ impl Curves {
             let Some(point) = series(&spec.label) else {
                 continue;
             };
-            let back_end = spec.back_end(prior, &labels);
+            let back_end = spec.back_end(config);
             let fixed = matches!(spec.selector, SelectorSpec::FixedRate { .. });
             let zero = spec.online.is_none()
+                && spec.odometry.is_none()
                 && spec.regressor_index(&labels).is_ok_and(|i| {
                     matches!(
                         config.regressors.get(i),
@@ -143,7 +143,7 @@ impl Curves {
         for c in curves.iter_mut() {
             let reference = config.schemes.iter().find(|s| {
                 matches!(s.selector, SelectorSpec::FixedRate { fps } if (fps - 2.5).abs() < 1e-9)
-                    && s.back_end(prior, &labels) == c.back_end
+                    && s.back_end(config) == c.back_end
             });
             c.reference = reference.and_then(|s| series(&s.label)).map(|p| p.rmse);
         }

@@ -77,9 +77,16 @@ impl Table {
         self.rows.is_empty()
     }
 
-    /// The Markdown table, one line per row, ending with a newline.
+    /// The Markdown table, one line per row, ending with a newline; a `|`
+    /// inside a cell is escaped.
     pub fn markdown(&self) -> String {
-        let mut s = format!("| {} |\n|", self.header.join(" | "));
+        let cells = |row: &[String]| {
+            row.iter()
+                .map(|c| c.replace('|', "\\|"))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        };
+        let mut s = format!("| {} |\n|", cells(&self.header));
         for a in &self.align {
             s.push_str(match a {
                 Align::Left => "---|",
@@ -88,7 +95,7 @@ impl Table {
         }
         s.push('\n');
         for row in &self.rows {
-            let _ = writeln!(s, "| {} |", row.join(" | "));
+            let _ = writeln!(s, "| {} |", cells(row));
         }
         s
     }
@@ -131,6 +138,14 @@ mod tests {
         );
         assert_eq!(t.csv_text(), "name,value\n\"a, b\",1\n");
         assert!(!t.is_empty());
+        // A pipe in a cell does not split it.
+        let mut t = Table::new(&["regressor"]);
+        t.push(vec!["|residual| GP".into()]);
+        assert!(
+            t.markdown().ends_with("| \\|residual\\| GP |\n"),
+            "{}",
+            t.markdown()
+        );
         assert!(Table::new(&["x"]).is_empty());
     }
 }

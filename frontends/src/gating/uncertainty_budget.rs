@@ -5,10 +5,14 @@
 //! the rover looks rarely; where they slip, or where an online model is
 //! still uncertain, it looks often.
 //!
-//! With `count_mean: false` only the variance counts: the drift left once
-//! the odometry is corrected by the predicted mean, as the front end does.
-//! A model that has learned a large but steady residual then stops asking
-//! for frames, and only what it does not know costs frames.
+//! The drift counted is that of the odometry the pose graph uses, so it
+//! follows the scheme's odometry mode ([`crate::odometry_mode`]): where the
+//! predicted mean corrects the wheels, only the variance left counts (a
+//! model that has learned a large but steady residual stops asking for
+//! frames, and only what it does not know costs frames); where nothing is
+//! corrected (the authors' odometry), the mean² counts too. `count_mean`
+//! may state it; a value that contradicts the mode is an error
+//! ([`crate::SelectorSpec::for_odometry`]).
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 use serde::{Deserialize, Serialize};
@@ -25,9 +29,12 @@ pub struct UncertaintyBudgetParams {
     pub budget_m2: f64,
     /// Shortest period between processed frames (s; default 0.4).
     pub min_period_secs: f64,
-    /// Count the predicted mean² in the drift (default true); false counts
-    /// the variance alone.
-    pub count_mean: bool,
+    /// Count the predicted mean² in the drift (the uncorrected odometry's
+    /// error) or the variance alone (the corrected odometry's). Default
+    /// null: as the scheme's odometry mode says (false when the mean
+    /// corrects the odometry, true when it does not); a policy built
+    /// outside a scheme counts the variance alone.
+    pub count_mean: Option<bool>,
 }
 
 impl Default for UncertaintyBudgetParams {
@@ -35,7 +42,7 @@ impl Default for UncertaintyBudgetParams {
         Self {
             budget_m2: 2.5e-5,
             min_period_secs: 0.4,
-            count_mean: true,
+            count_mean: None,
         }
     }
 }
@@ -92,7 +99,7 @@ impl FrameSelector for UncertaintyBudget {
         if since_processed(ctx) + TIME_TOLERANCE_SECS < self.params.min_period_secs {
             return FrameDecision::Skip;
         }
-        let drift = if self.params.count_mean {
+        let drift = if self.params.count_mean.unwrap_or(false) {
             ctx.drift_since_processed
         } else {
             ctx.drift_variance_since_processed
@@ -119,7 +126,7 @@ mod tests {
         let mut s = UncertaintyBudget::new(UncertaintyBudgetParams {
             budget_m2: 1e-4,
             min_period_secs: 0.0,
-            count_mean: true,
+            count_mean: Some(true),
         })
         .unwrap();
         let times = run(&mut s, 10.0, |_| 0.01);
@@ -131,7 +138,11 @@ mod tests {
 
     #[test]
     fn no_drift_processes_only_the_first_frame_and_the_floor_holds() {
-        let mut s = UncertaintyBudget::new(UncertaintyBudgetParams::default()).unwrap();
+        let mut s = UncertaintyBudget::new(UncertaintyBudgetParams {
+            count_mean: Some(true),
+            ..Default::default()
+        })
+        .unwrap();
         assert_eq!(run(&mut s, 30.0, |_| 0.0), vec![0.0]);
         let times = run(&mut s, 10.0, |_| 1.0);
         assert_eq!(times.len(), 25, "min period 0.4 s: {times:?}");
@@ -142,7 +153,7 @@ mod tests {
         let mut s = UncertaintyBudget::new(UncertaintyBudgetParams {
             budget_m2: 1e-4,
             min_period_secs: 0.0,
-            count_mean: false,
+            count_mean: Some(false),
         })
         .unwrap();
         let ctx = |drift, variance_drift| FrameContext {
