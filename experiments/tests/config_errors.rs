@@ -467,3 +467,53 @@ fn every_shipped_experiment_file_loads() {
     }
     assert!(loaded >= 15, "{loaded} files");
 }
+
+/// `one_at_a_time`: the base, then each value of each parameter alone (its
+/// paths set together), every other value as in the base; beside `sweep`
+/// it is an error.
+#[test]
+fn one_parameter_at_a_time_runs_the_base_then_each_value_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("oat.yaml");
+    let text = format!(
+        "{GOOD}seeds: [1, 2]\none_at_a_time:\n  noise:\n    regressors[1].noise_variance: [0.1, 0.2]\n  kernel:\n    regressors[1].kernel: [matern52]\n    regressors[1].optimize: [false]\n"
+    );
+    std::fs::write(&path, &text).unwrap();
+    let plan = load_plan(&path).unwrap();
+    let keys: Vec<&str> = plan.runs.iter().map(|r| r.key.as_str()).collect();
+    assert_eq!(
+        keys,
+        [
+            "seed=1",
+            "seed=2",
+            "kernel=matern52 & false, seed=1",
+            "kernel=matern52 & false, seed=2",
+            "noise=0.1, seed=1",
+            "noise=0.1, seed=2",
+            "noise=0.2, seed=1",
+            "noise=0.2, seed=2",
+        ]
+    );
+    let gp = |i: usize| serde_json::to_value(&plan.runs[i].config.regressors[1]).unwrap();
+    assert_eq!(gp(0)["kernel"], "rbf");
+    assert_eq!(gp(2)["kernel"], "matern52");
+    assert_eq!(gp(2)["optimize"], false);
+    assert_eq!(gp(2)["noise_variance"], gp(0)["noise_variance"]);
+    assert_eq!(gp(4)["noise_variance"], 0.1);
+    assert_eq!(gp(4)["kernel"], "rbf");
+    // The same seed, the same data in every setting.
+    assert_eq!(plan.runs[0].seed, plan.runs[6].seed);
+    let e = error_of(
+        dir.path(),
+        "both.yaml",
+        &format!("{text}sweep:\n  regressors[1].kernel: [rbf]\n"),
+    );
+    check(
+        &e,
+        "`one_at_a_time` beside `sweep` or `zip`",
+        "both.yaml",
+        8,
+        1,
+        "either",
+    );
+}

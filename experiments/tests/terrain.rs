@@ -51,7 +51,7 @@ fn tracker_on(soil: Soil, seed: u64) -> (SimulatedVo, Traverse) {
         ..SimulatedVoParams::default()
     };
     let traverse = straight_drive();
-    let supply = feature_supply(&soils, &params.camera, &traverse);
+    let supply = feature_supply(&soils, &params.camera, 1.0, &traverse);
     let traverse = traverse.with_feature_supply(supply).unwrap();
     (SimulatedVo::new(params, &traverse).unwrap(), traverse)
 }
@@ -157,10 +157,13 @@ fn the_footprint_reads_the_soil_ahead_not_under_the_wheels() {
     )
     .unwrap();
     let camera = CameraParams::default();
-    let texture = |yaw: f64| {
+    let texture_with = |yaw: f64, contrast: f64| {
         let on_sand = Isometry3::new(Vector3::new(4.2, 4.5, 0.0), Vector3::z() * yaw);
-        gpodo_experiments::execute::feature_supply::footprint_texture(&soils, &camera, &on_sand)
+        gpodo_experiments::execute::feature_supply::footprint_texture(
+            &soils, &camera, contrast, &on_sand,
+        )
     };
+    let texture = |yaw: f64| texture_with(yaw, 1.0);
     // Standing on sand 0.3 m from the border: the footprint, 1.2–3.2 m ahead
     // of the body (`CameraParams::footprint_body`), lies on gravel when
     // the rover faces east, on sand when it faces west.
@@ -172,4 +175,9 @@ fn the_footprint_reads_the_soil_ahead_not_under_the_wheels() {
     let across = texture(std::f64::consts::FRAC_PI_2);
     let expected = (6.0 * Soil::loose_sand().texture + 3.0 * Soil::gravel().texture) / 9.0;
     assert!((across - expected).abs() < 1e-12, "{across} vs {expected}");
+    // The contrast exponent: 0 makes every soil alike, 2 squares each.
+    assert_eq!(texture_with(std::f64::consts::FRAC_PI_2, 0.0), 1.0);
+    let squared = (6.0 * 0.25f64.powi(2) + 3.0 * 1.2f64.powi(2)) / 9.0;
+    let got = texture_with(std::f64::consts::FRAC_PI_2, 2.0);
+    assert!((got - squared).abs() < 1e-12, "{got} vs {squared}");
 }

@@ -16,10 +16,12 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 pub const RATE_HALF_WINDOW_SECS: f64 = 0.25;
 
 /// The mean texture of the soils under the footprint of a camera on a body
-/// at `world_from_body`.
+/// at `world_from_body`, each soil's texture raised to `contrast`
+/// (`SimulatedVoParams::texture_contrast`; 1 keeps the soils' values).
 pub fn footprint_texture(
     soils: &SoilMap,
     camera: &CameraParams,
+    contrast: f64,
     world_from_body: &Isometry3<f64>,
 ) -> f64 {
     let points = camera.footprint_body();
@@ -27,7 +29,7 @@ pub fn footprint_texture(
         .iter()
         .map(|p| {
             let w = world_from_body * nalgebra::Point3::from(*p);
-            soils.soil_at(w.x, w.y).texture
+            soils.soil_at(w.x, w.y).texture.powf(contrast)
         })
         .sum();
     sum / points.len() as f64
@@ -48,13 +50,19 @@ fn body_rate(traverse: &Traverse, t: f64) -> Isometry3<f64> {
     )
 }
 
-/// The feature supply of every camera frame of `traverse`.
-pub fn feature_supply(soils: &SoilMap, camera: &CameraParams, traverse: &Traverse) -> Vec<f64> {
+/// The feature supply of every camera frame of `traverse`, the soils'
+/// textures raised to `contrast`.
+pub fn feature_supply(
+    soils: &SoilMap,
+    camera: &CameraParams,
+    contrast: f64,
+    traverse: &Traverse,
+) -> Vec<f64> {
     traverse
         .camera_times_secs()
         .iter()
         .map(|&t| {
-            let texture = footprint_texture(soils, camera, &traverse.ground_truth_at(t));
+            let texture = footprint_texture(soils, camera, contrast, &traverse.ground_truth_at(t));
             let blur = camera.motion_blur_px(&body_rate(traverse, t));
             texture * camera.blur_factor(blur)
         })

@@ -423,7 +423,7 @@ fn with_feature_supply<'a>(
         .traverses
         .iter()
         .map(|t| {
-            let supply = feature_supply(soils, &vo.camera, t);
+            let supply = feature_supply(soils, &vo.camera, vo.texture_contrast, t);
             t.clone().with_feature_supply(supply)
         })
         .collect::<Result<Vec<_>, _>>()?;

@@ -15,14 +15,14 @@ use crate::plan::{Controls, Dimension, Located, RunSpec};
 
 /// Keys of an experiment file that steer the sweep rather than describe an
 /// experiment.
-const CONTROL_KEYS: [&str; 5] = ["seed", "seeds", "sweep", "zip", "outputs"];
+const CONTROL_KEYS: [&str; 6] = ["seed", "seeds", "sweep", "zip", "one_at_a_time", "outputs"];
 
 /// Where each swept value is written in the file: (path, value index) →
 /// the value's own path (`sweep.regressors[1].kernel[2]`).
 pub(crate) type ValueSources = HashMap<(String, usize), String>;
 
-/// Takes the sweep controls (`seed`, `seeds`, `sweep`, `zip`, `outputs`)
-/// out of `tree`, leaving the experiment.
+/// Takes the sweep controls (`seed`, `seeds`, `sweep`, `zip`,
+/// `one_at_a_time`, `outputs`) out of `tree`, leaving the experiment.
 ///
 /// # Errors
 /// [`ConfigError::Located`] for a malformed control.
@@ -91,39 +91,110 @@ pub(crate) fn dimensions(
         }
     }
     for (g, group) in controls.zip.iter().flatten().enumerate() {
-        let at = format!("zip[{g}]");
-        let lengths: Vec<usize> = group.values().map(Vec::len).collect();
-        if group.is_empty() || lengths.contains(&0) {
-            return Err(located.error(
-                &at,
-                "an empty zip group".into(),
-                "paths with non-empty lists of values".into(),
-                false,
-            ));
-        }
-        if lengths.iter().any(|&l| l != lengths[0]) {
-            return Err(located.error(
-                &at,
-                format!("lists of different lengths {lengths:?}"),
-                "lists of one length (they are paired element by element)".into(),
-                false,
-            ));
-        }
-        for path in group.keys() {
-            paths::parse_path(path).map_err(|e| bad_path(&format!("{at}.{path}"), e))?;
-            for i in 0..lengths[0] {
-                value_sources.insert((path.clone(), i), format!("{at}.{path}[{i}]"));
-            }
-        }
-        dimensions.push(Dimension {
-            name: group.keys().cloned().collect::<Vec<_>>().join(" & "),
-            paths: group.keys().cloned().collect(),
-            values: (0..lengths[0])
-                .map(|i| group.values().map(|list| list[i].clone()).collect())
-                .collect(),
-        });
+        let name = group.keys().cloned().collect::<Vec<_>>().join(" & ");
+        dimensions.push(group_dimension(
+            name,
+            &format!("zip[{g}]"),
+            group,
+            &mut value_sources,
+            located,
+        )?);
     }
     Ok((dimensions, value_sources))
+}
+
+/// The parameters of `one_at_a_time:`, each a dimension named by its
+/// parameter (its paths varied together, element by element), and where
+/// each of their values is written.
+///
+/// # Errors
+/// [`ConfigError::Located`] for an empty parameter, lists of unequal
+/// length, a malformed path, or `one_at_a_time` beside `sweep` or `zip`.
+pub(crate) fn one_at_a_time(
+    controls: &Controls,
+    value_sources: &mut ValueSources,
+    located: &Located<'_>,
+) -> Result<Vec<Dimension>, ConfigError> {
+    let Some(parameters) = &controls.one_at_a_time else {
+        return Ok(Vec::new());
+    };
+    if controls.sweep.is_some() || controls.zip.is_some() {
+        return Err(located.error(
+            "one_at_a_time",
+            "`one_at_a_time` beside `sweep` or `zip`".into(),
+            "either a product of dimensions (`sweep`, `zip`) or one parameter at a time around the base"
+                .into(),
+            true,
+        ));
+    }
+    if parameters.is_empty() {
+        return Err(located.error(
+            "one_at_a_time",
+            "no parameter".into(),
+            "at least one `name: {path: [values]}`".into(),
+            false,
+        ));
+    }
+    parameters
+        .iter()
+        .map(|(name, group)| {
+            group_dimension(
+                name.clone(),
+                &format!("one_at_a_time.{name}"),
+                group,
+                value_sources,
+                located,
+            )
+        })
+        .collect()
+}
+
+/// A dimension of paths varied together, element by element (a `zip`
+/// group or a `one_at_a_time` parameter written at `at`).
+fn group_dimension(
+    name: String,
+    at: &str,
+    group: &BTreeMap<String, Vec<Value>>,
+    value_sources: &mut ValueSources,
+    located: &Located<'_>,
+) -> Result<Dimension, ConfigError> {
+    let lengths: Vec<usize> = group.values().map(Vec::len).collect();
+    if group.is_empty() || lengths.contains(&0) {
+        return Err(located.error(
+            at,
+            "an empty group".into(),
+            "paths with non-empty lists of values".into(),
+            false,
+        ));
+    }
+    if lengths.iter().any(|&l| l != lengths[0]) {
+        return Err(located.error(
+            at,
+            format!("lists of different lengths {lengths:?}"),
+            "lists of one length (they are paired element by element)".into(),
+            false,
+        ));
+    }
+    for path in group.keys() {
+        paths::parse_path(path).map_err(|e| {
+            located.error(
+                &format!("{at}.{path}"),
+                e,
+                "a path such as `regressors[1].kernel`".into(),
+                true,
+            )
+        })?;
+        for i in 0..lengths[0] {
+            value_sources.insert((path.clone(), i), format!("{at}.{path}[{i}]"));
+        }
+    }
+    Ok(Dimension {
+        name,
+        paths: group.keys().cloned().collect(),
+        values: (0..lengths[0])
+            .map(|i| group.values().map(|list| list[i].clone()).collect())
+            .collect(),
+    })
 }
 
 /// The Cartesian product of the dimensions' value indices, first dimension

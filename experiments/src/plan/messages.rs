@@ -51,6 +51,7 @@ fn value_at<'a>(root: &'a Value, path: &str) -> Option<&'a Value> {
         node = match segment {
             paths::Segment::Key(k) => node.get(&k)?,
             paths::Segment::Index(i) => node.get(i)?,
+            paths::Segment::All => node.get(0)?,
         };
     }
     Some(node)

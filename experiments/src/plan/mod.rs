@@ -16,6 +16,15 @@
 //! seeds: [1, 2, 3]                 # every combination, three times
 //! ```
 //!
+//! Or, instead of `sweep` and `zip`, one parameter at a time around the
+//! base (a sensitivity analysis): the base runs, then each value of each
+//! named parameter with everything else as in the base.
+//!
+//! ```yaml
+//! one_at_a_time:
+//!   map_error_share: { frontend.vo.map_error_share: [0.0, 1.0] }
+//! ```
+//!
 //! A run's key names its values (`regressors[1].kernel=rbf, seed=2`); its
 //! seed is derived from the sweep's `seed` and the key's seed, so a run's
 //! numbers do not depend on which other runs exist or in what order they
@@ -81,6 +90,8 @@ pub(crate) struct Controls {
     pub(crate) sweep: Option<BTreeMap<String, Vec<Value>>>,
     #[serde(default)]
     pub(crate) zip: Option<Vec<BTreeMap<String, Vec<Value>>>>,
+    #[serde(default)]
+    pub(crate) one_at_a_time: Option<BTreeMap<String, BTreeMap<String, Vec<Value>>>>,
     #[serde(default)]
     pub(crate) outputs: Outputs,
 }
@@ -190,7 +201,8 @@ pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
     let mut tree = read_tree(file, 0, &mut provenance)?;
     let located = Located { file, provenance };
     let controls = expand::split_controls(&mut tree, &located)?;
-    let (dimensions, value_sources) = expand::dimensions(&controls, &located)?;
+    let (mut dimensions, mut value_sources) = expand::dimensions(&controls, &located)?;
+    let one_at_a_time = expand::one_at_a_time(&controls, &mut value_sources, &located)?;
     let replicates = controls.seeds.clone().unwrap_or_default();
     if controls.seeds.as_ref().is_some_and(Vec::is_empty) {
         return Err(located.error(
@@ -205,13 +217,29 @@ pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
     } else {
         replicates.iter().copied().map(Some).collect()
     };
-    let combinations = expand::combinations(&dimensions);
-    let mut runs = Vec::with_capacity(combinations.len() * seeds.len());
-    for combination in &combinations {
+    // Each setting: the dimensions it sets and its value index in each.
+    let settings: Vec<(Vec<Dimension>, Vec<usize>)> = if one_at_a_time.is_empty() {
+        expand::combinations(&dimensions)
+            .into_iter()
+            .map(|c| (dimensions.clone(), c))
+            .collect()
+    } else {
+        // The base, then each parameter's values alone.
+        std::iter::once((Vec::new(), Vec::new()))
+            .chain(
+                one_at_a_time
+                    .iter()
+                    .flat_map(|d| (0..d.values.len()).map(move |i| (vec![d.clone()], vec![i]))),
+            )
+            .collect()
+    };
+    dimensions.extend(one_at_a_time);
+    let mut runs = Vec::with_capacity(settings.len() * seeds.len());
+    for (setting_dimensions, combination) in &settings {
         for &replicate in &seeds {
             let run = expand::expand_run(
                 &tree,
-                &dimensions,
+                setting_dimensions,
                 combination,
                 replicate.map(|r| (r, run_seed(controls.seed, r))),
                 &value_sources,

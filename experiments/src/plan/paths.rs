@@ -1,6 +1,7 @@
 //! Paths into a configuration tree, as sweeps name the values they vary:
 //! `regressors[1].kernel`, `frontend.vo.seed`, `schemes[3].selector`.
-//! Keys are field names; `[i]` indexes a list.
+//! Keys are field names; `[i]` indexes a list, `[*]` is every element of
+//! it (`schemes[*].motion_prior` sets every scheme's).
 
 use serde_json::Value;
 
@@ -11,6 +12,8 @@ pub enum Segment {
     Key(String),
     /// A list index.
     Index(usize),
+    /// Every element of a list.
+    All,
 }
 
 /// Parses `a.b[2].c`.
@@ -41,10 +44,15 @@ pub fn parse_path(path: &str) -> Result<Vec<Segment>, String> {
             let close = rest
                 .find(']')
                 .ok_or_else(|| format!("path `{path}`: `[` without `]`"))?;
-            let index: usize = rest[1..close]
-                .parse()
-                .map_err(|_| format!("path `{path}`: `{}` is not a list index", &rest[1..close]))?;
-            out.push(Segment::Index(index));
+            let inside = &rest[1..close];
+            if inside == "*" {
+                out.push(Segment::All);
+            } else {
+                let index: usize = inside
+                    .parse()
+                    .map_err(|_| format!("path `{path}`: `{inside}` is not a list index or `*`"))?;
+                out.push(Segment::Index(index));
+            }
             rest = &rest[close + 1..];
             if !rest.is_empty() && !rest.starts_with('[') {
                 return Err(format!("path `{path}`: expected `.` or `[` after `]`"));
@@ -62,46 +70,57 @@ pub fn parse_path(path: &str) -> Result<Vec<Segment>, String> {
 /// list.
 pub fn set_path(root: &mut Value, path: &str, value: Value) -> Result<(), String> {
     let segments = parse_path(path)?;
-    let mut node = root;
-    for (i, segment) in segments.iter().enumerate() {
-        let last = i + 1 == segments.len();
-        node = match segment {
-            Segment::Key(k) => {
-                if node.is_null() {
-                    *node = Value::Object(Default::default());
-                }
-                let Value::Object(map) = node else {
-                    return Err(format!(
-                        "path `{path}`: `{k}` is a field of a mapping, but the value there is not one"
-                    ));
-                };
-                if last {
-                    map.insert(k.clone(), value);
-                    return Ok(());
-                }
-                map.entry(k.clone()).or_insert(Value::Null)
-            }
-            Segment::Index(idx) => {
-                let Value::Array(list) = node else {
-                    return Err(format!(
-                        "path `{path}`: [{idx}] indexes a list, but the value there is not one"
-                    ));
-                };
-                let len = list.len();
-                let Some(item) = list.get_mut(*idx) else {
-                    return Err(format!(
-                        "path `{path}`: index {idx} is out of range (the list has {len} entries)"
-                    ));
-                };
-                if last {
-                    *item = value;
-                    return Ok(());
-                }
-                item
-            }
-        };
+    if segments.is_empty() {
+        return Err(format!("path `{path}`: empty path"));
     }
-    Err(format!("path `{path}`: empty path"))
+    set_at(root, &segments, &value, path)
+}
+
+/// Sets `value` at `segments` below `node` (`path` for messages).
+fn set_at(node: &mut Value, segments: &[Segment], value: &Value, path: &str) -> Result<(), String> {
+    let Some((segment, rest)) = segments.split_first() else {
+        *node = value.clone();
+        return Ok(());
+    };
+    match segment {
+        Segment::Key(k) => {
+            if node.is_null() {
+                *node = Value::Object(Default::default());
+            }
+            let Value::Object(map) = node else {
+                return Err(format!(
+                    "path `{path}`: `{k}` is a field of a mapping, but the value there is not one"
+                ));
+            };
+            set_at(
+                map.entry(k.clone()).or_insert(Value::Null),
+                rest,
+                value,
+                path,
+            )
+        }
+        Segment::Index(idx) => {
+            let Value::Array(list) = node else {
+                return Err(format!(
+                    "path `{path}`: [{idx}] indexes a list, but the value there is not one"
+                ));
+            };
+            let len = list.len();
+            let item = list.get_mut(*idx).ok_or_else(|| {
+                format!("path `{path}`: index {idx} is out of range (the list has {len} entries)")
+            })?;
+            set_at(item, rest, value, path)
+        }
+        Segment::All => {
+            let Value::Array(list) = node else {
+                return Err(format!(
+                    "path `{path}`: [*] takes every element of a list, but the value there is not one"
+                ));
+            };
+            list.iter_mut()
+                .try_for_each(|item| set_at(item, rest, value, path))
+        }
+    }
 }
 
 /// Overlays `top` on `base`: mappings are merged key by key (recursively),
@@ -159,6 +178,19 @@ mod tests {
         );
         let err = set_path(&mut v, "regressors[0].kind.x", json!(1)).unwrap_err();
         assert!(err.contains("not one"), "{err}");
+        // `[*]`: every element.
+        set_path(&mut v, "regressors[*].outputs", json!("shared")).unwrap();
+        assert_eq!(v["regressors"][0]["outputs"], json!("shared"));
+        assert_eq!(v["regressors"][1]["outputs"], json!("shared"));
+        assert_eq!(v["regressors"][1]["kernel"], json!("matern52"));
+        assert_eq!(
+            parse_path("schemes[*].odometry").unwrap(),
+            vec![
+                Segment::Key("schemes".into()),
+                Segment::All,
+                Segment::Key("odometry".into())
+            ]
+        );
     }
 
     #[test]

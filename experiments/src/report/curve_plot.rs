@@ -15,7 +15,7 @@ fn io(e: impl std::fmt::Display) -> std::io::Error {
 }
 
 /// A colour per curve (cycled).
-fn colour(i: usize) -> RGBColor {
+pub fn colour(i: usize) -> RGBColor {
     const PALETTE: [RGBColor; 10] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),

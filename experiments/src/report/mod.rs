@@ -16,6 +16,8 @@ pub mod files;
 pub mod hindsight;
 pub mod plots;
 pub mod run;
+pub mod sensitivity;
+pub mod sensitivity_plot;
 pub mod sweep;
 pub mod table;
 

@@ -15,6 +15,8 @@ use crate::output::write_atomically;
 use crate::plan::PlanFile;
 use crate::report::aggregate::{ablations, table_one, table_two, tradeoff_svg};
 use crate::report::curves_section::curves_section;
+use crate::report::sensitivity::sensitivity_section;
+use crate::report::sensitivity_plot::sensitivity_svg;
 use crate::report::table::Table;
 
 pub use crate::report::aggregate::Stat;
@@ -294,6 +296,21 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
         }
     }
     let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
+    if let Some((markdown, table, effects)) = sensitivity_section(records, bootstrap_seed) {
+        s.push_str(&markdown);
+        write_table("sensitivity.csv", &table)?;
+        match sensitivity_svg(&effects) {
+            Ok(svg) => {
+                let plots = dir.join("plots");
+                std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
+                let path = plots.join("sensitivity.svg");
+                write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
+            }
+            Err(e) => {
+                let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");
+            }
+        }
+    }
     if let Some(section) = curves_section(records, bootstrap_seed) {
         s.push_str(&section.markdown);
         for (file, table) in &section.tables {

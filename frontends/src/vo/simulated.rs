@@ -108,6 +108,12 @@ pub struct SimulatedVoParams {
     /// thresholds below, and scales the error by `1/√supply` (default
     /// true).
     pub terrain_features: bool,
+    /// Exponent `c` on every soil's texture in the feature supply,
+    /// `texture^c` (default 1: the soils' own values; 0: every soil alike;
+    /// 2: the contrast squared, e.g. sand 0.25 → 0.0625, gravel 1.2 →
+    /// 1.44). A parameter of the sensitivity sweep: no per-soil feature
+    /// counts were found.
+    pub texture_contrast: f64,
     /// Features F a match finds at full overlap on the reference texture
     /// (compact soil, no blur; default 300).
     pub features_per_frame: f64,
@@ -157,6 +163,7 @@ impl Default for SimulatedVoParams {
             error_model: TrackerErrorModel::Shared,
             map_error_share: 0.5,
             terrain_features: true,
+            texture_contrast: 1.0,
             features_per_frame: 300.0,
             min_tracked_features: 30,
             min_relocalisation_features: 50,
@@ -210,6 +217,9 @@ impl SimulatedVoParams {
             if !(v.is_finite() && v > 0.0) {
                 return bad(field, "a positive number");
             }
+        }
+        if !(self.texture_contrast.is_finite() && self.texture_contrast >= 0.0) {
+            return bad("texture_contrast", "a non-negative exponent");
         }
         self.error_model().validate()?;
         if self.max_candidates == 0 {
