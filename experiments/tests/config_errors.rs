@@ -476,7 +476,7 @@ fn one_parameter_at_a_time_runs_the_base_then_each_value_alone() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("oat.yaml");
     let text = format!(
-        "{GOOD}seeds: [1, 2]\none_at_a_time:\n  noise:\n    regressors[1].noise_variance: [0.1, 0.2]\n  kernel:\n    regressors[1].kernel: [matern52]\n    regressors[1].optimize: [false]\n"
+        "{GOOD}seeds: [1, 2]\none_at_a_time:\n  noise:\n    regressors[1].noise_variance: [0.1, 0.2]\n  kernel:\n    label: [fixed matern]\n    regressors[1].kernel: [matern52]\n    regressors[1].optimize: [false]\n"
     );
     std::fs::write(&path, &text).unwrap();
     let plan = load_plan(&path).unwrap();
@@ -486,8 +486,8 @@ fn one_parameter_at_a_time_runs_the_base_then_each_value_alone() {
         [
             "seed=1",
             "seed=2",
-            "kernel=matern52 & false, seed=1",
-            "kernel=matern52 & false, seed=2",
+            "kernel=fixed matern, seed=1",
+            "kernel=fixed matern, seed=2",
             "noise=0.1, seed=1",
             "noise=0.1, seed=2",
             "noise=0.2, seed=1",

@@ -87,6 +87,7 @@ pub(crate) fn dimensions(
                 name: path.clone(),
                 paths: vec![path.clone()],
                 values: values.iter().map(|v| vec![v.clone()]).collect(),
+                labels: None,
             });
         }
     }
@@ -138,13 +139,33 @@ pub(crate) fn one_at_a_time(
     parameters
         .iter()
         .map(|(name, group)| {
-            group_dimension(
-                name.clone(),
-                &format!("one_at_a_time.{name}"),
-                group,
-                value_sources,
-                located,
-            )
+            let at = format!("one_at_a_time.{name}");
+            let mut paths = group.clone();
+            let labels = paths.remove("label");
+            let mut dimension = group_dimension(name.clone(), &at, &paths, value_sources, located)?;
+            if let Some(labels) = labels {
+                let names: Option<Vec<String>> = labels
+                    .iter()
+                    .map(|v| v.as_str().map(str::to_string))
+                    .collect();
+                match names {
+                    Some(names) if names.len() == dimension.values.len() => {
+                        dimension.labels = Some(names);
+                    }
+                    _ => {
+                        return Err(located.error(
+                            &format!("{at}.label"),
+                            "labels that do not name the settings".into(),
+                            format!(
+                                "a list of {} strings, one per value",
+                                dimension.values.len()
+                            ),
+                            false,
+                        ));
+                    }
+                }
+            }
+            Ok(dimension)
         })
         .collect()
 }
@@ -194,6 +215,7 @@ fn group_dimension(
         values: (0..lengths[0])
             .map(|i| group.values().map(|list| list[i].clone()).collect())
             .collect(),
+        labels: None,
     })
 }
 
@@ -260,9 +282,12 @@ pub(crate) fn expand_run(
             })?;
             set_by.push((path.clone(), source));
         }
-        let shown: Vec<String> = d.values[i].iter().map(show).collect();
-        assignment.insert(d.name.clone(), shown.join(" & "));
-        key_parts.push(format!("{}={}", d.name, shown.join(" & ")));
+        let shown = match d.labels.as_ref().and_then(|l| l.get(i)) {
+            Some(label) => label.clone(),
+            None => d.values[i].iter().map(show).collect::<Vec<_>>().join(" & "),
+        };
+        key_parts.push(format!("{}={shown}", d.name));
+        assignment.insert(d.name.clone(), shown);
     }
     if let Some((replicate, _)) = seed {
         key_parts.push(format!("seed={replicate}"));

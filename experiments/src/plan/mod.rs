@@ -23,6 +23,10 @@
 //! ```yaml
 //! one_at_a_time:
 //!   map_error_share: { frontend.vo.map_error_share: [0.0, 1.0] }
+//!   camera:                          # paths set together; `label` names
+//!     label: [bumblebee2]            # the settings in keys and reports
+//!     frontend.vo.camera.focal_px: [838.0]
+//!     frontend.vo.search_radius_px: [7.0]
 //! ```
 //!
 //! A run's key names its values (`regressors[1].kernel=rbf, seed=2`); its
@@ -106,6 +110,10 @@ pub struct Dimension {
     pub paths: Vec<String>,
     /// Its values: one list per setting, one value per path.
     pub values: Vec<Vec<Value>>,
+    /// A name per setting for keys and reports (a `one_at_a_time`
+    /// parameter's `label:` list); `None`, the values themselves.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub labels: Option<Vec<String>>,
 }
 
 /// One concrete run of a sweep.

@@ -423,23 +423,57 @@ pub(crate) fn ablations(records: &[RunRecord], plan: Option<&PlanFile>) -> Vec<(
     out
 }
 
-/// The frames-versus-RMSE figure of Table II's rows.
+/// A scheme's policy family, as the trade-off figure colours it.
+fn family(selector: &gpodo_frontends::SelectorSpec) -> String {
+    use gpodo_frontends::SelectorSpec as S;
+    match selector {
+        S::FixedRate { .. } => "fixed rate".into(),
+        S::ResidualSchedule(_) => "authors' schedule".into(),
+        S::UncertaintyBudget(_) => "drift budget".into(),
+        S::MaxGap { inner, .. } => family(inner),
+        S::Hysteresis { .. } => "hysteresis".into(),
+        S::Oracle(p) if p.search.is_some() => "hindsight search".into(),
+        S::Oracle(_) => "surrogate planner".into(),
+        S::FrontLoaded(_) => "front-loaded".into(),
+    }
+}
+
+/// The frames-versus-RMSE figure of Table II's rows, for a sweep of one
+/// setting (its seeds pooled); `None` for several settings, whose
+/// figures are the curves per setting.
 pub(crate) fn tradeoff_svg(records: &[RunRecord]) -> Option<String> {
-    let table = table_two(records)?;
-    let points: Vec<(String, f64, f64, f64)> = table
-        .csv_rows()
-        .iter()
-        .filter_map(|row| {
-            let frames: f64 = row.get(4)?.parse().ok()?;
-            let rmse: f64 = row.get(7)?.parse().ok()?;
-            let std: f64 = row.get(8)?.parse().unwrap_or(0.0);
-            let label = if row[0] == "–" {
-                row[1].clone()
-            } else {
-                format!("{} [{}]", row[1], row[0])
-            };
-            Some((label, frames, rmse, std))
-        })
-        .collect();
-    crate::report::plots::tradeoff_svg(&points).ok()
+    let groups = crate::report::curves::by_setting(records);
+    let [(_, runs)] = groups.as_slice() else {
+        return None;
+    };
+    let config = &runs.first()?.config;
+    let mut points = Vec::new();
+    for spec in &config.schemes {
+        let values: Vec<(f64, f64)> = runs
+            .iter()
+            .flat_map(|r| {
+                r.metrics
+                    .schemes
+                    .iter()
+                    .filter(|m| m.label == spec.label)
+                    .map(|m| (m.frames as f64, m.rmse_m))
+            })
+            .collect();
+        if values.is_empty() {
+            continue;
+        }
+        let n = values.len() as f64;
+        let frames = values.iter().map(|v| v.0).sum::<f64>() / n;
+        let rmse = values.iter().map(|v| v.1).sum::<f64>() / n;
+        let var = values.iter().map(|v| (v.1 - rmse).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        points.push(crate::report::tradeoff_plot::TradeoffPoint {
+            family: family(&spec.selector),
+            back_end: spec.back_end(config),
+            fixed_rate: matches!(spec.selector, gpodo_frontends::SelectorSpec::FixedRate { .. }),
+            frames,
+            rmse,
+            std: var.sqrt(),
+        });
+    }
+    crate::report::tradeoff_plot::tradeoff_svg(&points).ok()
 }

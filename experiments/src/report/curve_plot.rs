@@ -1,7 +1,8 @@
 //! The frames-versus-error figure of a sweep: every curve's mean RMSE with
 //! its 95 % bootstrap band, against mean frames processed (left) and mean
-//! compute (right), both on log axes, in one SVG; the RMSE axis stops at
-//! three times the median point (the tables give the collapsed points).
+//! compute (right), in one SVG, every axis logarithmic; the RMSE axis
+//! stops at three times the median point (the tables give the collapsed
+//! points).
 
 use plotters::prelude::*;
 
@@ -31,6 +32,16 @@ pub fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
+/// The marker of curve `i` at pixel offset `at`: a circle, a triangle
+/// or a cross, so that curves sharing a colour (past ten) still differ.
+fn marker<DB: DrawingBackend>(i: usize, at: (i32, i32), c: RGBColor) -> DynElement<'static, DB, (i32, i32)> {
+    match (i / 10) % 3 {
+        0 => Circle::new(at, 4, c.filled()).into_dyn(),
+        1 => TriangleMarker::new(at, 5, c.filled()).into_dyn(),
+        _ => Cross::new(at, 4, c.stroke_width(2)).into_dyn(),
+    }
+}
+
 /// The figure.
 ///
 /// # Errors
@@ -58,6 +69,13 @@ pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
             .copied()
             .unwrap_or(highest);
         let y_max = highest.min(3.0 * median) * 1.1;
+        let lowest = curves
+            .iter()
+            .flat_map(|(_, ps)| ps.iter())
+            .flat_map(|p| [p.rmse.low, p.rmse.estimate])
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .fold(y_max, f64::min);
+        let y_min = (lowest / 1.1).min(y_max / 2.0);
         for (panel, (x, name)) in panels.iter().zip(x_of.iter().zip(names)) {
             let xs: Vec<f64> = curves
                 .iter()
@@ -74,12 +92,15 @@ pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
                 .margin(16)
                 .x_label_area_size(40)
                 .y_label_area_size(56)
-                .build_cartesian_2d((lo / 1.2..hi * 1.2).log_scale(), 0.0..y_max)
+                .build_cartesian_2d(
+                    (lo / 1.2..hi * 1.2).log_scale(),
+                    (y_min..y_max).log_scale(),
+                )
                 .map_err(io)?;
             chart
                 .configure_mesh()
                 .x_desc(name)
-                .y_desc("RMSE [m] (mean, 95 % bootstrap band over seeds)")
+                .y_desc("RMSE [m] (log; mean, 95 % bootstrap band over seeds)")
                 .light_line_style(WHITE)
                 .draw()
                 .map_err(io)?;
@@ -90,13 +111,13 @@ pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
                 let band: Vec<(f64, f64)> = sorted
                     .iter()
                     .filter(|p| p.rmse.low.is_finite())
-                    .map(|p| (x(p), p.rmse.high))
+                    .map(|p| (x(p), p.rmse.high.min(y_max)))
                     .chain(
                         sorted
                             .iter()
                             .rev()
                             .filter(|p| p.rmse.low.is_finite())
-                            .map(|p| (x(p), p.rmse.low)),
+                            .map(|p| (x(p), p.rmse.low.max(y_min))),
                     )
                     .collect();
                 if band.len() >= 4 {
@@ -111,10 +132,12 @@ pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
                     .map_err(io)?
                     .label(label.to_string())
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                        EmptyElement::at((x, y))
+                            + PathElement::new(vec![(0, 0), (18, 0)], c.stroke_width(2))
+                            + marker(i, (9, 0), c)
                     });
                 chart
-                    .draw_series(line.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+                    .draw_series(line.into_iter().map(|p| EmptyElement::at(p) + marker(i, (0, 0), c)))
                     .map_err(io)?;
             }
             chart

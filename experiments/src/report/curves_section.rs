@@ -38,7 +38,7 @@ fn interval(i: &Interval, digits: usize) -> String {
 }
 
 /// Fewest seeds for a verdict on a paired difference.
-const MIN_SEEDS_FOR_VERDICT: usize = 5;
+pub const MIN_SEEDS_FOR_VERDICT: usize = 5;
 
 fn verdict(d: &Interval, seeds: usize) -> &'static str {
     if seeds < MIN_SEEDS_FOR_VERDICT {

@@ -20,5 +20,6 @@ pub mod sensitivity;
 pub mod sensitivity_plot;
 pub mod sweep;
 pub mod table;
+pub mod tradeoff_plot;
 
 pub use files::write_report;

@@ -12,14 +12,16 @@
 //! * otherwise **the simulation cannot decide**, naming the settings whose
 //!   intervals lie below zero, above zero, or across it.
 //!
-//! A setting whose curves reach a budget on no seed is named and counts
-//! for neither side.
+//! A setting whose curves reach a budget on fewer than
+//! [`MIN_SEEDS_FOR_VERDICT`] seeds (the floor of every verdict in the
+//! curves tables) is named and counts for neither side.
 
 use std::fmt::Write as _;
 
 use crate::execute::records::RunRecord;
 use crate::report::bootstrap::Interval;
 use crate::report::curves::{BUDGETS, Curves, at_budget, by_setting};
+use crate::report::curves_section::MIN_SEEDS_FOR_VERDICT;
 use crate::report::table::{Align, Table};
 
 /// Where an interval lies.
@@ -31,19 +33,25 @@ pub enum Side {
     Above,
     /// Across zero.
     Across,
-    /// No seed reaches the budget.
-    OutOfRange,
+    /// Fewer than [`MIN_SEEDS_FOR_VERDICT`] seeds reach the budget.
+    TooFewSeeds,
 }
 
 impl Side {
-    /// Of an interval (or its absence).
-    pub fn of(d: Option<&Interval>) -> Self {
+    /// Of an effect's interval over `seeds` seeds in range.
+    pub fn of(d: Option<&Interval>, seeds: usize) -> Self {
         match d {
+            _ if seeds < MIN_SEEDS_FOR_VERDICT => Self::TooFewSeeds,
             Some(d) if d.high < 0.0 => Self::Below,
             Some(d) if d.low > 0.0 => Self::Above,
             Some(d) if d.low.is_finite() && d.high.is_finite() => Self::Across,
-            _ => Self::OutOfRange,
+            _ => Self::TooFewSeeds,
         }
+    }
+
+    /// Of `e`.
+    pub fn of_effect(e: &Effect) -> Self {
+        Self::of(e.difference.as_ref(), e.seeds.0)
     }
 
     fn words(self) -> &'static str {
@@ -51,7 +59,7 @@ impl Side {
             Self::Below => "below zero (gating better)",
             Self::Above => "above zero (gating worse)",
             Self::Across => "across zero",
-            Self::OutOfRange => "budget out of range",
+            Self::TooFewSeeds => "too few seeds in range",
         }
     }
 }
@@ -134,11 +142,11 @@ pub fn verdict(effects: &[Effect], policy: &str) -> String {
     let mine: Vec<&Effect> = effects.iter().filter(|e| e.policy == policy).collect();
     let sides: Vec<(Side, &Effect)> = mine
         .iter()
-        .map(|e| (Side::of(e.difference.as_ref()), *e))
+        .map(|e| (Side::of_effect(e), *e))
         .collect();
     let counted: Vec<&(Side, &Effect)> = sides
         .iter()
-        .filter(|(s, _)| *s != Side::OutOfRange)
+        .filter(|(s, _)| *s != Side::TooFewSeeds)
         .collect();
     let named = |side: Side| -> Vec<String> {
         sides
@@ -147,13 +155,13 @@ pub fn verdict(effects: &[Effect], policy: &str) -> String {
             .map(|(_, e)| format!("{} at {:.0} frames", e.setting(), e.budget))
             .collect()
     };
-    let out_of_range = named(Side::OutOfRange);
-    let caveat = if out_of_range.is_empty() {
+    let too_few = named(Side::TooFewSeeds);
+    let caveat = if too_few.is_empty() {
         String::new()
     } else {
         format!(
-            " (not reached, so not counted: {})",
-            out_of_range.join("; ")
+            " (reached on fewer than {MIN_SEEDS_FOR_VERDICT} seeds, so not counted: {})",
+            too_few.join("; ")
         )
     };
     let span = |items: &[&(Side, &Effect)]| {
@@ -251,7 +259,7 @@ pub fn sensitivity_section(
             e.difference.as_ref().map_or("–".into(), |d| {
                 format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
             }),
-            Side::of(e.difference.as_ref()).words().into(),
+            Side::of_effect(e).words().into(),
         ]);
         let d = e.difference;
         table.push_csv(vec![
@@ -276,7 +284,7 @@ pub fn sensitivity_section(
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "## Sensitivity — does gating win at equal frames across the plausible range?\n\nOne parameter at a time around the defaults, every setting on the same seeds. Δ = RMSE(policy) − RMSE(fixed rate of the same back end), both interpolated in log frames at the budget on each seed (never extrapolated), mean over seeds with a 95 % percentile-bootstrap interval. The verdict follows a rule fixed before the runs: a policy wins if at every budget every setting's interval lies below zero, loses if every one lies above, and otherwise the simulation cannot decide. Figure: `plots/sensitivity.svg`; table: `tables/sensitivity.csv`.\n"
+        "## Sensitivity — does gating win at equal frames across the plausible range?\n\nOne parameter at a time around the defaults, every setting on the same seeds. Δ = RMSE(policy) − RMSE(fixed rate of the same back end), both interpolated in log frames at the budget on each seed (never extrapolated), mean over seeds with a 95 % percentile-bootstrap interval. The verdict follows a rule fixed before the runs: a policy wins if at every budget every setting's interval lies below zero, loses if every one lies above, and otherwise the simulation cannot decide; a setting reached on fewer than five seeds counts for neither side. Figure: `plots/sensitivity.svg`; table: `tables/sensitivity.csv`.\n"
     );
     let _ = writeln!(s, "Verdict:\n");
     for p in &policies {

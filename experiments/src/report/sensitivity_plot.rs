@@ -10,6 +10,15 @@ use crate::report::curve_plot::colour;
 use crate::report::curves::BUDGETS;
 use crate::report::sensitivity::Effect;
 
+/// The marker of policy `i`: a circle or a triangle.
+fn marker<DB: DrawingBackend>(i: usize, c: RGBColor) -> DynElement<'static, DB, (i32, i32)> {
+    if i.is_multiple_of(2) {
+        Circle::new((0, 0), 5, c.filled()).into_dyn()
+    } else {
+        TriangleMarker::new((0, 0), 6, c.filled()).into_dyn()
+    }
+}
+
 fn io(e: impl std::fmt::Display) -> std::io::Error {
     std::io::Error::other(e.to_string())
 }
@@ -103,21 +112,14 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
                         PathElement::new(vec![(lo, y), (hi, y)], c.stroke_width(2))
                     }))
                     .map_err(io)?;
-                let marker =
-                    |(x, y): (f64, f64)| -> DynElement<'static, SVGBackend<'_>, (f64, f64)> {
-                        if pi % 2 == 0 {
-                            Circle::new((x, y), 5, c.filled()).into_dyn()
-                        } else {
-                            TriangleMarker::new((x, y), 6, c.filled()).into_dyn()
-                        }
-                    };
                 chart
-                    .draw_series(mine.iter().map(|&(y, x, _, _)| marker((x, y))))
+                    .draw_series(
+                        mine.iter()
+                            .map(|&(y, x, _, _)| EmptyElement::at((x, y)) + marker(pi, c)),
+                    )
                     .map_err(io)?
                     .label(policy.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3))
-                    });
+                    .legend(move |(x, y)| EmptyElement::at((x + 8, y)) + marker(pi, c));
             }
             chart
                 .configure_series_labels()
