@@ -469,7 +469,10 @@ pub(crate) fn tradeoff_svg(records: &[RunRecord]) -> Option<String> {
         points.push(crate::report::tradeoff_plot::TradeoffPoint {
             family: family(&spec.selector),
             back_end: spec.back_end(config),
-            fixed_rate: matches!(spec.selector, gpodo_frontends::SelectorSpec::FixedRate { .. }),
+            fixed_rate: matches!(
+                spec.selector,
+                gpodo_frontends::SelectorSpec::FixedRate { .. }
+            ),
             frames,
             rmse,
             std: var.sqrt(),

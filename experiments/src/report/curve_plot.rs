@@ -1,15 +1,20 @@
-//! The frames-versus-error figure of a sweep: every curve's mean RMSE with
-//! its 95 % bootstrap band, against mean frames processed (left) and mean
-//! compute (right), in one SVG, every axis logarithmic; the RMSE axis
-//! stops at three times the median point (the tables give the collapsed
-//! points).
+//! The frames-versus-error figure of a sweep, as small multiples: one panel
+//! per gated curve, with the fixed-rate curve of its back end (its
+//! control) in grey behind it, each the mean RMSE over seeds with its 95 %
+//! bootstrap band; every panel on the same log axes, so panels compare.
+//! The RMSE axis stops at three times the median point (the tables give
+//! the collapsed points).
 
 use plotters::prelude::*;
 
 use crate::report::curves::PointSummary;
 
-/// One curve as drawn: its name and its points sorted by the x value.
+/// One curve as drawn: its name and its points.
 pub type DrawnCurve<'a> = (&'a str, &'a [PointSummary]);
+
+/// One panel: a gated curve and, when its back end has one, its fixed-rate
+/// control.
+pub type Panel<'a> = (DrawnCurve<'a>, Option<DrawnCurve<'a>>);
 
 fn io(e: impl std::fmt::Display) -> std::io::Error {
     std::io::Error::other(e.to_string())
@@ -25,99 +30,97 @@ pub fn colour(i: usize) -> RGBColor {
         RGBColor(148, 103, 189),
         RGBColor(140, 86, 75),
         RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
+        RGBColor(0, 95, 95),
         RGBColor(188, 189, 34),
         RGBColor(23, 190, 207),
     ];
     PALETTE[i % PALETTE.len()]
 }
 
-/// The marker of curve `i` at pixel offset `at`: a circle, a triangle
-/// or a cross, so that curves sharing a colour (past ten) still differ.
-fn marker<DB: DrawingBackend>(i: usize, at: (i32, i32), c: RGBColor) -> DynElement<'static, DB, (i32, i32)> {
-    match (i / 10) % 3 {
-        0 => Circle::new(at, 4, c.filled()).into_dyn(),
-        1 => TriangleMarker::new(at, 5, c.filled()).into_dyn(),
-        _ => Cross::new(at, 4, c.stroke_width(2)).into_dyn(),
-    }
+/// The axis ranges every panel shares: (frames, RMSE).
+fn ranges(panels: &[Panel<'_>]) -> Option<((f64, f64), (f64, f64))> {
+    let points = || {
+        panels
+            .iter()
+            .flat_map(|(c, f)| std::iter::once(c).chain(f.iter()))
+            .flat_map(|(_, ps)| ps.iter())
+    };
+    let frames: Vec<f64> = points()
+        .map(|p| p.frames)
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    let lo = frames.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = frames.iter().copied().fold(0.0, f64::max);
+    let mut estimates: Vec<f64> = points()
+        .map(|p| p.rmse.estimate)
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    estimates.sort_by(f64::total_cmp);
+    let highest = *estimates.last()?;
+    let median = estimates[estimates.len() / 2];
+    // Collapsed points (tracking lost for good) would squeeze the range
+    // that matters.
+    let y_max = highest.min(3.0 * median) * 1.15;
+    let lowest = points()
+        .flat_map(|p| [p.rmse.low, p.rmse.estimate])
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold(y_max, f64::min);
+    let y_min = (lowest / 1.1).min(y_max / 2.0);
+    (lo.is_finite() && hi > lo).then_some(((lo / 1.2, hi * 1.2), (y_min, y_max)))
 }
 
-/// The figure.
+/// The figure: a grid of panels, three per row.
 ///
 /// # Errors
 /// A drawing error (as `io::Error`).
-pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
+pub fn curves_svg(panels: &[Panel<'_>]) -> std::io::Result<String> {
     let mut svg = String::new();
+    let Some(((x_lo, x_hi), (y_lo, y_hi))) = ranges(panels) else {
+        return Ok(svg);
+    };
+    let columns = 3;
+    let rows = panels.len().div_ceil(columns).max(1);
     {
-        let root = SVGBackend::with_string(&mut svg, (1400, 640)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (1500, 380 * rows as u32)).into_drawing_area();
         root.fill(&WHITE).map_err(io)?;
-        let panels = root.split_evenly((1, 2));
-        let x_of: [fn(&PointSummary) -> f64; 2] = [|p| p.frames, |p| p.compute];
-        let names = ["frames processed", "compute proxy [s]"];
-        let finite = |v: f64| v.is_finite().then_some(v);
-        // Collapsed points (tracking lost for good) would squeeze the range
-        // that matters: the axis stops at three times the median point.
-        let mut estimates: Vec<f64> = curves
-            .iter()
-            .flat_map(|(_, ps)| ps.iter())
-            .filter_map(|p| finite(p.rmse.high).or(finite(p.rmse.estimate)))
-            .collect();
-        estimates.sort_by(f64::total_cmp);
-        let highest = estimates.last().copied().unwrap_or(1e-3).max(1e-3);
-        let median = estimates
-            .get(estimates.len() / 2)
-            .copied()
-            .unwrap_or(highest);
-        let y_max = highest.min(3.0 * median) * 1.1;
-        let lowest = curves
-            .iter()
-            .flat_map(|(_, ps)| ps.iter())
-            .flat_map(|p| [p.rmse.low, p.rmse.estimate])
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .fold(y_max, f64::min);
-        let y_min = (lowest / 1.1).min(y_max / 2.0);
-        for (panel, (x, name)) in panels.iter().zip(x_of.iter().zip(names)) {
-            let xs: Vec<f64> = curves
-                .iter()
-                .flat_map(|(_, ps)| ps.iter().map(x))
-                .filter(|v| v.is_finite() && *v > 0.0)
-                .collect();
-            let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = xs.iter().copied().fold(0.0, f64::max);
-            if !(lo.is_finite() && hi > lo) {
-                continue;
-            }
+        let areas = root.split_evenly((rows, columns));
+        for (i, (panel, (curve, control))) in areas.iter().zip(panels).enumerate() {
             let mut chart = ChartBuilder::on(panel)
-                .caption(format!("RMSE against {name}"), ("sans-serif", 18))
-                .margin(16)
-                .x_label_area_size(40)
-                .y_label_area_size(56)
-                .build_cartesian_2d(
-                    (lo / 1.2..hi * 1.2).log_scale(),
-                    (y_min..y_max).log_scale(),
-                )
+                .caption(curve.0, ("sans-serif", 15))
+                .margin(10)
+                .x_label_area_size(36)
+                .y_label_area_size(52)
+                .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
                 .map_err(io)?;
             chart
                 .configure_mesh()
-                .x_desc(name)
-                .y_desc("RMSE [m] (log; mean, 95 % bootstrap band over seeds)")
+                .x_desc("frames processed (log)")
+                .y_desc("RMSE [m] (log)")
+                .x_label_formatter(&|v| format!("{v:.0}"))
+                .y_label_formatter(&|v| format!("{v:.2}"))
                 .light_line_style(WHITE)
                 .draw()
                 .map_err(io)?;
-            for (i, (label, points)) in curves.iter().enumerate() {
-                let c = colour(i);
-                let mut sorted: Vec<&PointSummary> = points.iter().filter(|p| x(p) > 0.0).collect();
-                sorted.sort_by(|a, b| x(a).total_cmp(&x(b)));
+            let grey = RGBColor(120, 120, 120);
+            let drawn = control
+                .iter()
+                .map(|c| (c, grey, "fixed rate, same back end"))
+                .chain(std::iter::once((curve, colour(i), "policy")));
+            for ((_, points), c, role) in drawn {
+                let mut sorted: Vec<&PointSummary> =
+                    points.iter().filter(|p| p.frames > 0.0).collect();
+                sorted.sort_by(|a, b| a.frames.total_cmp(&b.frames));
+                let clamp = |v: f64| v.clamp(y_lo, y_hi);
                 let band: Vec<(f64, f64)> = sorted
                     .iter()
                     .filter(|p| p.rmse.low.is_finite())
-                    .map(|p| (x(p), p.rmse.high.min(y_max)))
+                    .map(|p| (p.frames, clamp(p.rmse.high)))
                     .chain(
                         sorted
                             .iter()
                             .rev()
                             .filter(|p| p.rmse.low.is_finite())
-                            .map(|p| (x(p), p.rmse.low.max(y_min))),
+                            .map(|p| (p.frames, clamp(p.rmse.low))),
                     )
                     .collect();
                 if band.len() >= 4 {
@@ -125,19 +128,19 @@ pub fn curves_svg(curves: &[DrawnCurve<'_>]) -> std::io::Result<String> {
                         .draw_series(std::iter::once(Polygon::new(band, c.mix(0.15).filled())))
                         .map_err(io)?;
                 }
-                let line: Vec<(f64, f64)> =
-                    sorted.iter().map(|p| (x(p), p.rmse.estimate)).collect();
+                let line: Vec<(f64, f64)> = sorted
+                    .iter()
+                    .map(|p| (p.frames, clamp(p.rmse.estimate)))
+                    .collect();
                 chart
                     .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                     .map_err(io)?
-                    .label(label.to_string())
+                    .label(role)
                     .legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new(vec![(0, 0), (18, 0)], c.stroke_width(2))
-                            + marker(i, (9, 0), c)
+                        PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
                     });
                 chart
-                    .draw_series(line.into_iter().map(|p| EmptyElement::at(p) + marker(i, (0, 0), c)))
+                    .draw_series(line.into_iter().map(|p| Circle::new(p, 3, c.filled())))
                     .map_err(io)?;
             }
             chart

@@ -8,10 +8,10 @@ use std::fmt::Write as _;
 
 use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, RESAMPLES};
-use crate::report::curve_plot::curves_svg;
+use crate::report::curve_plot::{Panel, curves_svg};
 use crate::report::curves::{
-    BUDGETS, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting, frames_to_reach,
-    summarise,
+    BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting,
+    frames_to_reach, summarise,
 };
 use crate::report::table::{Align, Table};
 
@@ -114,7 +114,7 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
         let s = &mut out.markdown;
         let _ = writeln!(
             s,
-            "## Frames-versus-error curves{}\n\nEach curve is one policy with one knob varied; every point is a scheme run on all {} seeds ({:?}), all schemes sharing each seed's data and tracker streams. Mean over seeds with a 95 % percentile-bootstrap interval ({RESAMPLES} resamples of seeds). Figure: `plots/curves{suffix}.svg` (RMSE against frames and against compute).\n",
+            "## Frames-versus-error curves{}\n\nEach curve is one policy with one knob varied; every point is a scheme run on all {} seeds ({:?}), all schemes sharing each seed's data and tracker streams. Mean over seeds with a 95 % percentile-bootstrap interval ({RESAMPLES} resamples of seeds). Figure: `plots/curves{suffix}.svg` (one panel per policy, its back end's fixed rates in grey).\n",
             if many {
                 format!(" (`{setting}`)")
             } else {
@@ -409,13 +409,20 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
             .push((format!("curves_at_budget{suffix}.csv"), budget));
         out.tables
             .push((format!("curves_paired{suffix}.csv"), paired));
-        let drawn: Vec<(&str, &[PointSummary])> = curves
+        let drawn = |c: &Curve| -> Option<(&str, &[PointSummary])> {
+            let i = curves.curves.iter().position(|x| x.name == c.name)?;
+            Some((curves.curves[i].name.as_str(), summaries[i].as_slice()))
+        };
+        let panels: Vec<Panel<'_>> = curves
             .curves
             .iter()
-            .zip(&summaries)
-            .map(|(c, s)| (c.name.as_str(), s.as_slice()))
+            .filter(|c| !c.fixed_rate)
+            .filter_map(|c| {
+                let control = curves.fixed_rate_of(&c.back_end).and_then(&drawn);
+                Some((drawn(c)?, control))
+            })
             .collect();
-        match curves_svg(&drawn) {
+        match curves_svg(&panels) {
             Ok(svg) => out.figures.push((format!("curves{suffix}.svg"), svg)),
             Err(e) => {
                 let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");

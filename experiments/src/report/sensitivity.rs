@@ -140,10 +140,7 @@ pub fn effects(records: &[RunRecord], seed: u64) -> Option<Vec<Effect>> {
 /// The verdict on `policy` by the rule of the module documentation.
 pub fn verdict(effects: &[Effect], policy: &str) -> String {
     let mine: Vec<&Effect> = effects.iter().filter(|e| e.policy == policy).collect();
-    let sides: Vec<(Side, &Effect)> = mine
-        .iter()
-        .map(|e| (Side::of_effect(e), *e))
-        .collect();
+    let sides: Vec<(Side, &Effect)> = mine.iter().map(|e| (Side::of_effect(e), *e)).collect();
     let counted: Vec<&(Side, &Effect)> = sides
         .iter()
         .filter(|(s, _)| *s != Side::TooFewSeeds)

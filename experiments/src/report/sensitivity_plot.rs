@@ -2,22 +2,27 @@
 //! equal frames) with its 95 % interval, one row per setting, one panel
 //! per frame budget, one colour and marker per policy, the zero line
 //! drawn: a forest plot, read at a glance as "left of zero: gating
-//! better".
+//! better". The axis spans ±[`MAX_SHOWN_M`] at most; a value beyond is
+//! drawn at the edge with its number, and an effect reached on fewer than
+//! five seeds (which no verdict counts) is drawn pale.
 
 use plotters::prelude::*;
 
 use crate::report::curve_plot::colour;
 use crate::report::curves::BUDGETS;
-use crate::report::sensitivity::Effect;
+use crate::report::sensitivity::{Effect, Side};
 
 /// The marker of policy `i`: a circle or a triangle.
-fn marker<DB: DrawingBackend>(i: usize, c: RGBColor) -> DynElement<'static, DB, (i32, i32)> {
+fn marker<DB: DrawingBackend>(i: usize, c: RGBAColor) -> DynElement<'static, DB, (i32, i32)> {
     if i.is_multiple_of(2) {
         Circle::new((0, 0), 5, c.filled()).into_dyn()
     } else {
         TriangleMarker::new((0, 0), 6, c.filled()).into_dyn()
     }
 }
+
+/// The widest Δ the axis shows (m).
+pub const MAX_SHOWN_M: f64 = 0.15;
 
 fn io(e: impl std::fmt::Display) -> std::io::Error {
     std::io::Error::other(e.to_string())
@@ -40,7 +45,8 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
         }
     }
     let n = settings.len();
-    let height = 120 + 34 * n as u32;
+    // A spare row at the bottom holds the legend.
+    let height = 150 + 34 * n as u32;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1400, height)).into_drawing_area();
@@ -54,7 +60,9 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
                 .flat_map(|d| [d.low, d.high, d.estimate])
                 .filter(|v| v.is_finite())
                 .fold(0.005_f64, |m, v| m.max(v.abs()))
+                .min(MAX_SHOWN_M)
                 * 1.1;
+            let shown = |v: f64| v.clamp(-bound / 1.1, bound / 1.1);
             let labels = settings.clone();
             let mut chart = ChartBuilder::on(panel)
                 .caption(
@@ -64,12 +72,12 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
                 .margin(14)
                 .x_label_area_size(40)
                 .y_label_area_size(260)
-                .build_cartesian_2d(-bound..bound, -0.5..(n as f64 - 0.5))
+                .build_cartesian_2d(-bound..bound, -1.5..(n as f64 - 0.5))
                 .map_err(io)?;
             chart
                 .configure_mesh()
                 .x_desc("Δ RMSE [m] (mean over seeds, 95 % bootstrap interval); < 0: gating better")
-                .y_labels(n)
+                .y_labels(4 * (n + 1))
                 .y_label_formatter(&move |y| {
                     let i = y.round();
                     if (y - i).abs() > 1e-6 || i < 0.0 {
@@ -86,7 +94,7 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
                 .map_err(io)?;
             chart
                 .draw_series(std::iter::once(PathElement::new(
-                    vec![(0.0, -0.5), (0.0, n as f64 - 0.5)],
+                    vec![(0.0, -1.5), (0.0, n as f64 - 0.5)],
                     BLACK.stroke_width(1),
                 )))
                 .map_err(io)?;
@@ -98,28 +106,45 @@ pub fn sensitivity_svg(effects: &[Effect]) -> std::io::Result<String> {
                     let i = settings.iter().position(|s| *s == e.setting()).unwrap_or(0);
                     (n - 1 - i) as f64 + offset
                 };
-                let mine: Vec<(f64, f64, f64, f64)> = here
+                // (row, estimate, low, high, counted by a verdict)
+                let mine: Vec<(f64, f64, f64, f64, bool)> = here
                     .iter()
                     .filter(|e| &e.policy == policy)
                     .filter_map(|e| {
+                        let counted = Side::of_effect(e) != Side::TooFewSeeds;
                         e.difference
                             .filter(|d| d.low.is_finite() && d.high.is_finite())
-                            .map(|d| (row(e), d.estimate, d.low, d.high))
+                            .map(|d| (row(e), d.estimate, d.low, d.high, counted))
                     })
                     .collect();
+                let tone = |counted: bool| if counted { c.to_rgba() } else { c.mix(0.3) };
                 chart
-                    .draw_series(mine.iter().map(|&(y, _, lo, hi)| {
-                        PathElement::new(vec![(lo, y), (hi, y)], c.stroke_width(2))
+                    .draw_series(mine.iter().map(|&(y, _, lo, hi, counted)| {
+                        PathElement::new(
+                            vec![(shown(lo), y), (shown(hi), y)],
+                            tone(counted).stroke_width(2),
+                        )
                     }))
                     .map_err(io)?;
                 chart
-                    .draw_series(
-                        mine.iter()
-                            .map(|&(y, x, _, _)| EmptyElement::at((x, y)) + marker(pi, c)),
-                    )
+                    .draw_series(mine.iter().map(|&(y, x, _, _, counted)| {
+                        EmptyElement::at((shown(x), y)) + marker(pi, tone(counted))
+                    }))
                     .map_err(io)?
                     .label(policy.clone())
-                    .legend(move |(x, y)| EmptyElement::at((x + 8, y)) + marker(pi, c));
+                    .legend(move |(x, y)| EmptyElement::at((x + 8, y)) + marker(pi, c.to_rgba()));
+                // A value beyond the axis: its number beside the edge.
+                chart
+                    .draw_series(mine.iter().filter(|m| m.1.abs() > bound / 1.1).map(
+                        |&(y, x, _, _, _)| {
+                            Text::new(
+                                format!("{x:+.2}"),
+                                (shown(x) * 0.82, y + 0.35),
+                                ("sans-serif", 11).into_font(),
+                            )
+                        },
+                    ))
+                    .map_err(io)?;
             }
             chart
                 .configure_series_labels()

@@ -129,8 +129,7 @@ pub fn tradeoff_svg(points: &[TradeoffPoint]) -> std::io::Result<String> {
         }
         for (fi, family) in families.iter().enumerate() {
             let c = colour(fi);
-            let mine: Vec<&&TradeoffPoint> =
-                shown.iter().filter(|p| p.family == *family).collect();
+            let mine: Vec<&&TradeoffPoint> = shown.iter().filter(|p| p.family == *family).collect();
             chart
                 .draw_series(mine.iter().map(|p| {
                     let lo = (p.rmse - p.std).max(r_lo / 1.2);
