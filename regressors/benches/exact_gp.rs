@@ -18,7 +18,7 @@ use gpodo_regressors::dense::recycle;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_regressors::kernels::{KernelExpr, KernelInit};
+use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_traits::ResidualRegressor;
 
 mod common;
@@ -37,7 +37,7 @@ fn evaluation(c: &mut Criterion) {
     for d in DIMS {
         for n in SIZES {
             let (x, y) = data(n, d);
-            let kernel = KernelExpr::Leaf("rbf".into()).build(d, &KernelInit::default());
+            let kernel = KernelExpr::Leaf(LeafName::Rbf).build(d, &KernelInit::default());
             let label = format!("n{n}_d{d}");
             group.bench_with_input(BenchmarkId::new("lml_and_gradient", &label), &n, |b, _| {
                 b.iter(|| {

@@ -14,7 +14,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_regressors::kernels::{KernelExpr, KernelInit};
+use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::inducing::place_inducing;
 use gpodo_regressors::sparse_gp::{Approximation, InducingParams, SparseGp, SparseGpParams};
@@ -32,7 +32,7 @@ fn evaluation(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(5));
-    let kernel = KernelExpr::Leaf("rbf".into()).build(D, &KernelInit::default());
+    let kernel = KernelExpr::Leaf(LeafName::Rbf).build(D, &KernelInit::default());
     let (x, y) = data(2000, D);
     group.bench_function("exact_lml_and_gradient/n2000", |b| {
         b.iter(|| log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap())

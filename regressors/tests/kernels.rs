@@ -11,17 +11,20 @@ use gpodo_regressors::dense::frobenius_dot;
 use gpodo_regressors::kernels::{Kernel, KernelExpr, KernelInit};
 use support::*;
 
-const EXPRESSIONS: [&str; 10] = [
+const EXPRESSIONS: [&str; 13] = [
     "rbf",
     "matern52",
     "matern32",
     "linear",
     "white",
+    "ratquad",
     "rbf + linear",
     "matern52 + linear",
     "rbf * linear",
     "(rbf + linear) * matern32",
     "rbf + matern32 + white",
+    "ratquad + linear",
+    "ratquad * matern52",
 ];
 
 fn weighted_sum(k: &Kernel, x: &Mat<f64>, w: &Mat<f64>) -> f64 {
@@ -57,6 +60,83 @@ fn gradient_matches_finite_differences_for_every_kernel() {
                     "{expr} trial {trial} parameter {k}: analytic {a} vs fd {fd} (rel {err:e})"
                 );
             }
+        }
+    }
+}
+
+/// The cross-covariance gradients a sparse GP uses: with respect to the
+/// hyperparameters and to the first point set, and of the diagonal,
+/// against central finite differences.
+#[test]
+fn cross_and_diagonal_gradients_match_finite_differences() {
+    let mut rng = rng(15);
+    let h = 1e-5;
+    for expr in EXPRESSIONS {
+        let (n1, n2, d) = (5, 7, 3);
+        let x1 = inputs(&mut rng, n1, d);
+        let x2 = inputs(&mut rng, n2, d);
+        let w = Mat::from_fn(n1, n2, |i, j| ((i * 7 + j * 3) % 5) as f64 - 2.0);
+        let kernel = random_kernel(&mut rng, expr, d);
+        let cache = kernel.cross_with_cache(x1.as_ref(), x2.as_ref());
+        let mut analytic = vec![0.0; kernel.n_params()];
+        let mut dx1 = Mat::<f64>::zeros(n1, d);
+        kernel.accumulate_cross_gradient(
+            x1.as_ref(),
+            x2.as_ref(),
+            &cache,
+            w.as_ref(),
+            Some(&mut analytic),
+            Some((&mut dx1, 1.0)),
+        );
+        let value = |k: &Kernel, x1: &Mat<f64>| {
+            frobenius_dot(w.as_ref(), k.cross(x1.as_ref(), x2.as_ref()).as_ref())
+        };
+        let theta = kernel.log_params();
+        for (p, a) in analytic.iter().enumerate() {
+            let (mut plus, mut minus) = (kernel.clone(), kernel.clone());
+            let mut tp = theta.clone();
+            tp[p] += h;
+            plus.set_log_params(&tp);
+            tp[p] -= 2.0 * h;
+            minus.set_log_params(&tp);
+            let fd = (value(&plus, &x1) - value(&minus, &x1)) / (2.0 * h);
+            assert!(rel_err(*a, fd, 1e-6) < 1e-5, "{expr} θ{p}: {a} vs {fd}");
+        }
+        for i in 0..n1 {
+            for q in 0..d {
+                let (mut plus, mut minus) = (x1.clone(), x1.clone());
+                plus[(i, q)] += h;
+                minus[(i, q)] -= h;
+                let fd = (value(&kernel, &plus) - value(&kernel, &minus)) / (2.0 * h);
+                let a = dx1[(i, q)];
+                assert!(
+                    rel_err(a, fd, 1e-6) < 1e-5,
+                    "{expr} x1[{i},{q}]: {a} vs {fd}"
+                );
+            }
+        }
+        let wd: Vec<f64> = (0..n1).map(|i| i as f64 - 1.5).collect();
+        let mut diag = vec![0.0; kernel.n_params()];
+        kernel.accumulate_diag_gradient(x1.as_ref(), &wd, &mut diag);
+        let dvalue = |k: &Kernel| -> f64 {
+            k.diag(x1.as_ref())
+                .iter()
+                .zip(&wd)
+                .map(|(a, b)| a * b)
+                .sum()
+        };
+        for (p, a) in diag.iter().enumerate() {
+            let (mut plus, mut minus) = (kernel.clone(), kernel.clone());
+            let mut tp = theta.clone();
+            tp[p] += h;
+            plus.set_log_params(&tp);
+            tp[p] -= 2.0 * h;
+            minus.set_log_params(&tp);
+            let fd = (dvalue(&plus) - dvalue(&minus)) / (2.0 * h);
+            assert!(
+                rel_err(*a, fd, 1e-6) < 1e-5,
+                "{expr} diag θ{p}: {a} vs {fd}"
+            );
         }
     }
 }
@@ -152,6 +232,14 @@ fn values_match_closed_forms_in_one_dimension() {
     assert!((set("matern52", &[s2, l]) - m52).abs() < 1e-14);
     let m32 = s2 * (1.0 + 3f64.sqrt() * r) * (-(3f64.sqrt()) * r).exp();
     assert!((set("matern32", &[s2, l]) - m32).abs() < 1e-14);
+    // Rational quadratic, GPy's form: σ² (1 + r²/2)^(−α); with the
+    // lengthscale scaled by √α it tends to the RBF as α → ∞.
+    let alpha = 0.7_f64;
+    let rq = s2 * (1.0 + r * r / 2.0).powf(-alpha);
+    assert!((set("ratquad", &[s2, l, alpha]) - rq).abs() < 1e-14);
+    let big = 1e8_f64;
+    let far = set("ratquad", &[s2, l * big.sqrt(), big]);
+    assert!((far - s2 * (-0.5 * r * r).exp()).abs() < 1e-7, "{far}");
     // Linear: v · 0 · 1.5 off the diagonal; on it, v · 1.5².
     let lin = KernelExpr::parse("linear")
         .unwrap()

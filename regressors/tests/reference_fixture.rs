@@ -52,7 +52,7 @@ fn lml_gradient_and_predictions_agree_with_gpy() {
         matrix(&fixture.y_train),
         matrix(&fixture.x_test),
     );
-    assert_eq!(fixture.cases.len(), 8);
+    assert_eq!(fixture.cases.len(), 10);
     for case in &fixture.cases {
         let k = kernel(&case.combine, &case.parts);
         let eval =

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::RegressorError;
 pub use crate::hyperopt::Optimizer;
 use crate::hyperopt::{LBFGS_MEMORY, OptimizerSettings, StartPolicy};
-use crate::kernels::{KernelExpr, KernelInit, ParamKind};
+use crate::kernels::{KernelExpr, KernelInit, LeafName, ParamKind};
 
 /// How the output columns share hyperparameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -33,6 +33,8 @@ pub struct Bounds {
     pub linear_variance: [f64; 2],
     /// Noise variance (default `[1e-8, 1e2]`).
     pub noise_variance: [f64; 2],
+    /// The rational quadratic's power `α` (default `[1e-3, 1e4]`).
+    pub power: [f64; 2],
 }
 
 impl Default for Bounds {
@@ -42,6 +44,7 @@ impl Default for Bounds {
             lengthscale: [1e-3, 1e5],
             linear_variance: [1e-8, 1e4],
             noise_variance: [1e-8, 1e2],
+            power: [1e-3, 1e4],
         }
     }
 }
@@ -66,6 +69,7 @@ impl Bounds {
             ("bounds.lengthscale", self.lengthscale),
             ("bounds.linear_variance", self.linear_variance),
             ("bounds.noise_variance", self.noise_variance),
+            ("bounds.power", self.power),
         ];
         for (field, [lo, hi]) in bounds {
             if !(positive(lo) && positive(hi) && lo < hi) {
@@ -110,6 +114,7 @@ impl Bounds {
                 self.linear_variance,
                 "linear_variance",
             ),
+            ("init.power", Some(init.power), self.power, "power"),
         ];
         for (field, value, range, bound) in checks {
             if let Some(v) = value
@@ -131,6 +136,7 @@ impl Bounds {
             ParamKind::Variance => self.variance,
             ParamKind::Lengthscale => self.lengthscale,
             ParamKind::LinearVariance => self.linear_variance,
+            ParamKind::Power => self.power,
         }
     }
 }
@@ -189,7 +195,7 @@ pub struct ExactGpParams {
 impl Default for ExactGpParams {
     fn default() -> Self {
         Self {
-            kernel: KernelExpr::Leaf("rbf".into()),
+            kernel: KernelExpr::Leaf(LeafName::Rbf),
             outputs: OutputSharing::Shared,
             standardize: true,
             init: KernelInit::default(),

@@ -12,18 +12,13 @@ impl Kernel {
     /// `K(X1, X2)` (white noise contributes 0) with what
     /// [`Kernel::accumulate_cross_gradient`] needs.
     pub fn cross_with_cache(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> GramCache {
-        if let Some((family, s)) = self.family() {
-            let (k, s) = s.cross_with_s(family, x1, x2);
-            return GramCache::leaf(k, s);
-        }
         match self {
-            Self::Linear(l) => GramCache::leaf(l.cross(x1, x2), None),
+            Self::Leaf(l) => l.cross_with_cache(x1, x2),
             Self::Sum(c) | Self::Product(c) => {
                 let children: Vec<GramCache> =
                     c.iter().map(|k| k.cross_with_cache(x1, x2)).collect();
                 GramCache::combine(matches!(self, Self::Sum(_)), children, false)
             }
-            _ => GramCache::leaf(Mat::zeros(x1.nrows(), x2.nrows()), None),
         }
     }
 
@@ -41,12 +36,8 @@ impl Kernel {
         out: Option<&mut [f64]>,
         dx1: Option<(&mut Mat<f64>, f64)>,
     ) {
-        if let Some((_, s)) = self.family() {
-            s.accumulate_cross_gradient(x1, x2, &cache.k, cache.s.as_ref(), w, out, dx1);
-            return;
-        }
         match self {
-            Self::Linear(l) => l.accumulate_cross_gradient(x1, x2, w, out, dx1),
+            Self::Leaf(l) => l.accumulate_cross_gradient(x1, x2, cache, w, out, dx1),
             Self::Sum(children) | Self::Product(children) => {
                 let is_product = matches!(self, Self::Product(_));
                 let (mut out, mut dx1) = (out, dx1);
@@ -72,22 +63,13 @@ impl Kernel {
                     at += m;
                 }
             }
-            _ => {}
         }
     }
 
     /// Adds `Σ_i w_i ∂k(x_i, x_i)/∂θ_k` to `out`.
     pub fn accumulate_diag_gradient(&self, x: MatRef<'_, f64>, w: &[f64], out: &mut [f64]) {
-        let total: f64 = w.iter().sum();
         match self {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => out[0] += s.variance * total,
-            Self::White(wk) => out[0] += wk.variance * total,
-            Self::Linear(l) => {
-                for (q, o) in out.iter_mut().enumerate().take(x.ncols()) {
-                    let quad: f64 = (0..x.nrows()).map(|i| w[i] * x[(i, q)].powi(2)).sum();
-                    *o += l.variances[q] * quad;
-                }
-            }
+            Self::Leaf(l) => l.accumulate_diag_gradient(x, w, out),
             Self::Sum(children) | Self::Product(children) => {
                 let diags: Vec<Vec<f64>> = if matches!(self, Self::Product(_)) {
                     children.iter().map(|k| k.diag(x)).collect()

@@ -8,17 +8,14 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Kernel, Linear, Stationary, White};
-
-/// The leaf kernels an expression may name.
-pub const LEAF_NAMES: [&str; 5] = ["rbf", "matern52", "matern32", "linear", "white"];
+use super::{Kernel, LeafName};
 
 /// A parsed kernel expression.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(try_from = "String", into = "String")]
 pub enum KernelExpr {
-    /// A named leaf kernel (one of [`LEAF_NAMES`]).
-    Leaf(String),
+    /// A leaf kernel.
+    Leaf(LeafName),
     /// Sum of two or more kernels.
     Sum(Vec<KernelExpr>),
     /// Product of two or more kernels.
@@ -52,6 +49,8 @@ pub struct KernelInit {
     pub linear_variance: Option<f64>,
     /// Variance of the white kernel (default 0.01).
     pub white_variance: f64,
+    /// Power `α` of the rational quadratic kernel (default 2, GPy's).
+    pub power: f64,
 }
 
 impl Default for KernelInit {
@@ -61,6 +60,7 @@ impl Default for KernelInit {
             lengthscale: None,
             linear_variance: None,
             white_variance: 0.01,
+            power: 2.0,
         }
     }
 }
@@ -84,22 +84,11 @@ impl KernelExpr {
         Ok(expr)
     }
 
-    /// Builds the kernel for `d` inputs with initial hyperparameters.
+    /// Builds the kernel for `d` inputs with initial hyperparameters
+    /// ([`LeafName::build`]).
     pub fn build(&self, d: usize, init: &KernelInit) -> Kernel {
-        let lengthscale = init.lengthscale.unwrap_or((d.max(1) as f64).sqrt());
-        let linear_variance = init.linear_variance.unwrap_or(1.0 / d.max(1) as f64);
         match self {
-            Self::Leaf(name) => match name.as_str() {
-                "rbf" => Kernel::Rbf(Stationary::new(init.variance, vec![lengthscale; d])),
-                "matern52" => {
-                    Kernel::Matern52(Stationary::new(init.variance, vec![lengthscale; d]))
-                }
-                "matern32" => {
-                    Kernel::Matern32(Stationary::new(init.variance, vec![lengthscale; d]))
-                }
-                "linear" => Kernel::Linear(Linear::new(vec![linear_variance; d])),
-                _ => Kernel::White(White::new(init.white_variance)),
-            },
+            Self::Leaf(name) => Kernel::Leaf(name.build(d, init)),
             Self::Sum(terms) => Kernel::Sum(terms.iter().map(|t| t.build(d, init)).collect()),
             Self::Product(factors) => {
                 Kernel::Product(factors.iter().map(|f| f.build(d, init)).collect())
@@ -111,7 +100,7 @@ impl KernelExpr {
 impl fmt::Display for KernelExpr {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Leaf(name) => f.write_str(name),
+            Self::Leaf(name) => f.write_str(name.as_str()),
             Self::Sum(terms) => {
                 let parts: Vec<String> = terms.iter().map(ToString::to_string).collect();
                 f.write_str(&parts.join(" + "))
@@ -205,7 +194,7 @@ impl Parser<'_> {
     }
 
     fn atom(&mut self) -> Result<KernelExpr, KernelExprError> {
-        let expected = format!("a kernel name ({}) or `(`", LEAF_NAMES.join(", "));
+        let expected = format!("a kernel name ({}) or `(`", LeafName::listed());
         if self.eat('(') {
             let inner = self.sum()?;
             if !self.eat(')') {
@@ -226,16 +215,13 @@ impl Parser<'_> {
             return Err(self.error(&expected));
         }
         let name: String = self.chars[start..self.at].iter().map(|(_, c)| c).collect();
-        let lower = name.to_ascii_lowercase();
-        if LEAF_NAMES.contains(&lower.as_str()) {
-            Ok(KernelExpr::Leaf(lower))
-        } else {
+        name.parse::<LeafName>().map(KernelExpr::Leaf).map_err(|_| {
             self.at = start;
-            Err(KernelExprError {
-                expected: format!("a kernel name ({}), found `{name}`", LEAF_NAMES.join(", ")),
+            KernelExprError {
+                expected: format!("a kernel name ({}), found `{name}`", LeafName::listed()),
                 ..self.error("")
-            })
-        }
+            }
+        })
     }
 }
 
@@ -249,10 +235,10 @@ mod tests {
         assert_eq!(
             e,
             KernelExpr::Sum(vec![
-                KernelExpr::Leaf("rbf".into()),
+                KernelExpr::Leaf(LeafName::Rbf),
                 KernelExpr::Product(vec![
-                    KernelExpr::Leaf("linear".into()),
-                    KernelExpr::Leaf("white".into())
+                    KernelExpr::Leaf(LeafName::Linear),
+                    KernelExpr::Leaf(LeafName::White)
                 ])
             ])
         );

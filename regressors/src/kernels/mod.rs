@@ -1,17 +1,22 @@
 //! Covariance functions (paper §IV-A, eq. 10–13) with ARD and analytic
 //! gradients with respect to every hyperparameter in log space.
 //!
-//! [`Kernel`] is a closed tree of leaves ([`Stationary`] RBF / Matérn 5/2 /
-//! Matérn 3/2, [`Linear`], [`White`]) combined by sums and products, so the
-//! composite kernels of Table I (`rbf + linear`, `matern52 + linear`) are
-//! configurations ([`KernelExpr`]), not code. Hyperparameters are exposed as
-//! one flat vector of logarithms, leaf by leaf in expression order.
+//! [`Kernel`] is a closed tree of leaves ([`LeafKernel`]: [`Stationary`]
+//! RBF / Matérn 5/2 / Matérn 3/2, [`Linear`], [`White`]) combined by sums
+//! and products, so the composite kernels of Table I (`rbf + linear`,
+//! `matern52 + linear`) are configurations ([`KernelExpr`]), not code.
+//! Every per-leaf operation is dispatched in `leaf.rs`. Hyperparameters
+//! are exposed as one flat vector of logarithms, leaf by leaf in
+//! expression order.
 
 mod cross;
 pub(crate) mod distance;
 pub mod expr;
+mod leaf;
 mod linear;
 mod profile;
+mod ratquad;
+mod serialized;
 mod stationary;
 
 use faer::{Mat, MatRef};
@@ -19,29 +24,28 @@ use serde::{Deserialize, Serialize};
 
 pub use distance::median_pairwise_distance;
 pub use expr::{KernelExpr, KernelExprError, KernelInit};
+pub use leaf::{LeafKernel, LeafName, UnknownLeaf};
 pub use linear::{Linear, White};
 pub use profile::Family;
+pub use ratquad::RatQuad;
 pub use stationary::Stationary;
 
 use crate::dense::{
     column, column_mut, copy_lower_triangle, hadamard, lower_hadamard_in_place,
-    symmetrize_from_lower, trace,
+    symmetrize_from_lower,
 };
 
-/// A kernel with its current hyperparameters.
+/// A kernel with its current hyperparameters. Serialised in the flat
+/// shape saved models have always used (`{"kind": "rbf", "parameters":
+/// …}`, `{"kind": "sum", "parameters": [...]}`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", content = "parameters", rename_all = "snake_case")]
+#[serde(
+    from = "serialized::SerializedKernel",
+    into = "serialized::SerializedKernel"
+)]
 pub enum Kernel {
-    /// Squared exponential with ARD.
-    Rbf(Stationary),
-    /// Matérn 5/2 with ARD.
-    Matern52(Stationary),
-    /// Matérn 3/2 with ARD.
-    Matern32(Stationary),
-    /// Linear with per-input variances.
-    Linear(Linear),
-    /// White noise.
-    White(White),
+    /// One covariance function.
+    Leaf(LeafKernel),
     /// Sum of kernels.
     Sum(Vec<Kernel>),
     /// Product of kernels.
@@ -57,6 +61,8 @@ pub enum ParamKind {
     Lengthscale,
     /// A per-input variance of the linear kernel.
     LinearVariance,
+    /// The power `α` of the rational quadratic kernel.
+    Power,
 }
 
 /// A Gram evaluation kept for the gradient: this node's own `K`, the
@@ -65,8 +71,11 @@ pub enum ParamKind {
 pub struct GramCache {
     /// `K(X, X)` of this node.
     pub k: Mat<f64>,
-    /// `σ²(−κ'(r)/r)` for Matérn leaves.
+    /// `σ²(−κ'(r)/r)` for Matérn leaves (`−2 ∂K/∂r²` for the rational
+    /// quadratic).
     s: Option<Mat<f64>>,
+    /// `∂K/∂log α` for the rational quadratic.
+    a: Option<Mat<f64>>,
     /// One cache per child of a sum or product.
     children: Vec<GramCache>,
 }
@@ -76,6 +85,17 @@ impl GramCache {
         Self {
             k,
             s,
+            a: None,
+            children: Vec::new(),
+        }
+    }
+
+    /// A rational quadratic leaf's cache.
+    fn rational_quadratic(m: ratquad::RatQuadMatrices) -> Self {
+        Self {
+            k: m.k,
+            s: Some(m.s),
+            a: Some(m.a),
             children: Vec::new(),
         }
     }
@@ -108,6 +128,7 @@ impl GramCache {
         Self {
             k,
             s: None,
+            a: None,
             children,
         }
     }
@@ -116,8 +137,8 @@ impl GramCache {
     /// [`Kernel::gram_lower_with_cache`] made whole).
     fn symmetrize(&mut self) {
         symmetrize_from_lower(&mut self.k);
-        if let Some(s) = self.s.as_mut() {
-            symmetrize_from_lower(s);
+        for m in [self.s.as_mut(), self.a.as_mut()].into_iter().flatten() {
+            symmetrize_from_lower(m);
         }
         for child in &mut self.children {
             child.symmetrize();
@@ -128,8 +149,8 @@ impl GramCache {
     /// [`crate::dense::recycle`]).
     pub fn recycle(self) {
         crate::dense::recycle(self.k);
-        if let Some(s) = self.s {
-            crate::dense::recycle(s);
+        for m in [self.s, self.a].into_iter().flatten() {
+            crate::dense::recycle(m);
         }
         for child in self.children {
             child.recycle();
@@ -138,21 +159,10 @@ impl GramCache {
 }
 
 impl Kernel {
-    fn family(&self) -> Option<(Family, &Stationary)> {
-        match self {
-            Self::Rbf(s) => Some((Family::Rbf, s)),
-            Self::Matern52(s) => Some((Family::Matern52, s)),
-            Self::Matern32(s) => Some((Family::Matern32, s)),
-            _ => None,
-        }
-    }
-
     /// Number of hyperparameters.
     pub fn n_params(&self) -> usize {
         match self {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => s.n_params(),
-            Self::Linear(l) => l.variances.len(),
-            Self::White(_) => 1,
+            Self::Leaf(l) => l.n_params(),
             Self::Sum(c) | Self::Product(c) => c.iter().map(Self::n_params).sum(),
         }
     }
@@ -160,25 +170,32 @@ impl Kernel {
     /// The number of inputs the kernel was built for (`None` for white noise alone).
     pub fn input_dim(&self) -> Option<usize> {
         match self {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => Some(s.lengthscales.len()),
-            Self::Linear(l) => Some(l.variances.len()),
-            Self::White(_) => None,
+            Self::Leaf(l) => l.input_dim(),
             Self::Sum(c) | Self::Product(c) => c.iter().find_map(Self::input_dim),
+        }
+    }
+
+    /// The leaves, in expression order.
+    pub fn leaves(&self) -> Vec<&LeafKernel> {
+        match self {
+            Self::Leaf(l) => vec![l],
+            Self::Sum(c) | Self::Product(c) => c.iter().flat_map(Self::leaves).collect(),
+        }
+    }
+
+    fn leaves_mut(&mut self) -> Vec<&mut LeafKernel> {
+        match self {
+            Self::Leaf(l) => vec![l],
+            Self::Sum(c) | Self::Product(c) => c.iter_mut().flat_map(Self::leaves_mut).collect(),
         }
     }
 
     /// Hyperparameters as logarithms, leaf by leaf.
     pub fn log_params(&self) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.n_params());
-        self.visit(&mut |k| match k {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => {
-                out.push(s.variance.ln());
-                out.extend(s.lengthscales.iter().map(|l| l.ln()));
-            }
-            Self::Linear(l) => out.extend(l.variances.iter().map(|v| v.ln())),
-            Self::White(w) => out.push(w.variance.ln()),
-            Self::Sum(_) | Self::Product(_) => {}
-        });
+        for leaf in self.leaves() {
+            leaf.push_log_params(&mut out);
+        }
         out
     }
 
@@ -188,127 +205,54 @@ impl Kernel {
     /// Never for `p.len() == n_params()`; shorter slices panic (internal use).
     pub fn set_log_params(&mut self, p: &[f64]) {
         let mut at = 0;
-        self.visit_mut(&mut |k| match k {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => {
-                s.variance = p[at].exp();
-                for (l, v) in s.lengthscales.iter_mut().zip(&p[at + 1..]) {
-                    *l = v.exp();
-                }
-                at += s.n_params();
-            }
-            Self::Linear(l) => {
-                for (x, v) in l.variances.iter_mut().zip(&p[at..]) {
-                    *x = v.exp();
-                }
-                at += l.variances.len();
-            }
-            Self::White(w) => {
-                w.variance = p[at].exp();
-                at += 1;
-            }
-            Self::Sum(_) | Self::Product(_) => {}
-        });
+        for leaf in self.leaves_mut() {
+            let m = leaf.n_params();
+            leaf.set_log_params(&p[at..at + m]);
+            at += m;
+        }
     }
 
     /// Kind of each hyperparameter, in [`Kernel::log_params`] order.
     pub fn param_kinds(&self) -> Vec<ParamKind> {
         let mut out = Vec::new();
-        self.visit(&mut |k| match k {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => {
-                out.push(ParamKind::Variance);
-                out.extend(std::iter::repeat_n(
-                    ParamKind::Lengthscale,
-                    s.lengthscales.len(),
-                ));
-            }
-            Self::Linear(l) => out.extend(std::iter::repeat_n(
-                ParamKind::LinearVariance,
-                l.variances.len(),
-            )),
-            Self::White(_) => out.push(ParamKind::Variance),
-            Self::Sum(_) | Self::Product(_) => {}
-        });
+        for leaf in self.leaves() {
+            leaf.push_param_kinds(&mut out);
+        }
         out
     }
 
     /// A readable name per hyperparameter (`rbf.lengthscale[pitch]`), in
     /// [`Kernel::log_params`] order; leaves of the same kind are numbered.
     pub fn param_names(&self, input_names: &[String]) -> Vec<String> {
-        let mut leaves = Vec::new();
-        self.visit(&mut |k| {
-            if let Some(name) = k.leaf_name() {
-                leaves.push(name);
-            }
-        });
-        let mut seen = std::collections::HashMap::<&str, usize>::new();
+        let leaves = self.leaves();
+        let names: Vec<LeafName> = leaves.iter().map(|l| l.name()).collect();
+        let mut seen = std::collections::HashMap::<LeafName, usize>::new();
+        let input = |q: usize| {
+            input_names
+                .get(q)
+                .cloned()
+                .unwrap_or_else(|| format!("x{q}"))
+        };
         let mut out = Vec::new();
-        for leaf in &leaves {
-            let count = leaves.iter().filter(|l| *l == leaf).count();
-            let index = seen.entry(leaf).or_insert(0);
+        for leaf in leaves {
+            let name = leaf.name();
+            let count = names.iter().filter(|n| **n == name).count();
+            let index = seen.entry(name).or_insert(0);
             *index += 1;
             let prefix = if count > 1 {
-                format!("{leaf}#{index}")
+                format!("{name}#{index}")
             } else {
-                (*leaf).to_string()
+                name.to_string()
             };
-            let input = |q: usize| {
-                input_names
-                    .get(q)
-                    .cloned()
-                    .unwrap_or_else(|| format!("x{q}"))
-            };
-            match *leaf {
-                "linear" => {
-                    let d = self.input_dim().unwrap_or(0);
-                    out.extend((0..d).map(|q| format!("{prefix}.variance[{}]", input(q))));
-                }
-                "white" => out.push(format!("{prefix}.variance")),
-                _ => {
-                    let d = self.input_dim().unwrap_or(0);
-                    out.push(format!("{prefix}.variance"));
-                    out.extend((0..d).map(|q| format!("{prefix}.lengthscale[{}]", input(q))));
-                }
-            }
+            leaf.push_param_names(&prefix, &input, &mut out);
         }
         out
     }
 
-    fn leaf_name(&self) -> Option<&'static str> {
-        match self {
-            Self::Rbf(_) => Some("rbf"),
-            Self::Matern52(_) => Some("matern52"),
-            Self::Matern32(_) => Some("matern32"),
-            Self::Linear(_) => Some("linear"),
-            Self::White(_) => Some("white"),
-            Self::Sum(_) | Self::Product(_) => None,
-        }
-    }
-
-    fn visit<'a>(&'a self, f: &mut impl FnMut(&'a Kernel)) {
-        f(self);
-        if let Self::Sum(c) | Self::Product(c) = self {
-            for k in c {
-                k.visit(f);
-            }
-        }
-    }
-
-    fn visit_mut(&mut self, f: &mut impl FnMut(&mut Kernel)) {
-        f(self);
-        if let Self::Sum(c) | Self::Product(c) = self {
-            for k in c {
-                k.visit_mut(f);
-            }
-        }
-    }
-
     /// `K(X1, X2)` between two distinct point sets (white noise contributes 0).
     pub fn cross(&self, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
-        if let Some((family, s)) = self.family() {
-            return s.cross(family, x1, x2);
-        }
         match self {
-            Self::Linear(l) => l.cross(x1, x2),
+            Self::Leaf(l) => l.cross(x1, x2),
             Self::Sum(c) => {
                 let mut total = Mat::zeros(x1.nrows(), x2.nrows());
                 for k in c {
@@ -323,7 +267,6 @@ impl Kernel {
                 }
                 total
             }
-            _ => Mat::zeros(x1.nrows(), x2.nrows()),
         }
     }
 
@@ -332,15 +275,7 @@ impl Kernel {
     pub fn diag(&self, x: MatRef<'_, f64>) -> Vec<f64> {
         let n = x.nrows();
         match self {
-            Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => vec![s.variance; n],
-            Self::Linear(l) => (0..n)
-                .map(|i| {
-                    (0..x.ncols())
-                        .map(|q| l.variances[q] * x[(i, q)].powi(2))
-                        .sum()
-                })
-                .collect(),
-            Self::White(w) => vec![w.variance; n],
+            Self::Leaf(l) => l.diag(x),
             Self::Sum(c) => c.iter().fold(vec![0.0; n], |acc, k| {
                 acc.iter().zip(k.diag(x)).map(|(a, b)| a + b).collect()
             }),
@@ -368,23 +303,13 @@ impl Kernel {
     /// unspecified): all an exact GP's likelihood and gradient read, at
     /// half the cost of the full matrices.
     pub fn gram_lower_with_cache(&self, x: MatRef<'_, f64>) -> GramCache {
-        let n = x.nrows();
-        if let Some((family, s)) = self.family() {
-            let (k, s) = s.gram_lower(family, x);
-            return GramCache::leaf(k, s);
-        }
         match self {
-            Self::Linear(l) => GramCache::leaf(l.gram_lower(x), None),
-            Self::White(w) => GramCache::leaf(
-                Mat::from_fn(n, n, |i, j| if i == j { w.variance } else { 0.0 }),
-                None,
-            ),
+            Self::Leaf(l) => l.gram_lower_with_cache(x),
             Self::Sum(c) | Self::Product(c) => {
                 let children: Vec<GramCache> =
                     c.iter().map(|k| k.gram_lower_with_cache(x)).collect();
                 GramCache::combine(matches!(self, Self::Sum(_)), children, true)
             }
-            _ => GramCache::leaf(Mat::zeros(n, n), None),
         }
     }
 
@@ -400,13 +325,8 @@ impl Kernel {
         w: MatRef<'_, f64>,
         out: &mut [f64],
     ) {
-        if let Some((_, s)) = self.family() {
-            s.accumulate_gradient(x, &cache.k, cache.s.as_ref(), w, out);
-            return;
-        }
         match self {
-            Self::Linear(l) => l.accumulate_gradient(x, w, out),
-            Self::White(wk) => out[0] += wk.variance * trace(w),
+            Self::Leaf(l) => l.accumulate_gradient(x, cache, w, out),
             Self::Sum(children) => {
                 let mut at = 0;
                 for (k, c) in children.iter().zip(&cache.children) {
@@ -431,7 +351,6 @@ impl Kernel {
                     at += m;
                 }
             }
-            _ => {}
         }
     }
 }

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::RegressorError;
 use crate::exact_gp::Bounds;
 use crate::hyperopt::{LBFGS_MEMORY, Optimizer, OptimizerSettings, StartPolicy};
-use crate::kernels::{KernelExpr, KernelInit};
+use crate::kernels::{KernelExpr, KernelInit, LeafName};
 
 /// Which sparse approximation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -110,7 +110,7 @@ pub struct SparseGpParams {
 impl Default for SparseGpParams {
     fn default() -> Self {
         Self {
-            kernel: KernelExpr::Leaf("rbf".into()),
+            kernel: KernelExpr::Leaf(LeafName::Rbf),
             approximation: Approximation::Vfe,
             inducing: InducingParams::default(),
             standardize: true,

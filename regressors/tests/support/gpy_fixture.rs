@@ -2,13 +2,13 @@
 //! and kernels described leaf by leaf as the generator scripts write them.
 
 use faer::Mat;
-use gpodo_regressors::kernels::{Kernel, Linear, Stationary, White};
+use gpodo_regressors::kernels::{Kernel, LeafKernel, Linear, RatQuad, Stationary, White};
 use serde::Deserialize;
 
 /// One leaf kernel of a fixture case.
 #[derive(Debug, Deserialize)]
 pub struct Part {
-    /// `rbf`, `matern52`, `matern32`, `linear` or `white`.
+    /// `rbf`, `matern52`, `matern32`, `linear`, `white` or `ratquad`.
     pub kind: String,
     /// Signal variance (stationary and white kernels).
     #[serde(default)]
@@ -19,6 +19,9 @@ pub struct Part {
     /// Per-input variances (linear kernel).
     #[serde(default)]
     pub variances: Option<Vec<f64>>,
+    /// The power `α` (rational quadratic kernel).
+    #[serde(default)]
+    pub power: Option<f64>,
 }
 
 /// A fixture's rows as a faer matrix.
@@ -29,11 +32,18 @@ pub fn matrix(rows: &[Vec<f64>]) -> Mat<f64> {
 fn leaf(part: &Part) -> Kernel {
     let stationary = || Stationary::new(part.variance.unwrap(), part.lengthscales.clone().unwrap());
     match part.kind.as_str() {
-        "rbf" => Kernel::Rbf(stationary()),
-        "matern52" => Kernel::Matern52(stationary()),
-        "matern32" => Kernel::Matern32(stationary()),
-        "linear" => Kernel::Linear(Linear::new(part.variances.clone().unwrap())),
-        "white" => Kernel::White(White::new(part.variance.unwrap())),
+        "rbf" => Kernel::Leaf(LeafKernel::Rbf(stationary())),
+        "matern52" => Kernel::Leaf(LeafKernel::Matern52(stationary())),
+        "matern32" => Kernel::Leaf(LeafKernel::Matern32(stationary())),
+        "linear" => Kernel::Leaf(LeafKernel::Linear(Linear::new(
+            part.variances.clone().unwrap(),
+        ))),
+        "white" => Kernel::Leaf(LeafKernel::White(White::new(part.variance.unwrap()))),
+        "ratquad" => Kernel::Leaf(LeafKernel::RatQuad(RatQuad::new(
+            part.variance.unwrap(),
+            part.lengthscales.clone().unwrap(),
+            part.power.unwrap(),
+        ))),
         other => panic!("unknown kind {other}"),
     }
 }
@@ -54,6 +64,7 @@ pub fn gpy_name(kind: &str) -> &str {
     match kind {
         "matern52" => "Mat52",
         "matern32" => "Mat32",
+        "ratquad" => "RatQuad",
         other => other,
     }
 }
@@ -82,6 +93,11 @@ pub fn gpy_kernel_gradient(
         match part.kind.as_str() {
             "linear" => out.extend(get("variances")),
             "white" => out.extend(get("variance")),
+            "ratquad" => {
+                out.extend(get("variance"));
+                out.extend(get("lengthscale"));
+                out.extend(get("power"));
+            }
             _ => {
                 out.extend(get("variance"));
                 out.extend(get("lengthscale"));
