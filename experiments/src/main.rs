@@ -462,6 +462,7 @@ fn main() -> anyhow::Result<()> {
         )
         .with_writer(std::io::stderr)
         .init();
+    gpodo_experiments::stop::install_ctrl_c()?;
     match cli.command {
         Command::Run {
             file,
@@ -469,7 +470,15 @@ fn main() -> anyhow::Result<()> {
             resume,
             force,
             shard,
-        } => run(&file, out, resume, force, shard, cli.quiet),
+        } => match run(&file, out, resume, force, shard, cli.quiet) {
+            // Stopped by Ctrl-C: the runner's message, and the status a
+            // shell gives an interrupted command.
+            Err(e) if gpodo_experiments::stop::requested() => {
+                eprintln!("{}", e.root_cause());
+                std::process::exit(130);
+            }
+            other => other,
+        },
         Command::Plan { file } => plan(&file),
         Command::Report { dir } => report(&dir),
         Command::Bench { file, out } => bench(&file, out),

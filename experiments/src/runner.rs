@@ -104,6 +104,11 @@ pub enum RunnerError {
     /// The shared work failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// The user stopped the run (Ctrl-C).
+    #[error(
+        "stopped: the runs finished before the stop are recorded; `gpodo run --resume` runs the rest"
+    )]
+    Stopped,
     /// Writing a report failed.
     #[error("writing {}: {source}", path.display())]
     Output {
@@ -220,6 +225,9 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         MultiProgress::new()
     };
     let shared = SharedWork::build(&configs, Some(&multi))?;
+    if crate::stop::requested() {
+        return Err(RunnerError::Stopped);
+    }
     let bar = if options.quiet {
         ProgressBar::hidden()
     } else {
@@ -237,7 +245,15 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
     todo.par_iter()
         .progress_with(bar.clone())
         .try_for_each(|run| -> Result<(), RunnerError> {
-            let mut results = match shared.results(&run.config, base) {
+            if crate::stop::requested() {
+                return Err(RunnerError::Stopped);
+            }
+            let results = shared.results(&run.config, base);
+            // A run the stop cut short records nothing.
+            if crate::stop::requested() {
+                return Err(RunnerError::Stopped);
+            }
+            let mut results = match results {
                 Ok(r) => r,
                 Err(e) => {
                     let reason = e.to_string();

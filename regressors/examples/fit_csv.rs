@@ -29,9 +29,10 @@ use gpodo_traits::{FitProgress, ResidualDataset, ResidualRegressor, SampleMatrix
 struct Trace(Instant);
 
 impl FitProgress for Trace {
-    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) -> std::ops::ControlFlow<()> {
         let seconds = self.0.elapsed().as_secs_f64();
         eprintln!("{start} {iteration} {objective} {seconds:.3}");
+        std::ops::ControlFlow::Continue(())
     }
 }
 

@@ -41,6 +41,10 @@ pub enum RegressorError {
         /// What is wrong, naming the row and column where there is one.
         detail: String,
     },
+    /// The fit was stopped from outside (its progress observer asked it
+    /// to); nothing was fitted.
+    #[error("the fit was stopped before it ended; nothing was fitted")]
+    Stopped,
     /// The hyperparameter optimiser failed.
     #[error("hyperparameter optimisation ({optimizer}): {detail}")]
     Optimizer {

@@ -380,8 +380,9 @@ fn regressors_are_send_and_sync() {
 struct Recorder(std::sync::Mutex<Vec<(usize, u64, f64)>>);
 
 impl gpodo_traits::FitProgress for Recorder {
-    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) -> std::ops::ControlFlow<()> {
         self.0.lock().unwrap().push((start, iteration, objective));
+        std::ops::ControlFlow::Continue(())
     }
 }
 
@@ -411,6 +412,56 @@ fn a_fit_reports_its_iterations_without_changing_its_result() {
     }
     let best = seen.iter().map(|s| s.2).fold(f64::NEG_INFINITY, f64::max);
     assert!((best - report.objective.unwrap()).abs() < 1e-6 * best.abs());
+}
+
+/// Asks the fit to stop at its `after`-th reported iteration.
+struct StopAfter {
+    after: usize,
+    seen: std::sync::atomic::AtomicUsize,
+}
+
+impl gpodo_traits::FitProgress for StopAfter {
+    fn iteration(&self, _: usize, _: u64, _: f64) -> std::ops::ControlFlow<()> {
+        let n = self.seen.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        if n >= self.after {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    }
+}
+
+/// A fit whose progress asks it to stop ends with an error saying so, at
+/// once (no further iteration is reported), and leaves no model behind,
+/// for the exact and the sparse GP; the same fit left alone succeeds.
+#[test]
+fn a_stopped_fit_says_so_and_fits_nothing() {
+    use gpodo_regressors::{SparseGp, SparseGpParams};
+    let (x, y) = sine_data(80, 29);
+    let data = dataset(&x, &y);
+    let models: Vec<Box<dyn Fn() -> Box<dyn ResidualRegressor>>> = vec![
+        Box::new(|| Box::new(ExactGp::new(ExactGpParams::default()).unwrap())),
+        Box::new(|| Box::new(SparseGp::new(SparseGpParams::default()).unwrap())),
+    ];
+    for make in models {
+        let stop = std::sync::Arc::new(StopAfter {
+            after: 3,
+            seen: std::sync::atomic::AtomicUsize::new(0),
+        });
+        let mut model = make();
+        model.set_progress(Some(stop.clone()));
+        let err = model.fit(&data).unwrap_err();
+        assert!(err.to_string().contains("stopped"), "{err}");
+        assert_eq!(stop.seen.load(std::sync::atomic::Ordering::SeqCst), 3);
+        let predicted = model.predict(&data.inputs);
+        assert!(
+            matches!(predicted, Err(gpodo_traits::Error::NotFitted { .. })),
+            "{:?}",
+            predicted.map(|_| ())
+        );
+        let mut alone = make();
+        assert!(alone.fit(&data).is_ok());
+    }
 }
 
 #[test]

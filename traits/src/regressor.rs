@@ -146,11 +146,14 @@ pub struct StartRecord {
 }
 
 /// Receives a fit's progress: the optimiser's iterations (for progress
-/// bars and logs; the fit's result never depends on it).
+/// bars and logs; a fit that goes on never depends on it), and may stop the
+/// fit.
 pub trait FitProgress: Send + Sync {
     /// Iteration `iteration` of start `start` ended with the best objective
     /// `objective` so far (e.g. the log marginal likelihood).
-    fn iteration(&self, start: usize, iteration: u64, objective: f64);
+    /// `ControlFlow::Break(())` stops the fit: it returns an error saying
+    /// so, never a half-fitted model.
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) -> std::ops::ControlFlow<()>;
 }
 
 /// A regressor of odometry residuals.

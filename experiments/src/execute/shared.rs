@@ -149,9 +149,11 @@ fn fit_shared(
         spec.label()
     };
     let spinner = progress.map(|m| FitSpinner::new(m, &label));
-    let sink = spinner
-        .as_ref()
-        .map(|s| Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>);
+    // Without a spinner the fit still hears a stop (Ctrl-C).
+    let sink: Option<Arc<dyn gpodo_traits::FitProgress>> = Some(match spinner.as_ref() {
+        Some(s) => Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>,
+        None => Arc::new(crate::stop::StopOnRequest),
+    });
     let (mut result, model) = if absolute {
         let (train, test) = (absolute_rows(&p.rows.train), absolute_rows(&p.rows.test));
         fit_and_score(spec, base, &train, &test, sink)?
@@ -254,7 +256,11 @@ impl SharedWork {
             .par_bridge()
             .map(|(key, (spec, absolute, p, base))| {
                 let fitted = fit_shared(spec, absolute, base, &p, progress).map_err(|e| {
-                    tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
+                    if crate::stop::requested() {
+                        tracing::info!(regressor = %spec.label(), "fit stopped");
+                    } else {
+                        tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
+                    }
                     (spec.label(), e.to_string())
                 });
                 (key, fitted)
@@ -397,11 +403,12 @@ impl FitSpinner {
 }
 
 impl gpodo_traits::FitProgress for FitSpinner {
-    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) -> std::ops::ControlFlow<()> {
         self.bar.set_message(format!(
             "{}: start {start}, iteration {iteration}, objective {objective:.2}",
             self.label
         ));
+        crate::stop::control_flow()
     }
 }
 

@@ -69,7 +69,8 @@ impl<O, S: Solver<O, HyperState>> Solver<O, HyperState> for Converging<S> {
 }
 
 /// Reports each iteration to a [`FitProgress`] (an argmin observer), as
-/// the objective to maximise: `−cost / scale`.
+/// the objective to maximise: `−cost / scale`; when the progress asks to
+/// stop, ends the run with an error.
 struct Reporter {
     progress: Arc<dyn FitProgress>,
     start: usize,
@@ -78,12 +79,14 @@ struct Reporter {
 
 impl Observe<HyperState> for Reporter {
     fn observe_iter(&mut self, state: &HyperState, _kv: &KV) -> Result<(), ArgminError> {
-        self.progress.iteration(
+        match self.progress.iteration(
             self.start,
             state.get_iter(),
             -state.get_best_cost() / self.scale,
-        );
-        Ok(())
+        ) {
+            std::ops::ControlFlow::Continue(()) => Ok(()),
+            std::ops::ControlFlow::Break(()) => Err(ArgminError::msg("the fit was stopped")),
+        }
     }
 }
 

@@ -9,6 +9,9 @@
 //! those optimised) is kept, so a report can show how multimodal a problem
 //! was.
 
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -93,30 +96,52 @@ impl StartPolicy {
 }
 
 /// Reports a run's starts to the fit's progress under numbers that follow
-/// the runs before it, so that every optimiser run of a fit has its own.
+/// the runs before it, so that every optimiser run of a fit has its own;
+/// once the progress asks to stop, every run of the fit stops.
 struct Numbered {
     inner: std::sync::Arc<dyn gpodo_traits::FitProgress>,
     first: usize,
+    stopped: std::sync::Arc<AtomicBool>,
 }
 
 impl gpodo_traits::FitProgress for Numbered {
-    fn iteration(&self, start: usize, iteration: u64, objective: f64) {
-        self.inner
+    fn iteration(&self, start: usize, iteration: u64, objective: f64) -> ControlFlow<()> {
+        if self.stopped.load(Ordering::Relaxed) {
+            return ControlFlow::Break(());
+        }
+        let flow = self
+            .inner
             .iteration(self.first + start, iteration, objective);
+        if flow.is_break() {
+            self.stopped.store(true, Ordering::Relaxed);
+        }
+        flow
     }
 }
 
-/// The progress sink of the run that is numbered `first`.
+/// The progress sink of the run that is numbered `first`, which sets
+/// `stopped` when the fit is to stop.
 fn numbered(
     progress: &ProgressSink,
     first: usize,
+    stopped: &std::sync::Arc<AtomicBool>,
 ) -> Option<std::sync::Arc<dyn gpodo_traits::FitProgress>> {
     progress.0.as_ref().map(|inner| {
         std::sync::Arc::new(Numbered {
             inner: std::sync::Arc::clone(inner),
             first,
+            stopped: std::sync::Arc::clone(stopped),
         }) as std::sync::Arc<dyn gpodo_traits::FitProgress>
     })
+}
+
+/// [`RegressorError::Stopped`] once the fit's progress has asked to stop.
+fn check_stopped(stopped: &AtomicBool) -> Result<(), RegressorError> {
+    if stopped.load(Ordering::Relaxed) {
+        Err(RegressorError::Stopped)
+    } else {
+        Ok(())
+    }
 }
 
 /// What a perturbed candidate's label carries after its base's.
@@ -276,6 +301,7 @@ pub fn maximize_best(
     let (mut best_run, mut evaluations, mut iterations) = (None::<Maximized>, 0, 0);
     let mut last_error = None;
     let mut run_number = 0;
+    let stopped = std::sync::Arc::new(AtomicBool::new(false));
     // Every named base races, with the best-scored others: the objective
     // at a start predicts its optimum poorly (on the ExoTeR table a
     // perturbed start scores above GPy's unit lengthscales and ends 350
@@ -302,7 +328,7 @@ pub fn maximize_best(
         let mut racers = Vec::with_capacity(runs.len());
         for (i, start) in runs {
             let u = clamped(&start, bounds);
-            let sink = numbered(progress, run_number);
+            let sink = numbered(progress, run_number, &stopped);
             run_number += 1;
             match Run::start(objective, bounds, u, value_scale, &short) {
                 Ok(run) => racers.push((i, run, sink)),
@@ -310,6 +336,7 @@ pub fn maximize_best(
             }
         }
         race(&mut racers, policy);
+        check_stopped(&stopped)?;
         let mut leader: Option<(usize, Vec<f64>, f64)> = None;
         for (i, run, _) in racers {
             let out = run.finish();
@@ -337,9 +364,11 @@ pub fn maximize_best(
             bounds: bounds.to_vec(),
             perturb: perturb.to_vec(),
         };
-        let sink = numbered(progress, run_number);
+        let sink = numbered(progress, run_number, &stopped);
         run_number += 1 + settings.restarts;
-        match maximize(objective, &coords, value_scale, &settings, sink.as_ref()) {
+        let result = maximize(objective, &coords, value_scale, &settings, sink.as_ref());
+        check_stopped(&stopped)?;
+        match result {
             Ok(out) => {
                 let record = &mut records[i];
                 record.final_objective = out.start_values.first().copied();
