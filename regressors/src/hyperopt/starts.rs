@@ -144,8 +144,40 @@ fn check_stopped(stopped: &AtomicBool) -> Result<(), RegressorError> {
     }
 }
 
-/// What a perturbed candidate's label carries after its base's.
-const PERTURBED: &str = ", perturbed #";
+/// What a candidate start is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StartKind {
+    /// A named base start: it always races.
+    Base,
+    /// Seeded perturbation number `number` (from 1) of the base before it:
+    /// it races only when it scores among the best.
+    Perturbation {
+        /// Which perturbation of its base.
+        number: usize,
+    },
+}
+
+/// A candidate start before it is scored.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StartPoint {
+    /// What the start is, e.g. `lengthscale 1` or `√D, perturbed #2`.
+    pub label: String,
+    /// Its kind.
+    pub kind: StartKind,
+    /// The optimiser's coordinates there.
+    pub coords: Vec<f64>,
+}
+
+impl StartPoint {
+    /// A named base start.
+    pub fn base(label: impl Into<String>, coords: Vec<f64>) -> Self {
+        Self {
+            label: label.into(),
+            kind: StartKind::Base,
+            coords,
+        }
+    }
+}
 
 /// One candidate start.
 #[derive(Debug, Clone, PartialEq)]
@@ -170,16 +202,19 @@ pub fn with_perturbations(
     perturb: &[bool],
     perturbations: usize,
     seed: u64,
-) -> Vec<(String, Vec<f64>)> {
+) -> Vec<StartPoint> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(bases.len() * (1 + perturbations));
     for (label, base) in bases {
         let base = clamped(&base, bounds);
-        for k in 1..=perturbations {
-            let moved = perturbed(&base, bounds, perturb, &mut rng);
-            out.push((format!("{label}{PERTURBED}{k}"), moved));
+        for number in 1..=perturbations {
+            out.push(StartPoint {
+                label: format!("{label}, perturbed #{number}"),
+                kind: StartKind::Perturbation { number },
+                coords: perturbed(&base, bounds, perturb, &mut rng),
+            });
         }
-        out.insert(out.len() - perturbations, (label, base));
+        out.insert(out.len() - perturbations, StartPoint::base(label, base));
     }
     out
 }
@@ -187,17 +222,17 @@ pub fn with_perturbations(
 /// Scores every candidate with `score` and returns them all, in their
 /// given order, with their values (a failed evaluation scores `None`).
 pub fn score_all(
-    candidates: Vec<(String, Vec<f64>)>,
+    candidates: Vec<StartPoint>,
     score: impl Fn(&[f64]) -> Result<f64, RegressorError>,
 ) -> Vec<Candidate> {
     candidates
         .into_iter()
-        .map(|(label, coords)| {
-            let value = score(&coords).ok().filter(|v| v.is_finite());
+        .map(|start| {
+            let value = score(&start.coords).ok().filter(|v| v.is_finite());
             Candidate {
-                base: !label.contains(PERTURBED),
-                label,
-                coords,
+                base: start.kind == StartKind::Base,
+                label: start.label,
+                coords: start.coords,
                 value,
             }
         })
@@ -280,7 +315,7 @@ pub fn kernel_bases(
 #[allow(clippy::too_many_arguments)]
 pub fn maximize_best(
     objective: &dyn Objective,
-    candidates: Vec<(String, Vec<f64>)>,
+    candidates: Vec<StartPoint>,
     score: impl Fn(&[f64]) -> Result<f64, RegressorError>,
     bounds: &[LogBounds],
     perturb: &[bool],
@@ -453,7 +488,7 @@ mod tests {
             ("b".into(), vec![5.0, 2.0]),
         ];
         let all = with_perturbations(bases.clone(), &bounds, &[true, false], 2, 7);
-        let labels: Vec<&str> = all.iter().map(|(l, _)| l.as_str()).collect();
+        let labels: Vec<&str> = all.iter().map(|s| s.label.as_str()).collect();
         assert_eq!(
             labels,
             [
@@ -465,12 +500,14 @@ mod tests {
                 "b, perturbed #2"
             ]
         );
+        assert_eq!(all[0].kind, StartKind::Base);
+        assert_eq!(all[2].kind, StartKind::Perturbation { number: 2 });
         // Base b was clamped into its bound; unperturbed coordinates stay.
-        assert_eq!(all[3].1, vec![2.0f64.ln(), 2.0]);
-        for (_, c) in &all {
-            assert!(c[0] >= 0.5f64.ln() - 1e-15 && c[0] <= 2.0f64.ln() + 1e-15);
+        assert_eq!(all[3].coords, vec![2.0f64.ln(), 2.0]);
+        for s in &all {
+            assert!(s.coords[0] >= 0.5f64.ln() - 1e-15 && s.coords[0] <= 2.0f64.ln() + 1e-15);
         }
-        assert_eq!(all[1].1[1], 1.0);
+        assert_eq!(all[1].coords[1], 1.0);
         // Deterministic: the same seed gives the same candidates.
         assert_eq!(
             all,
@@ -481,11 +518,11 @@ mod tests {
     #[test]
     fn picks_the_highest_scored_candidates_and_skips_failures() {
         let candidates = vec![
-            ("low".to_string(), vec![0.0]),
-            ("fails".into(), vec![1.0]),
-            ("high".into(), vec![2.0]),
-            ("tie".into(), vec![3.0]),
-            ("high again".into(), vec![4.0]),
+            StartPoint::base("low", vec![0.0]),
+            StartPoint::base("fails", vec![1.0]),
+            StartPoint::base("high", vec![2.0]),
+            StartPoint::base("tie", vec![3.0]),
+            StartPoint::base("high again", vec![4.0]),
         ];
         let scored = score_all(candidates, |c| match c[0] as i32 {
             0 => Ok(-10.0),
@@ -527,10 +564,10 @@ mod tests {
     #[test]
     fn halving_the_race_spares_only_the_trailing_racers() {
         // One named start near each bump: all five race.
-        let candidates: Vec<(String, Vec<f64>)> = PEAKS
+        let candidates: Vec<StartPoint> = PEAKS
             .iter()
             .enumerate()
-            .map(|(k, (t, _))| (format!("near {k}"), vec![t[0] + 1.2, t[1] - 0.9]))
+            .map(|(k, (t, _))| StartPoint::base(format!("near {k}"), vec![t[0] + 1.2, t[1] - 0.9]))
             .collect();
         let bounds = vec![LogBounds::unbounded(); 2];
         let settings = OptimizerSettings {
