@@ -171,32 +171,13 @@ impl SelectorSpec {
                     ..*p
                 }),
             },
-            Self::MaxGap {
-                inner,
-                max_gap_secs,
-                max_distance_m,
-                max_rotation_rad,
-            } => Self::MaxGap {
-                inner: Box::new(inner_for_odometry(inner, mode)?),
-                max_gap_secs: *max_gap_secs,
-                max_distance_m: *max_distance_m,
-                max_rotation_rad: *max_rotation_rad,
-            },
-            Self::Hysteresis {
-                inner,
-                enter_mps,
-                exit_mps,
-                alert_period_secs,
-                alert_keyframe_scale,
-                signal,
-            } => Self::Hysteresis {
-                inner: Box::new(inner_for_odometry(inner, mode)?),
-                enter_mps: *enter_mps,
-                exit_mps: *exit_mps,
-                alert_period_secs: *alert_period_secs,
-                alert_keyframe_scale: *alert_keyframe_scale,
-                signal: *signal,
-            },
+            Self::MaxGap { .. } | Self::Hysteresis { .. } => {
+                let mut wrapper = self.clone();
+                if let Self::MaxGap { inner, .. } | Self::Hysteresis { inner, .. } = &mut wrapper {
+                    **inner = inner_for_odometry(inner, mode)?;
+                }
+                wrapper
+            }
             other => other.clone(),
         })
     }

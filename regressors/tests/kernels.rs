@@ -27,6 +27,23 @@ const EXPRESSIONS: [&str; 13] = [
     "ratquad * matern52",
 ];
 
+/// Central finite differences of `f` in each log-hyperparameter of
+/// `kernel`, step `h`.
+fn log_param_fd(kernel: &Kernel, h: f64, f: impl Fn(&Kernel) -> f64) -> Vec<f64> {
+    let theta = kernel.log_params();
+    (0..theta.len())
+        .map(|p| {
+            let (mut plus, mut minus) = (kernel.clone(), kernel.clone());
+            let mut tp = theta.clone();
+            tp[p] += h;
+            plus.set_log_params(&tp);
+            tp[p] -= 2.0 * h;
+            minus.set_log_params(&tp);
+            (f(&plus) - f(&minus)) / (2.0 * h)
+        })
+        .collect()
+}
+
 fn weighted_sum(k: &Kernel, x: &Mat<f64>, w: &Mat<f64>) -> f64 {
     frobenius_dot(w.as_ref(), k.gram(x.as_ref()).as_ref())
 }
@@ -43,18 +60,9 @@ fn gradient_matches_finite_differences_for_every_kernel() {
             let cache = kernel.gram_with_cache(x.as_ref());
             let mut analytic = vec![0.0; kernel.n_params()];
             kernel.accumulate_gradient(x.as_ref(), &cache, w.as_ref(), &mut analytic);
-            let theta = kernel.log_params();
-            let h = 1e-5;
-            for (k, a) in analytic.iter().enumerate() {
-                let mut plus = kernel.clone();
-                let mut minus = kernel.clone();
-                let mut tp = theta.clone();
-                tp[k] += h;
-                plus.set_log_params(&tp);
-                tp[k] -= 2.0 * h;
-                minus.set_log_params(&tp);
-                let fd = (weighted_sum(&plus, &x, &w) - weighted_sum(&minus, &x, &w)) / (2.0 * h);
-                let err = rel_err(*a, fd, 1e-6);
+            let fd = log_param_fd(&kernel, 1e-5, |k| weighted_sum(k, &x, &w));
+            for (k, (a, fd)) in analytic.iter().zip(&fd).enumerate() {
+                let err = rel_err(*a, *fd, 1e-6);
                 assert!(
                     err < 1e-5,
                     "{expr} trial {trial} parameter {k}: analytic {a} vs fd {fd} (rel {err:e})"
@@ -91,16 +99,9 @@ fn cross_and_diagonal_gradients_match_finite_differences() {
         let value = |k: &Kernel, x1: &Mat<f64>| {
             frobenius_dot(w.as_ref(), k.cross(x1.as_ref(), x2.as_ref()).as_ref())
         };
-        let theta = kernel.log_params();
-        for (p, a) in analytic.iter().enumerate() {
-            let (mut plus, mut minus) = (kernel.clone(), kernel.clone());
-            let mut tp = theta.clone();
-            tp[p] += h;
-            plus.set_log_params(&tp);
-            tp[p] -= 2.0 * h;
-            minus.set_log_params(&tp);
-            let fd = (value(&plus, &x1) - value(&minus, &x1)) / (2.0 * h);
-            assert!(rel_err(*a, fd, 1e-6) < 1e-5, "{expr} θ{p}: {a} vs {fd}");
+        let fd = log_param_fd(&kernel, h, |k| value(k, &x1));
+        for (p, (a, fd)) in analytic.iter().zip(&fd).enumerate() {
+            assert!(rel_err(*a, *fd, 1e-6) < 1e-5, "{expr} θ{p}: {a} vs {fd}");
         }
         for i in 0..n1 {
             for q in 0..d {
@@ -125,16 +126,10 @@ fn cross_and_diagonal_gradients_match_finite_differences() {
                 .map(|(a, b)| a * b)
                 .sum()
         };
-        for (p, a) in diag.iter().enumerate() {
-            let (mut plus, mut minus) = (kernel.clone(), kernel.clone());
-            let mut tp = theta.clone();
-            tp[p] += h;
-            plus.set_log_params(&tp);
-            tp[p] -= 2.0 * h;
-            minus.set_log_params(&tp);
-            let fd = (dvalue(&plus) - dvalue(&minus)) / (2.0 * h);
+        let fd = log_param_fd(&kernel, h, dvalue);
+        for (p, (a, fd)) in diag.iter().zip(&fd).enumerate() {
             assert!(
-                rel_err(*a, fd, 1e-6) < 1e-5,
+                rel_err(*a, *fd, 1e-6) < 1e-5,
                 "{expr} diag θ{p}: {a} vs {fd}"
             );
         }
