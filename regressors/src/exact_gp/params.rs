@@ -184,9 +184,8 @@ pub struct ExactGpParams {
     pub relative_cost_tolerance: f64,
     /// Correction pairs of the L-BFGS (default 30; scipy's and so GPy's
     /// `maxcor` is 10). With 30 to 60 log-hyperparameters, 10 pairs see
-    /// too little of the curvature: on the simulated testbed's 1200 rows
-    /// the four Table I fits take 20 % fewer evaluations with 30, at the
-    /// same optima within 0.3 nats.
+    /// too little of the curvature (measured in `bench/README.md`, "L-BFGS
+    /// memory").
     pub lbfgs_memory: usize,
     /// Hyperparameter bounds.
     pub bounds: Bounds,

@@ -1,7 +1,7 @@
 //! The multi-start policy shared by the GP regressors: the log marginal
 //! likelihood in 20–30 lengthscales is multimodal, and a single start can
-//! land in an optimum hundreds of nats below another (on the ExoTeR table,
-//! `√D` lengthscales end 386 nats below GPy's unit lengthscales). So a
+//! land in an optimum hundreds of nats below another (`bench/README.md`
+//! compares the starts on the ExoTeR table). So a
 //! handful of deterministic candidate starts — named base points and seeded
 //! perturbations of them — is scored by the objective alone (no gradient,
 //! one factorisation each), the optimiser runs from the best few, and the
@@ -47,9 +47,9 @@ pub struct StartPolicy {
     /// where it paused, so the leader and its optimum are unchanged
     /// whenever it is in that half; 0 races every candidate the whole way.
     /// Unset, each model's own default: 7 for the exact GP
-    /// ([`EXACT_GP_HALVE_AFTER`]), none for the sparse GP, whose racers'
-    /// ranks were not measured, and where halving continued another start
-    /// on 5 fits of 13 (`bench/README.md`, "Halving the start race").
+    /// ([`EXACT_GP_HALVE_AFTER`]), none for the sparse GP, where halving
+    /// changed which start continued (`bench/README.md`, "Halving the
+    /// start race").
     pub halve_after: Option<u64>,
 }
 
@@ -64,10 +64,10 @@ impl Default for StartPolicy {
     }
 }
 
-/// The exact GP's default for [`StartPolicy::halve_after`]. Starts from
-/// unit lengthscales climb slowly at first: on the 16 fits of
-/// `bench/README.md` the 15-iteration leader ranked as low as 4th of 4 or 5
-/// after 3–5 iterations, and at most 3rd of 5 (2nd of 4) after 6–11.
+/// The exact GP's default for [`StartPolicy::halve_after`]: starts from
+/// unit lengthscales climb slowly at first, so a ranking after fewer
+/// iterations drops the eventual leader (the racers' ranks by iteration are
+/// in `bench/README.md`, "Halving the start race").
 pub const EXACT_GP_HALVE_AFTER: u64 = 7;
 
 impl StartPolicy {
