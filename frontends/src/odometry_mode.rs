@@ -90,17 +90,6 @@ impl WindowOdometry {
             uncorrected_sq_error: 3.0 * variance,
         }
     }
-
-    /// The drift rate a budget counts under `mode` ((m/s)²): the edges'
-    /// variance when the mean is corrected, the uncorrected odometry's
-    /// expected squared error when it is not.
-    pub fn budget_rate(&self, mode: &OdometryMode) -> f64 {
-        if mode.correct_mean {
-            self.variance.sum()
-        } else {
-            self.uncorrected_sq_error
-        }
-    }
 }
 
 impl OdometryMode {
@@ -125,19 +114,18 @@ impl OdometryMode {
     }
 
     /// A short description for reports.
-    pub fn label(&self) -> &'static str {
-        match (self.correct_mean, self.covariance) {
-            (true, CovarianceSource::PredictiveVariance) => "corrected, predictive variance",
-            (false, CovarianceSource::PredictiveVariance) => "uncorrected, predictive variance",
-            (true, CovarianceSource::AbsoluteResidual) => "corrected, |residual|² covariance",
-            (false, CovarianceSource::AbsoluteResidual) => "uncorrected, |residual|² covariance",
-            (true, CovarianceSource::AbsoluteResidualAsVariance) => {
-                "corrected, |residual| as variance"
-            }
-            (false, CovarianceSource::AbsoluteResidualAsVariance) => {
-                "uncorrected, |residual| as variance"
-            }
-        }
+    pub fn label(&self) -> String {
+        let mean = if self.correct_mean {
+            "corrected"
+        } else {
+            "uncorrected"
+        };
+        let covariance = match self.covariance {
+            CovarianceSource::PredictiveVariance => "predictive variance",
+            CovarianceSource::AbsoluteResidual => "|residual|² covariance",
+            CovarianceSource::AbsoluteResidualAsVariance => "|residual| as variance",
+        };
+        format!("{mean}, {covariance}")
     }
 
     /// The odometry of one window under this mode.
@@ -216,13 +204,16 @@ mod tests {
         let a = OdometryMode::CORRECTED.window(&p).unwrap();
         assert_eq!(a.correction, p.mean);
         assert_eq!(a.variance, p.variance);
-        assert!((a.budget_rate(&OdometryMode::CORRECTED) - 6e-6).abs() < 1e-18);
+        // A corrected odometry's budget counts the variance.
+        assert!(!OdometryMode::CORRECTED.budget_counts_mean());
+        assert!((a.variance.sum() - 6e-6).abs() < 1e-18);
         // (b): σ = â, nothing corrected, the budget counts ‖â‖² + Σ σ²_â.
         let b = OdometryMode::AUTHORS.window(&p).unwrap();
         assert_eq!(b.correction, Vector3::zeros());
         assert_eq!(b.variance, Vector3::new(25e-6, 4e-6, 1e-6));
         let second_moment = 25e-6 + 4e-6 + 1e-6 + 5e-6;
-        assert!((b.budget_rate(&OdometryMode::AUTHORS) - second_moment).abs() < 1e-18);
+        assert!(OdometryMode::AUTHORS.budget_counts_mean());
+        assert!((b.uncorrected_sq_error - second_moment).abs() < 1e-18);
         // (c): corrected, â² covariance, the budget counts Σ â².
         let both = OdometryMode {
             correct_mean: true,
@@ -230,7 +221,8 @@ mod tests {
         };
         let c = both.window(&p).unwrap();
         assert_eq!(c.correction, p.mean);
-        assert!((c.budget_rate(&both) - 30e-6).abs() < 1e-18);
+        assert!(!both.budget_counts_mean());
+        assert!((c.variance.sum() - 30e-6).abs() < 1e-18);
         // The literal reading: â itself is the variance.
         let literal = OdometryMode {
             correct_mean: false,

@@ -101,6 +101,21 @@ pub struct SchemeSpecRef<'a> {
     pub odometry: OdometryMode,
 }
 
+impl<'a> SchemeSpecRef<'a> {
+    /// A scheme with the front end's tracking prior, no keyframe
+    /// rescaling and gpodo's odometry (the mean corrects, the predictive
+    /// variance weights).
+    pub fn new(label: &'a str, selector: &'a SelectorSpec) -> Self {
+        Self {
+            label,
+            selector,
+            motion_prior: None,
+            rescale_keyframes: None,
+            odometry: OdometryMode::default(),
+        }
+    }
+}
+
 /// What every scheme on a traverse shares.
 #[derive(Clone, Copy)]
 pub struct SchemeContext<'a> {

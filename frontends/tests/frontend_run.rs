@@ -385,13 +385,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
                 ..UncertaintyBudgetParams::default()
             });
             let causal = run_scheme(
-                &SchemeSpecRef {
-                    label: "causal",
-                    selector: &causal_spec,
-                    motion_prior: None,
-                    rescale_keyframes: None,
-                    odometry: OdometryMode::default(),
-                },
+                &SchemeSpecRef::new("causal", &causal_spec),
                 &t,
                 residuals(),
                 &ctx,
@@ -407,13 +401,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
                 ..OracleParams::default()
             });
             let oracle = run_scheme(
-                &SchemeSpecRef {
-                    label: "hindsight",
-                    selector: &oracle_spec,
-                    motion_prior: None,
-                    rescale_keyframes: None,
-                    odometry: OdometryMode::default(),
-                },
+                &SchemeSpecRef::new("hindsight", &oracle_spec),
                 &t,
                 residuals(),
                 &SchemeContext {
@@ -500,19 +488,7 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
         predictions: vec![ResidualPrediction::uninformed(1e-4); n],
     };
     let run = |label: &str, selector: &SelectorSpec, residuals, ctx: &SchemeContext<'_>| {
-        run_scheme(
-            &SchemeSpecRef {
-                label,
-                selector,
-                motion_prior: None,
-                rescale_keyframes: None,
-                odometry: OdometryMode::default(),
-            },
-            &t,
-            residuals,
-            ctx,
-        )
-        .unwrap()
+        run_scheme(&SchemeSpecRef::new(label, selector), &t, residuals, ctx).unwrap()
     };
     let gated = SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
         budget_m2: 1e-5,
@@ -586,20 +562,9 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
         predictions: vec![ResidualPrediction::uninformed(1e-6); t.windows().len()],
     };
     let run = |selector: &SelectorSpec| {
-        run_scheme(
-            &SchemeSpecRef {
-                label: "s",
-                selector,
-                motion_prior: None,
-                rescale_keyframes: None,
-                odometry: OdometryMode::default(),
-            },
-            &t,
-            residuals(),
-            &ctx,
-        )
-        .unwrap()
-        .run
+        run_scheme(&SchemeSpecRef::new("s", selector), &t, residuals(), &ctx)
+            .unwrap()
+            .run
     };
     // A budget nothing reaches, guarded every 5 s: 0.2 fps while tracking.
     let gated = SelectorSpec::MaxGap {
@@ -715,11 +680,8 @@ fn the_odometry_mode_decides_correction_covariance_and_budget() {
     let run = |selector: &SelectorSpec, mode: OdometryMode, residuals| {
         run_scheme(
             &SchemeSpecRef {
-                label: "s",
-                selector,
-                motion_prior: None,
-                rescale_keyframes: None,
                 odometry: mode,
+                ..SchemeSpecRef::new("s", selector)
             },
             &t,
             residuals,
