@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::Stationary;
 use super::distance::{scaled_sq_dist, scaled_sq_dist_lower};
-use crate::dense::{column, frobenius_dot};
+use crate::dense::{column, for_column_blocks, frobenius_dot};
 
 /// Hyperparameters of the rational quadratic kernel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -69,28 +69,46 @@ impl RatQuad {
         (k, alpha * k / (1.0 + 0.5 * r2), -alpha * k * ln_u)
     }
 
-    /// The three matrices from `r²`, on and below the diagonal only when
-    /// `lower`.
-    fn matrices(&self, r2: &Mat<f64>, lower: bool) -> RatQuadMatrices {
+    /// The three matrices from `r²` (taken over as `K`'s buffer), on and
+    /// below the diagonal only when `lower` (what is above is then
+    /// unspecified): column blocks in parallel ([`for_column_blocks`]),
+    /// each entry from one evaluation, bit-identical whatever the thread
+    /// count.
+    fn matrices(&self, mut r2: Mat<f64>, lower: bool) -> RatQuadMatrices {
         let (n1, n2) = (r2.nrows(), r2.ncols());
-        let mut k = Mat::zeros(n1, n2);
-        let mut s = Mat::zeros(n1, n2);
-        let mut a = Mat::zeros(n1, n2);
-        for j in 0..n2 {
-            let i0 = if lower { j.min(n1) } else { 0 };
-            for i in i0..n1 {
-                let (kv, sv, av) = self.entry(r2[(i, j)]);
-                k[(i, j)] = kv;
-                s[(i, j)] = sv;
-                a[(i, j)] = av;
+        let mut s = crate::dense::scratch(n1, n2);
+        let mut a = crate::dense::scratch(n1, n2);
+        // `s`'s and `a`'s columns ride along as the per-column outputs of
+        // `r2`'s blocks.
+        let mut outputs: Vec<(&mut [f64], &mut [f64])> =
+            columns(&mut s).into_iter().zip(columns(&mut a)).collect();
+        for_column_blocks(&mut r2, &mut outputs, |j0, kcols, outs| {
+            for (jj, (kcol, (scol, acol))) in kcols.iter_mut().zip(outs.iter_mut()).enumerate() {
+                let i0 = if lower { (j0 + jj).min(n1) } else { 0 };
+                for i in i0..n1 {
+                    let (kv, sv, av) = self.entry(kcol[i]);
+                    kcol[i] = kv;
+                    scol[i] = sv;
+                    acol[i] = av;
+                }
             }
-        }
-        RatQuadMatrices { k, s, a }
+        });
+        drop(outputs);
+        RatQuadMatrices { k: r2, s, a }
     }
+}
 
+/// The columns of an owned (column-major) matrix as mutable slices.
+fn columns(m: &mut Mat<f64>) -> Vec<&mut [f64]> {
+    m.col_iter_mut()
+        .filter_map(|c| c.try_as_col_major_mut().map(|c| c.as_slice_mut()))
+        .collect()
+}
+
+impl RatQuad {
     /// `K(X, X)` and its derivative matrices on and below the diagonal.
     pub fn gram_lower(&self, x: MatRef<'_, f64>) -> RatQuadMatrices {
-        self.matrices(&scaled_sq_dist_lower(x, &self.lengthscales), true)
+        self.matrices(scaled_sq_dist_lower(x, &self.lengthscales), true)
     }
 
     /// `K(X1, X2)` and its derivative matrices, in full.
@@ -99,7 +117,7 @@ impl RatQuad {
         x1: MatRef<'_, f64>,
         x2: MatRef<'_, f64>,
     ) -> RatQuadMatrices {
-        self.matrices(&scaled_sq_dist(x1, x2, &self.lengthscales), false)
+        self.matrices(scaled_sq_dist(x1, x2, &self.lengthscales), false)
     }
 
     /// `K(X1, X2)`.
