@@ -172,7 +172,7 @@ fn bench_writes_ratios_to_the_exact_gp_row_and_rejects_a_bad_baseline() {
     write(&d.join("table.csv"), &csv);
     write(
         &d.join("b.yaml"),
-        "name: b\ndataset: {kind: residual_table, path: table.csv, targets: [y1, y2], train_fraction: 0.8}\nregressors:\n  - kind: zero\n  - kind: exact_gp\n    max_iters: 20\n  - kind: sparse_gp\n    inducing: {count: 15}\n    max_iters: 20\nbench: {predict_queries: 7, learning_curve_every: 40}\n",
+        "name: b\ndataset: {kind: residual_table, path: table.csv, targets: [y1, y2], train_fraction: 0.8}\nregressors:\n  - kind: zero\n  - kind: exact_gp\n    hyperopt: {max_iters: 20}\n  - kind: sparse_gp\n    inducing: {count: 15}\n    hyperopt: {max_iters: 20}\nbench: {predict_queries: 7, learning_curve_every: 40}\n",
     );
     let out = gpodo(&["-q", "bench", "b.yaml"], d);
     assert!(

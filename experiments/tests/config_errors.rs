@@ -82,7 +82,7 @@ fn an_unknown_field_names_the_key() {
     );
     let text = GOOD.replace("    kernel: rbf", "    kernel: rbf\n    restart: 2");
     let e = error_of(dir.path(), "y.yaml", &text);
-    check(&e, "unknown field `restart`", "y.yaml", 7, 5, "restarts");
+    check(&e, "unknown field `restart`", "y.yaml", 7, 5, "hyperopt");
 }
 
 #[test]
@@ -111,14 +111,17 @@ fn a_bad_kernel_expression_names_the_value() {
 #[test]
 fn an_invalid_value_names_the_field_and_range() {
     let dir = tempfile::tempdir().unwrap();
-    let text = GOOD.replace("    kernel: rbf", "    kernel: rbf\n    max_iters: 0");
+    let text = GOOD.replace(
+        "    kernel: rbf",
+        "    kernel: rbf\n    hyperopt:\n      max_iters: 0",
+    );
     let e = error_of(dir.path(), "x.yaml", &text);
     check(
         &e,
-        "invalid `max_iters` of exact_gp",
+        "invalid `hyperopt.max_iters` of exact_gp",
         "x.yaml",
-        7,
-        16,
+        8,
+        18,
         "at least 1",
     );
     let text = "name: t\ndataset: { kind: residual_table, path: x.csv, targets: [a], train_fraction: 1.5 }\nregressors: [{ kind: zero }]\n";
@@ -211,7 +214,7 @@ fn sweeps_are_checked_before_anything_runs() {
         d,
         "g.yaml",
         &format!(
-            "{GOOD}zip:\n  - regressors[1].kernel: [rbf, matern52]\n    regressors[1].restarts: [0]\n"
+            "{GOOD}zip:\n  - regressors[1].kernel: [rbf, matern52]\n    regressors[1].hyperopt.restarts: [0]\n"
         ),
     );
     check(
@@ -516,4 +519,43 @@ fn one_parameter_at_a_time_runs_the_base_then_each_value_alone() {
         1,
         "either",
     );
+}
+
+#[test]
+fn an_optimiser_setting_at_the_top_of_a_gp_names_its_place_in_hyperopt() {
+    let dir = tempfile::tempdir().unwrap();
+    for (kind, key, value) in [
+        ("exact_gp", "max_iters", "30"),
+        ("exact_gp", "bounds", "{ variance: [1.0e-3, 10.0] }"),
+        ("sparse_gp", "restarts", "2"),
+    ] {
+        let text = GOOD.replace(
+            "  - kind: exact_gp\n    kernel: rbf",
+            &format!("  - kind: {kind}\n    kernel: rbf\n    {key}: {value}"),
+        );
+        let e = error_of(dir.path(), "x.yaml", &text);
+        check(
+            &e,
+            &format!("unknown field `{key}`"),
+            "x.yaml",
+            7,
+            5,
+            &format!("hyperopt.{key}"),
+        );
+    }
+    // ILGR has no `hyperopt:` block: its unknown field is only unknown.
+    let text = GOOD.replace(
+        "kind: exact_gp\n    kernel: rbf",
+        "kind: ilgr\n    max_iters: 3",
+    );
+    let e = error_of(dir.path(), "y.yaml", &text);
+    assert!(!e.contains("hyperopt"), "{e}");
+    // In the block, the setting is read.
+    let text = GOOD.replace(
+        "    kernel: rbf",
+        "    kernel: rbf\n    hyperopt: { max_iters: 30 }",
+    );
+    let path = dir.path().join("z.yaml");
+    std::fs::write(&path, text).unwrap();
+    assert!(load_plan(&path).is_ok());
 }

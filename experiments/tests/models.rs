@@ -23,11 +23,11 @@ regressors:
   - kind: zero
   - kind: exact_gp
     kernel: rbf
-    max_iters: 30
+    hyperopt: { max_iters: 30 }
   - kind: sparse_gp
     kernel: rbf
     inducing: { count: 20 }
-    max_iters: 20
+    hyperopt: { max_iters: 20 }
   - kind: ilgr
   - kind: knn
 ";
@@ -48,9 +48,9 @@ fn a_saved_model_predicts_what_the_in_process_model_predicted() {
     let file = write_config(tmp.path());
     let config = ExperimentConfig::from_path(&file).unwrap();
     for label in [
-        "exact GP: rbf [max_iters=30]",
+        "exact GP: rbf [hyperopt.max_iters=30]",
         "ILGR",
-        "sparse GP (VFE, m=20): rbf [max_iters=20]",
+        "sparse GP (VFE, m=20): rbf [hyperopt.max_iters=20]",
     ] {
         let fitted = fit_model(&config, tmp.path(), label).unwrap();
         let path = tmp.path().join("m.gpodo");
@@ -94,7 +94,11 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
     let out = Command::new(GPODO)
         .args(["--quiet", "fit"])
         .arg(&file)
-        .args(["--regressor", "exact GP: rbf [max_iters=30]", "--save"])
+        .args([
+            "--regressor",
+            "exact GP: rbf [hyperopt.max_iters=30]",
+            "--save",
+        ])
         .arg(&model)
         .output()
         .unwrap();
@@ -128,7 +132,7 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
         ]
     );
     let config = ExperimentConfig::from_path(&file).unwrap();
-    let fitted = fit_model(&config, tmp.path(), "exact GP: rbf [max_iters=30]").unwrap();
+    let fitted = fit_model(&config, tmp.path(), "exact GP: rbf [hyperopt.max_iters=30]").unwrap();
     assert_eq!(values.nrows(), fitted.test_predictions.mean.nrows());
     for i in 0..values.nrows() {
         for j in 0..3 {
@@ -165,12 +169,12 @@ fn bad_model_files_and_rows_are_refused_with_their_reason() {
     let other_version = tmp.path().join("v99.gpodo");
     std::fs::write(
         &other_version,
-        text.replacen("\"version\":1", "\"version\":99", 1),
+        text.replacen("\"version\":2", "\"version\":99", 1),
     )
     .unwrap();
     let e = ModelFile::load(&other_version).unwrap_err().to_string();
     assert!(
-        e.contains("version Some(99)") && e.contains("reads version 1"),
+        e.contains("model file version 99") && e.contains("reads versions 1 and 2"),
         "{e}"
     );
 

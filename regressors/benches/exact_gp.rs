@@ -18,6 +18,7 @@ use gpodo_regressors::dense::recycle;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
+use gpodo_regressors::hyperopt::HyperoptParams;
 use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_traits::ResidualRegressor;
 
@@ -81,7 +82,10 @@ fn fit(c: &mut Criterion) {
                 |b, _| {
                     b.iter(|| {
                         let params = ExactGpParams {
-                            max_iters: FIT_ITERATIONS,
+                            hyperopt: HyperoptParams {
+                                max_iters: FIT_ITERATIONS,
+                                ..HyperoptParams::default()
+                            },
                             ..ExactGpParams::default()
                         };
                         let mut gp = ExactGp::new(params).unwrap();

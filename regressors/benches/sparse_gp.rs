@@ -14,6 +14,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
+use gpodo_regressors::hyperopt::HyperoptParams;
 use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::inducing::place_inducing;
@@ -82,7 +83,10 @@ fn fit(c: &mut Criterion) {
     group.bench_function("exact_rbf_25_iterations/n2000", |b| {
         b.iter(|| {
             let mut gp = ExactGp::new(ExactGpParams {
-                max_iters: FIT_ITERATIONS,
+                hyperopt: HyperoptParams {
+                    max_iters: FIT_ITERATIONS,
+                    ..HyperoptParams::default()
+                },
                 ..ExactGpParams::default()
             })
             .unwrap();
@@ -95,7 +99,10 @@ fn fit(c: &mut Criterion) {
         group.bench_function(format!("sparse_vfe_m100_25_iterations/n{n}"), |b| {
             b.iter(|| {
                 let mut gp = SparseGp::new(SparseGpParams {
-                    max_iters: FIT_ITERATIONS,
+                    hyperopt: HyperoptParams {
+                        max_iters: FIT_ITERATIONS,
+                        ..HyperoptParams::default()
+                    },
                     ..SparseGpParams::default()
                 })
                 .unwrap();

@@ -80,36 +80,34 @@ fn main() -> anyhow::Result<()> {
         header[..d].to_vec(),
         header[d..].to_vec(),
     )?;
-    let mut params = ExactGpParams {
-        max_iters: 1000,
-        ..ExactGpParams::default()
-    };
+    let mut params = ExactGpParams::default();
+    params.hyperopt.max_iters = 1000;
     if let Some(tol) = env("GPODO_GRAD_TOL")? {
-        params.gradient_tolerance = tol;
+        params.hyperopt.gradient_tolerance = tol;
     }
     if let Some(l) = env("GPODO_LENGTHSCALE")? {
         params.init.lengthscale = Some(l);
     }
     if let Some(tol) = env("GPODO_COST_TOL")? {
-        params.relative_cost_tolerance = tol;
+        params.hyperopt.relative_cost_tolerance = tol;
     }
     if let Some(m) = env("GPODO_LBFGS_MEMORY")? {
-        params.lbfgs_memory = m;
+        params.hyperopt.lbfgs_memory = m;
     }
     if let Ok(expr) = std::env::var("GPODO_KERNEL") {
         params.kernel = gpodo_regressors::kernels::KernelExpr::parse(&expr)?;
     }
     if let Some(r) = env("GPODO_RACE")? {
-        params.start.race_iterations = r;
+        params.hyperopt.start.race_iterations = r;
     }
     if let Some(m) = env("GPODO_MAX_ITERS")? {
-        params.max_iters = m;
+        params.hyperopt.max_iters = m;
     }
     if let Some(h) = env("GPODO_HALVE")? {
-        params.start.halve_after = Some(h);
+        params.hyperopt.start.halve_after = Some(h);
     }
     if let Some(k) = env("GPODO_PERTURBATIONS")? {
-        params.start.perturbations = k;
+        params.hyperopt.start.perturbations = k;
     }
     let mut gp = ExactGp::new(params)?;
     if std::env::var("GPODO_TRACE").is_ok_and(|v| v == "1") {

@@ -29,8 +29,9 @@ use crate::{RegressorError, RegressorSpec};
 /// What the first field of every model file says.
 pub const MODEL_FORMAT: &str = "gpodo-model";
 
-/// The model-file version this build writes and reads.
-pub const MODEL_VERSION: u32 = 1;
+/// The model-file version this build writes. It reads it and version 1
+/// (whose GP settings had the `hyperopt:` settings at their top level).
+pub const MODEL_VERSION: u32 = 2;
 
 /// A regressor's learned state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -225,13 +226,19 @@ impl ModelFile {
                 header.format
             )));
         }
-        if header.version != Some(MODEL_VERSION) {
-            return Err(invalid(format!(
-                "model file version {:?}; this gpodo reads version {MODEL_VERSION} (save the model again with this version)",
-                header.version
-            )));
+        let mut value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+        match header.version {
+            Some(MODEL_VERSION) => {}
+            Some(1) => upgrade_v1(&mut value),
+            other => {
+                let version = other.map_or("without a version".into(), |v| format!("version {v}"));
+                return Err(invalid(format!(
+                    "model file {version}; this gpodo reads versions 1 and {MODEL_VERSION} (save the model again with this version)"
+                )));
+            }
         }
-        let file: Self = serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+        let file: Self = serde_json::from_value(value).map_err(|e| invalid(e.to_string()))?;
         let d = file.input_names.len();
         if let Some(s) = &file.input_standardizer
             && s.dim() != d
@@ -308,5 +315,27 @@ impl Predictor {
     /// on inputs z-scored as the file says).
     pub fn model_mut(&mut self) -> &mut dyn ResidualRegressor {
         self.model.as_mut()
+    }
+}
+
+/// Rewrites a version-1 file as version 2: a GP's optimiser settings move
+/// from the top level of its `params` into `params.hyperopt`. Version 1 of
+/// the other kinds reads as version 2.
+fn upgrade_v1(value: &mut serde_json::Value) {
+    use serde_json::{Map, Value};
+    if let Some(version) = value.get_mut("version") {
+        *version = Value::from(MODEL_VERSION);
+    }
+    let Some(Value::Object(params)) = value.pointer_mut("/state/params") else {
+        return;
+    };
+    let mut hyperopt = Map::new();
+    for key in crate::hyperopt::HYPEROPT_FIELDS {
+        if let Some(v) = params.remove(key) {
+            hyperopt.insert(key.to_string(), v);
+        }
+    }
+    if !hyperopt.is_empty() {
+        params.insert("hyperopt".into(), Value::Object(hyperopt));
     }
 }

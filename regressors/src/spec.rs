@@ -194,15 +194,23 @@ mod tests {
 
     #[test]
     fn exact_gp_reads_its_kernel_expression_and_defaults() {
-        let spec =
-            parse(r#"{"kind": "exact_gp", "kernel": "matern52 + linear", "restarts": 2}"#).unwrap();
+        let spec = parse(
+            r#"{"kind": "exact_gp", "kernel": "matern52 + linear", "hyperopt": {"restarts": 2}}"#,
+        )
+        .unwrap();
         let RegressorSpec::ExactGp(p) = &spec else {
             panic!("not an exact GP: {spec:?}")
         };
         assert_eq!(p.kernel.to_string(), "matern52 + linear");
-        assert_eq!(p.restarts, 2);
-        assert_eq!(p.max_iters, ExactGpParams::default().max_iters);
-        assert_eq!(spec.label(), "exact GP: matern52 + linear [restarts=2]");
+        assert_eq!(p.hyperopt.restarts, 2);
+        assert_eq!(
+            p.hyperopt.max_iters,
+            ExactGpParams::default().hyperopt.max_iters
+        );
+        assert_eq!(
+            spec.label(),
+            "exact GP: matern52 + linear [hyperopt.restarts=2]"
+        );
         assert!(spec.build().is_ok());
     }
 

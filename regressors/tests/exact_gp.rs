@@ -8,7 +8,8 @@ mod support;
 
 use faer::Mat;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
-use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, ExactGpState, Optimizer, OutputSharing};
+use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, ExactGpState, OutputSharing};
+use gpodo_regressors::hyperopt::{Bounds, HyperoptParams, Optimizer};
 use gpodo_regressors::kernels::{KernelExpr, KernelInit};
 use gpodo_traits::{ResidualRegressor, SampleMatrix};
 use support::*;
@@ -156,8 +157,11 @@ fn prediction_at_training_points_interpolates_with_tiny_noise() {
             lengthscale: Some(1.0),
             ..KernelInit::default()
         },
-        bounds: gpodo_regressors::exact_gp::Bounds {
-            noise_variance: [1e-10, 1.0],
+        hyperopt: HyperoptParams {
+            bounds: Bounds {
+                noise_variance: [1e-10, 1.0],
+                ..Default::default()
+            },
             ..Default::default()
         },
         ..fixed("matern52")
@@ -194,7 +198,10 @@ fn learning_raises_the_likelihood_and_fits_a_sine_with_both_optimisers() {
     let mut lmls = Vec::new();
     for optimizer in [Optimizer::Lbfgs, Optimizer::ConjugateGradient] {
         let mut gp = ExactGp::new(ExactGpParams {
-            optimizer,
+            hyperopt: HyperoptParams {
+                optimizer,
+                ..Default::default()
+            },
             ..ExactGpParams::default()
         })
         .unwrap();
@@ -318,7 +325,10 @@ fn restarts_are_reproducible_and_never_worse() {
     let data = dataset(&x, &y);
     let fit = |restarts, seed| {
         let mut gp = ExactGp::new(ExactGpParams {
-            restarts,
+            hyperopt: HyperoptParams {
+                restarts,
+                ..Default::default()
+            },
             seed,
             ..ExactGpParams::default()
         })
@@ -391,7 +401,10 @@ fn a_fit_reports_its_iterations_without_changing_its_result() {
     let (x, y) = sine_data(60, 23);
     let data = dataset(&x, &y);
     let params = ExactGpParams {
-        restarts: 1,
+        hyperopt: HyperoptParams {
+            restarts: 1,
+            ..Default::default()
+        },
         ..ExactGpParams::default()
     };
     let recorder = std::sync::Arc::new(Recorder::default());

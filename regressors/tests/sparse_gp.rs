@@ -311,7 +311,10 @@ fn saved_state_predicts_the_same_without_the_data_and_fits_are_reproducible() {
             count: 12,
             ..Default::default()
         },
-        max_iters: 40,
+        hyperopt: gpodo_regressors::hyperopt::HyperoptParams {
+            max_iters: 40,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut a = SparseGp::new(params.clone()).unwrap();

@@ -41,7 +41,24 @@ pub(crate) fn split_serde_message(message: &str, path: &str) -> (String, String)
             "variant"
         };
     let problem = problem.replace("unknown variant", &format!("unknown {what}"));
-    (problem, expected)
+    (
+        problem.clone(),
+        moved_setting(&problem, &expected).unwrap_or(expected),
+    )
+}
+
+/// For an unknown GP field that is one of the optimiser's settings (the
+/// fields the message expects include `hyperopt`), where it belongs now.
+fn moved_setting(problem: &str, expected: &str) -> Option<String> {
+    let field = problem.strip_prefix("unknown field `")?.split('`').next()?;
+    let listed = |name: &str| expected.split([',', ' ']).any(|f| f == name);
+    if !listed("hyperopt") {
+        return None;
+    }
+    let place = gpodo_regressors::hyperopt::moved_to_hyperopt(field)?;
+    Some(format!(
+        "`{place}`: the optimiser's settings are in the model's `hyperopt:` block"
+    ))
 }
 
 /// The value at `path` in `root`.

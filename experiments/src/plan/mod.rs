@@ -12,7 +12,7 @@
 //! sweep:                           # one run per combination
 //!   regressors[1].kernel: [rbf, matern52, rbf + linear, matern52 + linear]
 //! zip:                             # lists varied together
-//!   - { regressors[1].restarts: [0, 2], regressors[1].max_iters: [200, 400] }
+//!   - { regressors[1].hyperopt.restarts: [0, 2], regressors[1].hyperopt.max_iters: [200, 400] }
 //! seeds: [1, 2, 3]                 # every combination, three times
 //! ```
 //!

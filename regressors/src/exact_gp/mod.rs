@@ -12,4 +12,4 @@ pub mod posterior;
 
 pub use crate::scaling::GpPredictions;
 pub use model::{ExactGp, ExactGpState, GroupState};
-pub use params::{Bounds, ExactGpParams, Optimizer, OutputSharing};
+pub use params::{ExactGpParams, OutputSharing};

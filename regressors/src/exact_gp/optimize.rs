@@ -1,8 +1,7 @@
 //! Hyperparameter learning of the exact GP: the log marginal likelihood and
 //! its analytic gradient in `log θ` (kernel hyperparameters, then the noise
-//! variance), maximised by [`crate::hyperopt::maximize`] within the bounds
-//! of [`ExactGpParams::bounds`], from the best of several scored candidate
-//! starts ([`crate::hyperopt::starts`]).
+//! variance), maximised by the GPs' one recipe ([`crate::hyperopt::learn`])
+//! within the bounds of its `hyperopt:` settings.
 
 use faer::MatRef;
 use gpodo_traits::StartRecord;
@@ -10,7 +9,8 @@ use gpodo_traits::StartRecord;
 use super::likelihood::log_marginal_likelihood;
 use super::params::ExactGpParams;
 use crate::RegressorError;
-use crate::hyperopt::{LogBounds, Objective, ProgressSink, starts};
+use crate::hyperopt::starts::{self, EXACT_GP_HALVE_AFTER};
+use crate::hyperopt::{HyperProblem, HyperoptParams, Objective, ProgressSink, SearchSpace};
 use crate::kernels::Kernel;
 
 /// The outcome of hyperparameter learning.
@@ -55,15 +55,13 @@ impl Objective for Lml<'_> {
 }
 
 /// Learns the kernel hyperparameters and noise variance of
-/// `params.kernel` on `(x, y)` by maximising the log marginal likelihood:
-/// the candidate starts of [`starts::kernel_bases`] and their seeded perturbations
-/// ([`StartPolicy`](crate::hyperopt::StartPolicy)) are scored by their LML,
-/// the named bases and the best `start.optimize_best` race (the better
-/// half of them after `start.halve_after` iterations), the leader runs to
-/// convergence (plus `restarts` perturbations of it), and the highest
-/// optimum wins.
+/// `params.kernel` on `(x, y)` by maximising the log marginal likelihood
+/// from the candidate starts of [`starts::kernel_bases`], as
+/// `params.hyperopt` says (the start race halved after
+/// [`EXACT_GP_HALVE_AFTER`] iterations unless it says otherwise).
 ///
 /// # Errors
+/// [`RegressorError::Stopped`] when `progress` asked to stop;
 /// [`RegressorError::Optimizer`] or [`RegressorError::NotPositiveDefinite`]
 /// when no start produced a finite objective.
 pub fn maximize_lml(
@@ -73,42 +71,30 @@ pub fn maximize_lml(
     progress: &ProgressSink,
 ) -> Result<Optimized, RegressorError> {
     let template = params.kernel.build(x.ncols(), &params.init);
-    let mut bounds: Vec<LogBounds> = template
-        .param_kinds()
-        .into_iter()
-        .map(|k| LogBounds::new(params.bounds.of(k)))
-        .collect();
-    bounds.push(LogBounds::new(params.bounds.noise_variance));
     let objective = Lml {
         template: &template,
         x,
         y,
     };
-    let perturb = vec![true; bounds.len()];
-    let candidates = starts::with_perturbations(
-        starts::kernel_bases(&params.kernel, &params.init, x, params.noise_variance),
-        &bounds,
-        &perturb,
-        params.start.perturbations,
-        params.seed,
-    );
-    let value_scale = 1.0 / (y.nrows() * y.ncols()).max(1) as f64;
-    let result = starts::maximize_best(
-        &objective,
-        candidates,
-        |c| {
-            let (kernel, noise) = objective.hyperparameters(c);
-            log_marginal_likelihood(&kernel, noise, x, y, false).map(|e| e.lml)
-        },
-        &bounds,
-        &perturb,
-        &params
+    let score = |c: &[f64]| {
+        let (kernel, noise) = objective.hyperparameters(c);
+        log_marginal_likelihood(&kernel, noise, x, y, false).map(|e| e.lml)
+    };
+    let problem = HyperProblem {
+        objective: &objective,
+        score: &score,
+        space: SearchSpace::kernel(&template, &params.hyperopt.bounds),
+        bases: starts::kernel_bases(&params.kernel, &params.init, x, params.noise_variance),
+        value_scale: 1.0 / (y.nrows() * y.ncols()).max(1) as f64,
+    };
+    let hyperopt = HyperoptParams {
+        start: params
+            .hyperopt
             .start
-            .with_default_halve_after(starts::EXACT_GP_HALVE_AFTER),
-        value_scale,
-        &params.settings(),
-        progress,
-    );
+            .with_default_halve_after(EXACT_GP_HALVE_AFTER),
+        ..params.hyperopt
+    };
+    let result = crate::hyperopt::learn(&problem, &hyperopt, params.seed, progress);
     // The evaluations' buffers are not needed once the search is over.
     crate::dense::release_spare();
     let (out, records) = result?;

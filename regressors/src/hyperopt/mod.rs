@@ -8,21 +8,24 @@
 //! best point evaluated wins, by objective alone.
 
 mod bounds;
+mod negated;
+mod params;
 mod projected_lbfgs;
+pub mod race;
+pub mod recipe;
 mod run;
 mod solver;
 pub mod starts;
 
-use std::cell::{Cell, RefCell};
-
-use argmin::core::{CostFunction, Error as ArgminError, Gradient};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 pub use bounds::LogBounds;
+pub use params::{Bounds, HYPEROPT_FIELDS, HyperoptParams, moved_to_hyperopt};
 pub use projected_lbfgs::ProjectedLbfgs;
+pub use recipe::{HyperProblem, SearchSpace, learn};
 pub use starts::StartPolicy;
 
 use crate::RegressorError;
@@ -46,7 +49,7 @@ pub enum Optimizer {
 /// The GP regressors' default L-BFGS memory (correction pairs).
 pub const LBFGS_MEMORY: usize = 30;
 
-/// How to run the optimiser (the flat YAML fields of each GP's parameters).
+/// How one optimiser run goes: [`HyperoptParams`] with the model's seed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptimizerSettings {
     /// Which optimiser.
@@ -102,16 +105,16 @@ impl OptimizerSettings {
             })
         };
         if self.max_iters == 0 && optimize {
-            return bad("max_iters", "at least 1 (or `optimize: false`)");
+            return bad("hyperopt.max_iters", "at least 1 (or `optimize: false`)");
         }
         if !(self.gradient_tolerance.is_finite() && self.gradient_tolerance > 0.0) {
-            return bad("gradient_tolerance", "a positive number");
+            return bad("hyperopt.gradient_tolerance", "a positive number");
         }
         if !(self.relative_cost_tolerance.is_finite() && self.relative_cost_tolerance >= 0.0) {
-            return bad("relative_cost_tolerance", "a non-negative number");
+            return bad("hyperopt.relative_cost_tolerance", "a non-negative number");
         }
         if self.lbfgs_memory == 0 {
-            return bad("lbfgs_memory", "at least 1 correction pair");
+            return bad("hyperopt.lbfgs_memory", "at least 1 correction pair");
         }
         Ok(())
     }
@@ -167,124 +170,6 @@ impl std::fmt::Debug for ProgressSink {
         } else {
             "ProgressSink(none)"
         })
-    }
-}
-
-/// A point, the cost there and its gradient.
-type Evaluated = (Vec<f64>, f64, Vec<f64>);
-
-/// One evaluation of the objective, before negation and scaling.
-struct RawEvaluation {
-    /// Where it was evaluated (the optimiser's point, clamped).
-    clamped: Vec<f64>,
-    value: f64,
-    gradient: Vec<f64>,
-}
-
-/// The negated, scaled objective in the optimiser's (unclamped)
-/// coordinates, caching the last point (argmin asks for the cost and the
-/// gradient separately) and remembering the best point evaluated.
-struct Negated<'a> {
-    objective: &'a dyn Objective,
-    bounds: &'a [LogBounds],
-    /// Objective scale: `value_scale` (e.g. `1/(n·p)`), further divided by
-    /// the gradient norm at the start when that exceeds 1, so that the
-    /// optimiser's first step (along the raw gradient) is at most about one
-    /// unit of `log θ`, as L-BFGS-B's first step is — whatever the data size.
-    scale: Cell<f64>,
-    last: RefCell<Option<Evaluated>>,
-    best: RefCell<Option<(Vec<f64>, f64)>>,
-    evaluations: Cell<usize>,
-}
-
-impl Negated<'_> {
-    fn clamp(&self, u: &[f64]) -> Vec<f64> {
-        u.iter()
-            .zip(self.bounds)
-            .map(|(u, b)| b.to_log(*u))
-            .collect()
-    }
-
-    fn evaluate(&self, u: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
-        if let Some((at, cost, grad)) = self.last.borrow().as_ref()
-            && at.as_slice() == u
-        {
-            return Ok((*cost, grad.clone()));
-        }
-        let raw = self.evaluate_raw(u)?;
-        Ok(self.record(u, raw))
-    }
-
-    /// The objective and its gradient at the clamped `u`, unscaled and not
-    /// cached (but counted).
-    fn evaluate_raw(&self, u: &[f64]) -> Result<RawEvaluation, RegressorError> {
-        let clamped = self.clamp(u);
-        let (value, gradient) = self.objective.evaluate(&clamped)?;
-        self.evaluations.set(self.evaluations.get() + 1);
-        tracing::trace!(
-            evaluation = self.evaluations.get(),
-            value,
-            "hyperparameter objective"
-        );
-        Ok(RawEvaluation {
-            clamped,
-            value,
-            gradient,
-        })
-    }
-
-    /// The cost and gradient the optimiser sees at `u` (negated, scaled,
-    /// plus the bound penalties) for the objective's `raw` evaluation.
-    fn scaled(&self, u: &[f64], raw: &RawEvaluation) -> (f64, f64, Vec<f64>) {
-        let scale = self.scale.get();
-        let objective_cost = -raw.value * scale;
-        let mut cost = objective_cost;
-        let mut grad: Vec<f64> = raw
-            .gradient
-            .iter()
-            .zip(u.iter().zip(self.bounds))
-            .map(|(g, (u, b))| -g * b.derivative(*u) * scale)
-            .collect();
-        for ((g, u), b) in grad.iter_mut().zip(u).zip(self.bounds) {
-            let (p, dp) = b.penalty(*u);
-            cost += p;
-            *g += dp;
-        }
-        (objective_cost, cost, grad)
-    }
-
-    /// Scales `raw` (at `u`), caches it as the last point and keeps it as
-    /// the best when it is.
-    fn record(&self, u: &[f64], raw: RawEvaluation) -> (f64, Vec<f64>) {
-        let (objective_cost, cost, grad) = self.scaled(u, &raw);
-        // The best point is kept by objective alone, at its clamped
-        // coordinates (where the objective was evaluated).
-        let improved = self
-            .best
-            .borrow()
-            .as_ref()
-            .is_none_or(|(_, c)| objective_cost < *c);
-        if improved {
-            *self.best.borrow_mut() = Some((raw.clamped, objective_cost));
-        }
-        *self.last.borrow_mut() = Some((u.to_vec(), cost, grad.clone()));
-        (cost, grad)
-    }
-}
-
-impl CostFunction for &Negated<'_> {
-    type Param = Vec<f64>;
-    type Output = f64;
-    fn cost(&self, u: &Self::Param) -> Result<f64, ArgminError> {
-        Ok(self.evaluate(u)?.0)
-    }
-}
-
-impl Gradient for &Negated<'_> {
-    type Param = Vec<f64>;
-    type Gradient = Vec<f64>;
-    fn gradient(&self, u: &Self::Param) -> Result<Vec<f64>, ArgminError> {
-        Ok(self.evaluate(u)?.1)
     }
 }
 
@@ -382,6 +267,8 @@ pub fn maximize(
 
 #[cfg(test)]
 mod tests {
+    use std::cell::RefCell;
+
     use super::*;
 
     /// `−Σ (c_i − t_i)²`, with a maximum at `t`.
@@ -419,7 +306,9 @@ mod tests {
             ..settings(Optimizer::Lbfgs)
         };
         match bad.check("exact_gp", true) {
-            Err(RegressorError::InvalidSpec { field, .. }) => assert_eq!(field, "lbfgs_memory"),
+            Err(RegressorError::InvalidSpec { field, .. }) => {
+                assert_eq!(field, "hyperopt.lbfgs_memory")
+            }
             other => panic!("expected an InvalidSpec error, got {other:?}"),
         }
         assert!(settings(Optimizer::Lbfgs).check("exact_gp", true).is_ok());

@@ -4,15 +4,13 @@
 //! each and only the better ones further), and finally turned into a
 //! [`Maximized`].
 
-use std::cell::{Cell, RefCell};
 use std::sync::Arc;
 
 use gpodo_traits::FitProgress;
 
+use super::negated::Negated;
 use super::solver::Stepper;
-use super::{
-    CostTolerance, LogBounds, Maximized, Negated, Objective, OptimizerSettings, optimizer_error,
-};
+use super::{CostTolerance, LogBounds, Maximized, Objective, OptimizerSettings, optimizer_error};
 use crate::RegressorError;
 
 /// One optimiser start, advanced leg by leg.
@@ -40,26 +38,10 @@ impl<'a> Run<'a> {
         value_scale: f64,
         settings: &OptimizerSettings,
     ) -> Result<Self, RegressorError> {
-        let problem = Negated {
-            objective,
-            bounds,
-            scale: Cell::new(value_scale),
-            last: RefCell::new(None),
-            best: RefCell::new(None),
-            evaluations: Cell::new(0),
-        };
-        // The scale is fixed by the gradient at the start, so that
-        // evaluation is scaled once it is known (not evaluated twice).
-        let raw = problem.evaluate_raw(&u)?;
-        let (_, _, grad) = problem.scaled(&u, &raw);
-        let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
-        if norm > 1.0 {
-            problem.scale.set(value_scale / norm);
-        }
-        problem.record(&u, raw);
+        let problem = Negated::start(objective, bounds, &u, value_scale)?;
         let tol_cost = CostTolerance {
             relative: settings.relative_cost_tolerance,
-            unit: problem.scale.get(),
+            unit: problem.scale(),
         };
         let stepper = Stepper::new(bounds, u, settings, tol_cost)
             .map_err(|e| optimizer_error(settings, e))?;
@@ -84,7 +66,7 @@ impl<'a> Run<'a> {
         let Some(stepper) = self.stepper.take() else {
             return;
         };
-        let scale = self.problem.scale.get();
+        let scale = self.problem.scale();
         let progress = progress.map(|(p, start)| (p, start, scale));
         match stepper.advance(&self.problem, max_iters, progress) {
             Ok((iterations, stepper)) => {
@@ -105,27 +87,14 @@ impl<'a> Run<'a> {
 
     /// The best objective so far (unscaled, to maximise).
     pub(super) fn best_value(&self) -> f64 {
-        self.problem
-            .best
-            .borrow()
-            .as_ref()
-            .map_or(f64::NEG_INFINITY, |(_, cost)| {
-                -cost / self.problem.scale.get()
-            })
+        self.problem.best_value()
     }
 
     /// The best point evaluated and its value (unscaled, to maximise),
     /// with the run's evaluations and iterations.
     pub(super) fn finish(self) -> Maximized {
-        let (evaluations, iterations) = (self.problem.evaluations.get(), self.iterations);
-        let scale = self.problem.scale.get();
-        // `start` recorded the start point, so there is always a best one.
-        let (coords, cost) = self
-            .problem
-            .best
-            .into_inner()
-            .unwrap_or_else(|| (Vec::new(), f64::INFINITY));
-        let value = -cost / scale;
+        let (evaluations, iterations) = (self.problem.evaluations(), self.iterations);
+        let (coords, value) = self.problem.into_best();
         Maximized {
             coords,
             value,
@@ -138,6 +107,8 @@ impl<'a> Run<'a> {
 
 #[cfg(test)]
 mod tests {
+    use std::cell::RefCell;
+
     use super::*;
     use crate::hyperopt::Optimizer;
 

@@ -16,8 +16,9 @@ use argmin::solver::conjugategradient::beta::PolakRibiere;
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use gpodo_traits::FitProgress;
 
+use super::negated::Negated;
 use super::projected_lbfgs::ProjectedLbfgs;
-use super::{CostTolerance, LogBounds, Negated, Optimizer, OptimizerSettings};
+use super::{CostTolerance, LogBounds, Optimizer, OptimizerSettings};
 
 type HyperState = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 

@@ -8,7 +8,9 @@ use std::time::Instant;
 
 use faer::{Mat, MatRef};
 use gpodo_traits::Standardizer;
-use gpodo_traits::{Error, FitReport, ResidualDataset, ResidualRegressor, SampleMatrix};
+use gpodo_traits::{
+    Error, FitReport, ResidualDataset, ResidualRegressor, SampleMatrix, StartRecord,
+};
 use serde::{Deserialize, Serialize};
 
 use super::bound::sparse_objective;
@@ -17,7 +19,7 @@ use super::params::{Approximation, SparseGpParams};
 use super::posterior::SparsePosterior;
 use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
-use crate::hyperopt::{LogBounds, Objective, ProgressSink, starts};
+use crate::hyperopt::{HyperProblem, Objective, ProgressSink, SearchSpace, learn, starts};
 use crate::kernels::Kernel;
 use crate::scaling::{
     GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
@@ -51,6 +53,32 @@ pub struct SparseGpState {
     pub objective: f64,
 }
 
+/// A kernel, a noise variance and the inducing inputs.
+type Hyperparameters = (Kernel, f64, Mat<f64>);
+
+/// What learning the hyperparameters cost, for the fit report (empty
+/// when they were not learned).
+#[derive(Debug, Default)]
+struct Learned {
+    evaluations: Option<usize>,
+    iterations: Option<u64>,
+    starts: Vec<StartRecord>,
+}
+
+/// The learned hyperparameters by name, then the noise variance and the
+/// number of inducing points.
+fn learned_parameters(posterior: &SparsePosterior, input_names: &[String]) -> Vec<(String, f64)> {
+    let kernel = &posterior.kernel;
+    let mut parameters: Vec<(String, f64)> = kernel
+        .param_names(input_names)
+        .into_iter()
+        .zip(kernel.log_params().into_iter().map(f64::exp))
+        .collect();
+    parameters.push(("noise_variance".into(), posterior.noise_variance));
+    parameters.push(("inducing_points".into(), posterior.inducing.nrows() as f64));
+    parameters
+}
+
 /// The sparse Gaussian process regressor.
 #[derive(Debug, Clone)]
 pub struct SparseGp {
@@ -71,7 +99,7 @@ struct SparseObjective<'a> {
 }
 
 impl SparseObjective<'_> {
-    fn unpack(&self, coords: &[f64]) -> (Kernel, f64, Mat<f64>) {
+    fn unpack(&self, coords: &[f64]) -> Hyperparameters {
         let k = self.template.n_params();
         let mut kernel = self.template.clone();
         kernel.set_log_params(&coords[..k]);
@@ -183,69 +211,25 @@ impl SparseGp {
         let p = &self.params;
         let z0 = place_inducing(x.as_ref(), &p.inducing, p.seed);
         let kernel0 = p.kernel.build(x.ncols(), &p.init);
-        let learn_inducing = p.optimize && !p.inducing.fixed;
         let objective = SparseObjective {
             template: &kernel0,
             x: x.as_ref(),
             y: y.as_ref(),
             inducing: &z0,
-            learn_inducing,
+            learn_inducing: p.optimize && !p.inducing.fixed,
             approximation: p.approximation,
             jitter: p.jitter,
         };
-        let mut fit_record = (None, None, Vec::new());
-        let (kernel, noise, z) = if p.optimize {
-            let mut bounds: Vec<LogBounds> = kernel0
-                .param_kinds()
-                .into_iter()
-                .map(|k| LogBounds::new(p.bounds.of(k)))
-                .collect();
-            bounds.push(LogBounds::new(p.bounds.noise_variance));
-            let mut perturb = vec![true; bounds.len()];
-            let inducing: Vec<f64> = if learn_inducing {
-                (0..z0.nrows())
-                    .flat_map(|i| (0..z0.ncols()).map(move |q| (i, q)))
-                    .map(|(i, q)| z0[(i, q)])
-                    .collect()
-            } else {
-                Vec::new()
-            };
-            bounds.resize(bounds.len() + inducing.len(), LogBounds::unbounded());
-            perturb.resize(bounds.len(), false);
-            let bases = starts::kernel_bases(&p.kernel, &p.init, x.as_ref(), p.noise_variance)
-                .into_iter()
-                .map(|(label, mut c)| {
-                    c.extend_from_slice(&inducing);
-                    (label, c)
-                })
-                .collect();
-            let candidates =
-                starts::with_perturbations(bases, &bounds, &perturb, p.start.perturbations, p.seed);
-            let value_scale = 1.0 / (y.nrows() * y.ncols()) as f64;
-            let (out, records) = starts::maximize_best(
-                &objective,
-                candidates,
-                |c| objective.evaluate(c).map(|(v, _)| v),
-                &bounds,
-                &perturb,
-                &p.start,
-                value_scale,
-                &p.settings(),
-                &self.progress,
-            )?;
-            tracing::debug!(
-                objective = out.value,
-                evaluations = out.evaluations,
-                iterations = out.iterations,
-                "sparse GP hyperparameters learned"
-            );
-            fit_record = (Some(out.evaluations), Some(out.iterations), records);
-            objective.unpack(&out.coords)
+        let ((kernel, noise, z), learned) = if p.optimize {
+            self.learn(&objective)?
         } else {
-            (kernel0.clone(), p.noise_variance, z0.clone())
+            (
+                (kernel0.clone(), p.noise_variance, z0.clone()),
+                Learned::default(),
+            )
         };
         let posterior = SparsePosterior::new(
-            kernel.clone(),
+            kernel,
             noise,
             z,
             x.as_ref(),
@@ -253,22 +237,15 @@ impl SparseGp {
             p.approximation,
             p.jitter,
         )?;
-        let mut parameters: Vec<(String, f64)> = kernel
-            .param_names(&data.input_names)
-            .into_iter()
-            .zip(kernel.log_params().into_iter().map(f64::exp))
-            .collect();
-        parameters.push(("noise_variance".into(), noise));
-        parameters.push(("inducing_points".into(), posterior.inducing.nrows() as f64));
         let report = FitReport {
             n_samples: data.len(),
             duration_secs: start.elapsed().as_secs_f64(),
             objective: Some(posterior.objective),
-            evaluations: fit_record.0,
+            evaluations: learned.evaluations,
             jitter: Some(p.jitter + posterior.extra_jitter),
-            parameters,
-            iterations: fit_record.1,
-            starts: fit_record.2,
+            parameters: learned_parameters(&posterior, &data.input_names),
+            iterations: learned.iterations,
+            starts: learned.starts,
         };
         let state = SparseGpState {
             params: self.params.clone(),
@@ -276,8 +253,8 @@ impl SparseGp {
             target_names: data.target_names.clone(),
             input_scaler: scaled.input_scaler,
             output_scaler: scaled.output_scaler,
-            kernel,
-            noise_variance: noise,
+            kernel: posterior.kernel.clone(),
+            noise_variance: posterior.noise_variance,
             inducing: from_faer(posterior.inducing.as_ref()),
             weights: from_faer(posterior.weights.as_ref()),
             variance_matrix: from_faer(posterior.variance_matrix.as_ref()),
@@ -285,6 +262,53 @@ impl SparseGp {
         };
         self.fitted = Some((state, posterior));
         Ok(report)
+    }
+
+    /// Learns the hyperparameters (and the inducing inputs unless fixed)
+    /// with the GPs' recipe, from the kernel's base starts with the placed
+    /// inducing inputs.
+    fn learn(
+        &self,
+        objective: &SparseObjective<'_>,
+    ) -> Result<(Hyperparameters, Learned), RegressorError> {
+        let p = &self.params;
+        let z0 = objective.inducing;
+        let inducing: Vec<f64> = if objective.learn_inducing {
+            (0..z0.nrows())
+                .flat_map(|i| (0..z0.ncols()).map(move |q| z0[(i, q)]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let bases = starts::kernel_bases(&p.kernel, &p.init, objective.x, p.noise_variance)
+            .into_iter()
+            .map(|(label, mut c)| {
+                c.extend_from_slice(&inducing);
+                (label, c)
+            })
+            .collect();
+        let score = |c: &[f64]| objective.evaluate(c).map(|(v, _)| v);
+        let problem = HyperProblem {
+            objective,
+            score: &score,
+            space: SearchSpace::kernel(objective.template, &p.hyperopt.bounds)
+                .with_free(inducing.len()),
+            bases,
+            value_scale: 1.0 / (objective.y.nrows() * objective.y.ncols()) as f64,
+        };
+        let (out, starts) = learn(&problem, &p.hyperopt, p.seed, &self.progress)?;
+        tracing::debug!(
+            objective = out.value,
+            evaluations = out.evaluations,
+            iterations = out.iterations,
+            "sparse GP hyperparameters learned"
+        );
+        let learned = Learned {
+            evaluations: Some(out.evaluations),
+            iterations: Some(out.iterations),
+            starts,
+        };
+        Ok((objective.unpack(&out.coords), learned))
     }
 
     /// Mean, latent variance and noisy variance at `inputs`, in target units.

@@ -6,8 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
-use crate::exact_gp::Bounds;
-use crate::hyperopt::{LBFGS_MEMORY, Optimizer, OptimizerSettings, StartPolicy};
+use crate::hyperopt::HyperoptParams;
 use crate::kernels::{KernelExpr, KernelInit, LeafName};
 
 /// Which sparse approximation.
@@ -75,9 +74,6 @@ pub struct SparseGpParams {
     pub standardize: bool,
     /// Initial kernel hyperparameters.
     pub init: KernelInit,
-    /// How the optimiser's start is chosen (as the exact GP's: candidate
-    /// lengthscales scored by the objective, the best few optimised).
-    pub start: StartPolicy,
     /// Initial noise variance in standardised units (default 0.01).
     pub noise_variance: f64,
     /// Diagonal jitter added to `K_uu` in standardised units (default 1e-6,
@@ -87,24 +83,13 @@ pub struct SparseGpParams {
     /// Learn the hyperparameters (and the inducing inputs unless fixed)
     /// (default true).
     pub optimize: bool,
-    /// Optimiser (default `lbfgs`).
-    pub optimizer: Optimizer,
-    /// Iteration limit per start (default 200).
-    pub max_iters: u64,
-    /// Extra starts from seeded perturbations of the initial
-    /// hyperparameters (default 0).
-    pub restarts: usize,
-    /// Seed of the inducing-point placement and of the restarts (default 0).
+    /// How the hyperparameters (and inducing inputs) are learned: the
+    /// exact GP's settings, except that the start race is not halved
+    /// unless `start.halve_after` says so.
+    pub hyperopt: HyperoptParams,
+    /// Seed of the inducing-point placement, the candidate starts and the
+    /// restarts (default 0).
     pub seed: u64,
-    /// Gradient-norm stopping tolerance (default 1e-5), as for the exact GP.
-    pub gradient_tolerance: f64,
-    /// Relative objective-change stopping tolerance (default 2.2e-9), as
-    /// for the exact GP.
-    pub relative_cost_tolerance: f64,
-    /// Correction pairs of the L-BFGS (default 30, as for the exact GP).
-    pub lbfgs_memory: usize,
-    /// Hyperparameter bounds (as for the exact GP).
-    pub bounds: Bounds,
 }
 
 impl Default for SparseGpParams {
@@ -115,18 +100,11 @@ impl Default for SparseGpParams {
             inducing: InducingParams::default(),
             standardize: true,
             init: KernelInit::default(),
-            start: StartPolicy::default(),
             noise_variance: 0.01,
             jitter: 1e-6,
             optimize: true,
-            optimizer: Optimizer::Lbfgs,
-            max_iters: 200,
-            restarts: 0,
+            hyperopt: HyperoptParams::default(),
             seed: 0,
-            gradient_tolerance: 1e-5,
-            relative_cost_tolerance: 2.2e-9,
-            lbfgs_memory: LBFGS_MEMORY,
-            bounds: Bounds::default(),
         }
     }
 }
@@ -150,29 +128,7 @@ impl SparseGpParams {
         if !(self.jitter.is_finite() && self.jitter >= 0.0) {
             return bad("jitter", "a non-negative number");
         }
-        self.bounds.check("sparse_gp")?;
-        let [lo, hi] = self.bounds.noise_variance;
-        if !(self.noise_variance >= lo && self.noise_variance <= hi) {
-            return bad(
-                "noise_variance",
-                "a positive variance within bounds.noise_variance",
-            );
-        }
-        self.bounds.check_init(&self.init, "sparse_gp")?;
-        self.start.check("sparse_gp")?;
-        self.settings().check("sparse_gp", self.optimize)
-    }
-
-    /// The optimiser settings.
-    pub fn settings(&self) -> OptimizerSettings {
-        OptimizerSettings {
-            optimizer: self.optimizer,
-            max_iters: self.max_iters,
-            restarts: self.restarts,
-            seed: self.seed,
-            gradient_tolerance: self.gradient_tolerance,
-            relative_cost_tolerance: self.relative_cost_tolerance,
-            lbfgs_memory: self.lbfgs_memory,
-        }
+        self.hyperopt
+            .check("sparse_gp", self.optimize, &self.init, self.noise_variance)
     }
 }
