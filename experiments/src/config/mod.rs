@@ -123,7 +123,7 @@ pub enum DatasetSpec {
     },
     /// ROS bags (MCAP or ROS 1; paths relative to the experiment file),
     /// each turned into a rover log through the topic map as `gpodo
-    /// import` does (README, "From ROS bags").
+    /// import` does (`datasets/README.md`, "ROS bags").
     Bags {
         /// Training recordings.
         train: Vec<PathBuf>,

@@ -137,9 +137,9 @@ pub enum TrackerErrorModel {
     #[default]
     Shared,
     /// Every measurement draws its own error and every processed frame
-    /// enters the pose graph: the model of gpodo's results before
-    /// 2026-11-25 (`experiments/paper-independent.yaml` sets it with the
-    /// earlier error scales and reproduces them).
+    /// enters the pose graph, so more frames always average the error
+    /// down (`experiments/paper-independent.yaml` sets it, with the error
+    /// scales calibrated for it).
     Independent,
 }
 

@@ -216,9 +216,8 @@ pub fn for_column_blocks<T: Send>(
 /// `dst = alpha·a·b` (or `dst += …` with [`Accum::Add`]) with faer's GEMM,
 /// run sequentially when the inner dimension dwarfs the output (e.g.
 /// `K_uf K_fu`, `m × n` by `n × m` with `n ≫ m`): faer's parallel GEMM splits
-/// the output only, and on such shapes it is about ten times slower than
-/// its sequential kernel (measured: 131 ms against 12 ms for
-/// 100 × 20 000 × 100 on two cores).
+/// the output only, and on such shapes it is far slower than its
+/// sequential kernel (`bench/README.md`, "Sparse GP").
 pub fn gemm(
     dst: MatMut<'_, f64>,
     accum: Accum,
