@@ -5,9 +5,9 @@ what is not meant to repeat: wall-clock times and the code version.
     python3 experiments/scripts/compare_results.py results-before/paper results/paper
 
 Every file must exist on both sides. JSON and JSON-lines files are compared
-as values after dropping the keys `duration_secs`, `code_version` and
-`timing`; Markdown after blanking the code version, the wall time and the
-`fit [s]` column; every other file (CSV, TUM, SVG) byte for byte. Exits 1
+as values after dropping the keys `duration_secs`, `cpu_secs`, `code_version` and
+`timing`; Markdown after blanking the code version, the wall and CPU
+times and the `fit [s]` (`fit wall [s]`) column; every other file (CSV, TUM, SVG) byte for byte. Exits 1
 and names the first differences when the folders differ.
 
     python3 experiments/scripts/compare_results.py --hyperopt-keys OLD NEW
@@ -23,8 +23,8 @@ import re
 import sys
 from pathlib import Path
 
-VOLATILE_KEYS = {"duration_secs", "code_version", "timing"}
-VOLATILE_COLUMNS = {"fit [s]"}
+VOLATILE_KEYS = {"duration_secs", "cpu_secs", "code_version", "timing"}
+VOLATILE_COLUMNS = {"fit [s]", "fit wall [s]"}
 HYPEROPT_FIELDS = ["optimizer", "max_iters", "start", "restarts", "gradient_tolerance",
                    "relative_cost_tolerance", "lbfgs_memory", "bounds"]
 
@@ -55,6 +55,7 @@ def markdown(text):
     text = re.sub(r"Code: `[^`]*`", "Code: `…`", text)
     text = re.sub(r"code `[^`]*`", "code `…`", text)
     text = re.sub(r"Wall time: [0-9.]+ s", "Wall time: … s", text)
+    text = re.sub(r"CPU time: [0-9.]+ s", "CPU time: … s", text)
     out, blank = [], set()
     for line in text.splitlines():
         if line.startswith("|"):

@@ -18,6 +18,7 @@
 //! `ARCHITECTURE.md` for the path of one `gpodo run`.
 
 pub mod config;
+pub mod cpu;
 pub mod error;
 pub mod execute;
 pub mod output;

@@ -452,6 +452,14 @@ fn simulate(
     Ok(())
 }
 
+/// Whether the log may colour its lines: only on a terminal, and never
+/// when `NO_COLOR` is set (to anything but the empty string).
+fn colour_on_stderr() -> bool {
+    use std::io::IsTerminal;
+    let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+    std::io::stderr().is_terminal() && !no_color
+}
+
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     let level = if cli.quiet { "warn" } else { "info" };
@@ -461,6 +469,7 @@ fn main() -> anyhow::Result<()> {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level)),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(colour_on_stderr())
         .init();
     gpodo_experiments::stop::install_ctrl_c()?;
     match cli.command {

@@ -109,7 +109,10 @@ pub enum RunnerError {
         "stopped: the runs finished before the stop are recorded; `gpodo run --resume` runs the rest"
     )]
     Stopped,
-    /// Writing a report failed.
+    /// Writing a run's report failed (the error names the file).
+    #[error(transparent)]
+    Report(anyhow::Error),
+    /// Writing a file failed.
     #[error("writing {}: {source}", path.display())]
     Output {
         /// The file or folder.
@@ -268,6 +271,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
             };
             // A run's wall time: since the sweep started (shared work included).
             results.duration_secs = start.elapsed().as_secs_f64();
+            results.cpu_secs = crate::cpu::process_cpu_secs();
             writer.append(&RunRecord::new(run, &results))?;
             if details {
                 let run_dir = if single {
@@ -276,7 +280,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
                     dir.join("runs").join(slug(&run.key))
                 };
                 write_report(&results, &run_dir, plan.outputs.plots)
-                    .map_err(|e| output(&run_dir, e))?;
+                    .map_err(RunnerError::Report)?;
             }
             Ok(())
         })?;

@@ -209,3 +209,77 @@ fn bench_writes_ratios_to_the_exact_gp_row_and_rejects_a_bad_baseline() {
         "{err}"
     );
 }
+
+#[test]
+fn a_run_piped_to_a_file_logs_without_colour_codes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A warning (a reference table that is missing) and the info lines.
+    write(
+        &d.join("piped.yaml"),
+        "name: piped\ndataset: {kind: simulated, preset: exoter-prl, seed: 3, training_runs: 1, training_run_secs: 60, test_max_secs: 30}\nregressors:\n  - kind: zero\ncompare_with: {path: missing.csv, targets: [a]}\n",
+    );
+    let out = Command::new(GPODO)
+        .args(["run", "piped.yaml"])
+        .current_dir(d)
+        .env_remove("NO_COLOR")
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    assert!(log.contains("WARN") && log.contains("INFO"), "{log}");
+    assert!(
+        !log.contains('\u{1b}'),
+        "escape codes in a piped log: {log:?}"
+    );
+}
+
+#[test]
+fn a_residual_table_report_gives_its_own_units_and_no_empty_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A yaw-rate target (rad/s) and no wheels: no statistic of wheel
+    // speed, slip or attitude applies.
+    let mut csv = String::from("speed,steer,yaw_rate_error\n");
+    for i in 0..80 {
+        let x = i as f64 * 0.1;
+        csv.push_str(&format!("{x},{},{}\n", x.cos(), 0.01 * x.sin()));
+    }
+    write(&d.join("yaw.csv"), &csv);
+    write(
+        &d.join("yaw.yaml"),
+        "name: yaw\ndataset: {kind: residual_table, path: yaw.csv, targets: [yaw_rate_error], train_fraction: 0.75}\nregressors:\n  - kind: zero\n",
+    );
+    let out = gpodo(&["-q", "run", "yaw.yaml"], d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = std::fs::read_to_string(d.join("results/yaw/report.md")).unwrap();
+    let section = report
+        .split("## Residual statistics")
+        .nth(1)
+        .unwrap()
+        .split("\n## ")
+        .next()
+        .unwrap();
+    assert!(section.contains("the table's target units"), "{section}");
+    assert!(
+        !section.contains("mm/s") && !section.contains("wheel"),
+        "{section}"
+    );
+    assert!(
+        section.contains("| rows | n | mean abs | p95 abs |\n"),
+        "{section}"
+    );
+    assert!(
+        !section
+            .lines()
+            .filter(|l| l.starts_with("| train") || l.starts_with("| test"))
+            .any(|l| l.contains('–')),
+        "{section}"
+    );
+    // The fits' times say what they are.
+    assert!(report.contains("fit wall [s]") && report.contains("CPU time:"));
+}

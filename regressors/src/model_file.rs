@@ -189,8 +189,12 @@ impl ModelFile {
         };
         let text = serde_json::to_string(self).map_err(|e| io(std::io::Error::other(e)))?;
         let tmp = path.with_extension("gpodo.partial");
-        std::fs::write(&tmp, text.as_bytes()).map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
+        let written =
+            std::fs::write(&tmp, text.as_bytes()).and_then(|()| std::fs::rename(&tmp, path));
+        if written.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        written.map_err(io)
     }
 
     /// Reads a model file, refusing one of another format or version, a

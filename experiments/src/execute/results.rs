@@ -89,6 +89,10 @@ pub struct ExperimentResults {
     pub schemes: Vec<SchemeResult>,
     /// Wall-clock duration of the whole experiment (s).
     pub duration_secs: f64,
+    /// CPU time the process had used when the run was recorded, on all
+    /// threads (s; for a single run, the run's own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_secs: Option<f64>,
     /// The training rows (physical units), written as a CSV beside the
     /// report.
     #[serde(skip)]

@@ -373,6 +373,7 @@ impl SharedWork {
             absolute_regressors: absolute.iter().map(|f| f.result.clone()).collect(),
             schemes,
             duration_secs: start.elapsed().as_secs_f64(),
+            cpu_secs: None,
             train_rows: Some(data.train.clone()),
             test_rows: Some(data.test.clone()),
             traverses: Arc::clone(&p.traverses),

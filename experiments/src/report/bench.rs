@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::execute::bench::{BenchResults, BenchRow};
-use crate::output::write_atomically;
+use crate::output::write_file;
 use crate::report::table::{Align, Table};
 
 /// Writes `bench.md` and `bench.json` into `dir` and returns their paths.
@@ -16,8 +16,8 @@ pub fn write_bench_report(r: &BenchResults, dir: &Path) -> anyhow::Result<(PathB
     std::fs::create_dir_all(dir)?;
     let md = dir.join("bench.md");
     let json = dir.join("bench.json");
-    write_atomically(&json, serde_json::to_string_pretty(r)?.as_bytes())?;
-    write_atomically(&md, bench_markdown(r).as_bytes())?;
+    write_file(&json, serde_json::to_string_pretty(r)?.as_bytes())?;
+    write_file(&md, bench_markdown(r).as_bytes())?;
     Ok((md, json))
 }
 

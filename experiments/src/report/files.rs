@@ -9,7 +9,7 @@ use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::tum::{StampedPose, format_tum};
 
 use crate::execute::results::ExperimentResults;
-use crate::output::{slug, write_atomically};
+use crate::output::{slug, write_file};
 use crate::report::plots;
 use crate::report::run::markdown;
 
@@ -27,14 +27,14 @@ pub fn write_report(
     std::fs::create_dir_all(dir)?;
     let md = dir.join("report.md");
     let json = dir.join("metrics.json");
-    write_atomically(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
-    write_atomically(&md, markdown(results).as_bytes())?;
+    write_file(&json, serde_json::to_string_pretty(results)?.as_bytes())?;
+    write_file(&md, markdown(results).as_bytes())?;
     for (name, rows) in [
         ("residuals_train.csv", &results.train_rows),
         ("residuals_test.csv", &results.test_rows),
     ] {
         if let Some(rows) = rows {
-            write_atomically(&dir.join(name), residual_csv(rows).as_bytes())?;
+            write_file(&dir.join(name), residual_csv(rows).as_bytes())?;
         }
     }
     write_table_two_files(results, dir, plots)?;
@@ -63,7 +63,7 @@ fn write_table_two_files(
                 .collect()
         };
         let name = slug(traverse.name());
-        write_atomically(
+        write_file(
             &traj_dir.join(format!("{name}.ground_truth.tum")),
             format_tum(
                 &format!("ground truth of `{}` (world_from_body)", traverse.name()),
@@ -84,7 +84,7 @@ fn write_table_two_files(
                 scheme.run.frames,
                 scheme.run.keyframes
             );
-            write_atomically(
+            write_file(
                 &traj_dir.join(format!("{file}.tum")),
                 format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
             )?;
@@ -95,7 +95,7 @@ fn write_table_two_files(
                 "{}: {} frames, {} keyframes, RMSE {:.3} m",
                 scheme.label, scheme.run.frames, scheme.run.keyframes, scheme.run.metrics.rmse_m
             );
-            write_atomically(
+            write_file(
                 &plot_dir.join(format!("fig5_{file}.svg")),
                 plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
             )?;
@@ -104,7 +104,7 @@ fn write_table_two_files(
             continue;
         }
         if let Some((label, predictions)) = residual_map_source(results, t) {
-            write_atomically(
+            write_file(
                 &plot_dir.join(format!("fig3_{name}.svg")),
                 plots::residual_map_svg(traverse, predictions, &label)?.as_bytes(),
             )?;
