@@ -25,4 +25,5 @@ pub mod output;
 pub mod plan;
 pub mod report;
 pub mod runner;
+pub mod shard;
 pub mod stop;

@@ -48,8 +48,9 @@ enum Command {
         /// Start over, replacing this shard's record.
         #[arg(long)]
         force: bool,
-        /// Run the i-th of N deterministic slices (`i/N`, from 0); defaults
-        /// to SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set.
+        /// Run the i-th of N deterministic slices (`i/N`, from 0). In a
+        /// Slurm array task without it, shard SLURM_ARRAY_TASK_ID of the
+        /// count the results folder's plan.json records.
         #[arg(long)]
         shard: Option<String>,
     },
@@ -177,9 +178,12 @@ fn run(
     quiet: bool,
 ) -> anyhow::Result<()> {
     let plan = load_plan(file)?;
-    let shard = match shard {
-        Some(text) => Some(Shard::parse(&text).map_err(anyhow::Error::msg)?),
-        None => Shard::from_env().map_err(anyhow::Error::msg)?,
+    let shard = shard.as_deref().map(Shard::parse).transpose()?;
+    let slurm_task = match std::env::var("SLURM_ARRAY_TASK_ID") {
+        Ok(id) => Some(id.trim().parse::<usize>().with_context(|| {
+            format!("SLURM_ARRAY_TASK_ID `{id}`: expected a task index from 0")
+        })?),
+        Err(_) => None,
     };
     // A single experiment is simply run again; a sweep keeps its record
     // unless told to resume or start over.
@@ -189,6 +193,7 @@ fn run(
         resume,
         force,
         shard,
+        slurm_task,
         quiet,
     };
     let outcome =
@@ -278,6 +283,14 @@ fn report(dir: &Path) -> anyhow::Result<()> {
         report.missing,
         report.duplicates
     );
+    if report.missing > 0 || report.duplicates > 0 {
+        anyhow::bail!(
+            "{}: {} planned run(s) missing and {} recorded twice (the report names them); `gpodo run FILE --resume` runs the missing ones",
+            dir.display(),
+            report.missing,
+            report.duplicates
+        );
+    }
     Ok(())
 }
 

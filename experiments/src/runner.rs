@@ -1,17 +1,12 @@
 //! Runs a sweep: the shared work once, then every run in parallel (rayon),
 //! each appended to the record as it finishes; resumable; shardable for
-//! cluster array jobs (`--shard i/N`, or Slurm's `SLURM_ARRAY_TASK_ID` and
-//! `SLURM_ARRAY_TASK_COUNT`), each shard writing `runs.<i>.jsonl`.
+//! cluster array jobs (`--shard i/N`, or Slurm's `SLURM_ARRAY_TASK_ID`
+//! with the count the folder records; [`crate::shard`]), each shard
+//! writing `runs.<i>.jsonl`.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-use indicatif::{
-    MultiProgress, ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle,
-};
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
 use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
@@ -22,57 +17,11 @@ use crate::execute::shared::{SharedCounts, SharedWork};
 use crate::output::{slug, write_atomically};
 use crate::plan::{PlanFile, RunSpec, SweepPlan};
 use crate::report::write_report;
-
-/// One slice of a sweep: runs whose plan index is `index` modulo `count`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Shard {
-    /// This shard, from 0.
-    pub index: usize,
-    /// Number of shards.
-    pub count: usize,
-}
-
-impl Shard {
-    /// Parses `i/N` (0 ≤ i < N).
-    ///
-    /// # Errors
-    /// A message naming the expected form.
-    pub fn parse(text: &str) -> Result<Self, String> {
-        let bad = || format!("shard `{text}`: expected `i/N` with 0 ≤ i < N, e.g. `0/4`");
-        let (i, n) = text.split_once('/').ok_or_else(bad)?;
-        let (index, count): (usize, usize) = (
-            i.trim().parse().map_err(|_| bad())?,
-            n.trim().parse().map_err(|_| bad())?,
-        );
-        if count == 0 || index >= count {
-            return Err(bad());
-        }
-        Ok(Self { index, count })
-    }
-
-    /// The shard of a Slurm array task, when `SLURM_ARRAY_TASK_ID` and
-    /// `SLURM_ARRAY_TASK_COUNT` are set (task ids from 0, as
-    /// `--array=0-(N-1)` gives).
-    ///
-    /// # Errors
-    /// A message when the variables are set but inconsistent.
-    pub fn from_env() -> Result<Option<Self>, String> {
-        let (Ok(id), Ok(count)) = (
-            std::env::var("SLURM_ARRAY_TASK_ID"),
-            std::env::var("SLURM_ARRAY_TASK_COUNT"),
-        ) else {
-            return Ok(None);
-        };
-        Self::parse(&format!("{id}/{count}"))
-            .map(Some)
-            .map_err(|e| format!("from SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT: {e}"))
-    }
-
-    /// Whether this shard runs plan entry `run_index`.
-    pub fn owns(&self, run_index: usize) -> bool {
-        run_index % self.count == self.index
-    }
-}
+pub use crate::shard::{Shard, ShardError};
+use indicatif::{
+    MultiProgress, ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle,
+};
+use rayon::prelude::*;
 
 /// How to run a sweep.
 #[derive(Debug, Clone, Default)]
@@ -83,8 +32,11 @@ pub struct RunOptions {
     pub resume: bool,
     /// Start over when this shard's record file exists.
     pub force: bool,
-    /// Run one slice.
+    /// Run one slice (`--shard i/N`).
     pub shard: Option<Shard>,
+    /// The Slurm array task this process is (`SLURM_ARRAY_TASK_ID`), which
+    /// without `shard` runs that slice of the count the folder records.
+    pub slurm_task: Option<usize>,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -98,6 +50,9 @@ pub enum RunnerError {
         /// The record file.
         path: PathBuf,
     },
+    /// The shard cannot be settled.
+    #[error(transparent)]
+    Shard(#[from] ShardError),
     /// Writing or reading records failed.
     #[error(transparent)]
     Record(#[from] RecordError),
@@ -186,14 +141,20 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         source: e,
     };
     std::fs::create_dir_all(&dir).map_err(|e| output(&dir, e.into()))?;
-    let record = record_path(&dir, options.shard.map(|s| s.index));
+    let plan_path = dir.join("plan.json");
+    let recorded_shards = recorded_plan(&plan_path).and_then(|p| p.shards);
+    let shard = Shard::resolve(options.shard, options.slurm_task, recorded_shards)?;
+    let record = record_path(&dir, shard.map(|s| s.index));
     let has_runs = std::fs::metadata(&record).is_ok_and(|m| m.len() > 0);
     if has_runs && !options.resume && !options.force {
         return Err(RunnerError::ResultsExist { path: record });
     }
-    let plan_path = dir.join("plan.json");
-    let plan_json = serde_json::to_string_pretty(&PlanFile::new(plan))
-        .map_err(|e| output(&plan_path, e.into()))?;
+    let plan_file = PlanFile {
+        shards: shard.map(|s| s.count).or(recorded_shards),
+        ..PlanFile::new(plan)
+    };
+    let plan_json =
+        serde_json::to_string_pretty(&plan_file).map_err(|e| output(&plan_path, e.into()))?;
     write_atomically(&plan_path, plan_json.as_bytes()).map_err(|e| output(&plan_path, e.into()))?;
     let done = if options.resume {
         recorded_keys(&dir)?
@@ -204,7 +165,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
     let mine: Vec<&RunSpec> = plan
         .runs
         .iter()
-        .filter(|r| options.shard.is_none_or(|s| s.owns(r.index)))
+        .filter(|r| shard.is_none_or(|s| s.owns(r.index)))
         .collect();
     let todo: Vec<&RunSpec> = mine
         .iter()
@@ -299,4 +260,10 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
             .unwrap_or_else(std::sync::PoisonError::into_inner),
         duration_secs: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The `plan.json` an earlier run of the folder wrote, if it can be read.
+fn recorded_plan(path: &Path) -> Option<PlanFile> {
+    let text = std::fs::read_to_string(path).ok()?;
+    serde_json::from_str(&text).ok()
 }

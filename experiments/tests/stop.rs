@@ -29,6 +29,7 @@ seeds: [1, 2]
         resume: false,
         force: false,
         shard: None,
+        slurm_task: None,
         quiet: true,
     };
     gpodo_experiments::stop::request();

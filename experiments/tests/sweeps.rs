@@ -2,7 +2,9 @@
 //! processes record exactly the runs (and the same metrics, byte for byte)
 //! as the unsharded sweep; a partly run sweep resumes where it stopped and
 //! refuses to overwrite without `--resume` or `--force`; the report merges
-//! shards and names missing and duplicate runs; `gpodo plan` lists the runs.
+//! shards and names missing and duplicate runs (and fails while any is);
+//! a Slurm task resubmitted alone runs its own shard of the recorded count;
+//! `gpodo plan` lists the runs.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -149,9 +151,12 @@ fn a_stopped_sweep_resumes_and_the_report_names_gaps_and_duplicates() {
     std::fs::rename(d.join("r/runs.0.jsonl"), d.join("r/runs.jsonl")).unwrap();
     let partial = metrics_by_key(&d.join("r"));
     assert_eq!(partial.len(), 2);
+    // The report is written, and says by its exit status that runs are
+    // missing.
     let report = gpodo(&["report", "r"], d, None);
-    ok(&report);
+    assert!(!report.status.success());
     assert!(String::from_utf8_lossy(&report.stdout).contains("2 missing"));
+    assert!(String::from_utf8_lossy(&report.stderr).contains("2 planned run(s) missing"));
     assert!(
         std::fs::read_to_string(d.join("r/report.md"))
             .unwrap()
@@ -183,7 +188,7 @@ fn a_stopped_sweep_resumes_and_the_report_names_gaps_and_duplicates() {
     let first = std::fs::read_to_string(d.join("r/runs.jsonl")).unwrap();
     std::fs::write(d.join("r/runs.7.jsonl"), first.lines().next().unwrap()).unwrap();
     let report = gpodo(&["report", "r"], d, None);
-    ok(&report);
+    assert!(!report.status.success());
     assert!(String::from_utf8_lossy(&report.stdout).contains("0 missing, 1 duplicated"));
 }
 
@@ -211,4 +216,63 @@ fn the_same_config_gives_byte_identical_metrics() {
     assert!(d.join("a/report.md").is_file() && d.join("a/metrics.json").is_file());
     assert!(d.join("a/plots").is_dir() && d.join("a/trajectories").is_dir());
     assert!(d.join("a/summary.md").is_file());
+}
+
+/// `gpodo run` as Slurm array task `task` of an array of `array_size`.
+fn slurm_task(d: &Path, task: &str, array_size: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["-q", "run", "tiny.yaml", "--out", "s"];
+    args.extend_from_slice(extra);
+    Command::new(GPODO)
+        .args(&args)
+        .current_dir(d)
+        .env("SLURM_ARRAY_TASK_ID", task)
+        .env("SLURM_ARRAY_TASK_COUNT", array_size)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_slurm_task_resubmitted_alone_runs_exactly_its_shard_of_the_recorded_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("tiny.yaml"), SWEEP).unwrap();
+    // Without --shard, the first task of a fresh folder cannot know N.
+    let unknown = slurm_task(d, "0", "2", &[]);
+    assert!(!unknown.status.success());
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("--shard 0/N"));
+    // Task 0 of an array of 2, as sweep.sbatch starts it.
+    ok(&slurm_task(d, "0", "2", &["--shard", "0/2"]));
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("s/plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["shards"], 2);
+    // Task 1 lost and resubmitted alone (`--array=1`: an array of 1):
+    // shard 1 of the recorded 2, exactly the two runs shard 0 left.
+    let resubmitted = slurm_task(d, "1", "1", &[]);
+    ok(&resubmitted);
+    let stdout = String::from_utf8_lossy(&resubmitted.stdout);
+    assert!(
+        stdout.starts_with("2 run(s) done") && stdout.contains("2 left to other shards"),
+        "{stdout}"
+    );
+    assert!(d.join("s/runs.1.jsonl").is_file());
+    assert_eq!(metrics_by_key(&d.join("s")).len(), 4);
+    ok(&gpodo(&["report", "s"], d, None));
+    // A shard count that changes is refused, and nothing is run.
+    let changed = gpodo(
+        &[
+            "-q",
+            "run",
+            "tiny.yaml",
+            "--out",
+            "s",
+            "--shard",
+            "0/3",
+            "--resume",
+        ],
+        d,
+        None,
+    );
+    assert!(!changed.status.success());
+    assert!(String::from_utf8_lossy(&changed.stderr).contains("started as 2 shards"));
+    assert_eq!(metrics_by_key(&d.join("s")).len(), 4);
 }

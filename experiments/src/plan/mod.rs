@@ -314,6 +314,10 @@ pub struct PlanFile {
     pub replicates: Vec<u64>,
     /// Every run's key, in plan order.
     pub keys: Vec<String>,
+    /// How many shards the folder's runs are sliced into, as the first
+    /// shard recorded it (none for an unsharded sweep).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shards: Option<usize>,
 }
 
 impl PlanFile {
@@ -326,6 +330,7 @@ impl PlanFile {
             dimensions: plan.dimensions.clone(),
             replicates: plan.replicates.clone(),
             keys: plan.runs.iter().map(|r| r.key.clone()).collect(),
+            shards: None,
         }
     }
 }

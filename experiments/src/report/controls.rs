@@ -144,7 +144,7 @@ pub fn controls_section(s: &mut String, r: &ExperimentResults) {
     }
     let _ = writeln!(
         s,
-        "## Controls — what gating and what the regressor contribute\n\nA scheme's back end is its tracking prior and its residual source (which also corrects the odometry in the pose graph). Gating's effect: each gated scheme against the fixed-rate schemes of the same back end, their RMSE interpolated at the gated scheme's frame count (linear in log frames; Δ < 0: gating is better at equal frames). The regressor's effect: each scheme against the same selector and prior fed by the parametric model alone (zero residuals). One seed; the sweep report gives intervals over seeds.\n"
+        "## Controls — what gating and what the regressor contribute\n\nA scheme's back end is its tracking prior and its residual source (which also corrects the odometry in the pose graph). Gating's effect: each gated scheme against the fixed-rate schemes of the same back end, their RMSE interpolated at the gated scheme's frame count (linear in log frames; Δ < 0: gating is better at equal frames). The regressor's effect: each scheme against the same selector and prior fed by the parametric model alone (zero residuals). One seed: schemes grouped into `curve:`s and run over `seeds:` give these comparisons with intervals over seeds, in the sweep report's frames-versus-error curves.\n"
     );
     if !gating.is_empty() {
         let _ = writeln!(s, "Gating against fixed rate:\n\n{}", gating.markdown());
