@@ -257,10 +257,35 @@ fn visit_mcap(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usiz
         index,
         detail: e.to_string(),
     };
-    let stream = mcap::MessageStream::new(&bytes).map_err(|e| corrupt(0, e))?;
+    // Every chunk's CRC is checked (a damaged byte in a chunk otherwise
+    // decodes as a wrong stamp or value, or as nothing at all), and no
+    // record or chunk may claim more bytes than a damaged length could
+    // make the reader allocate.
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(mcap_record_limit(bytes.len()));
+    let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
+    let mut rest: &[u8] = &bytes;
     let mut index = 0;
-    for message in stream {
-        let message = message.map_err(|e| corrupt(index, e))?;
+    while let Some(event) = reader.next_event() {
+        let event = event.map_err(|e| match e {
+            mcap::McapError::BadChunkCrc { saved, calculated } => BagError::Corrupt {
+                path: path.to_path_buf(),
+                index,
+                detail: bad_chunk_detail(&bytes, saved, calculated),
+            },
+            e => corrupt(index, e),
+        })?;
+        let message = match event {
+            mcap::sans_io::MessageReadEvent::ReadRequest(need) => {
+                let len = need.min(rest.len());
+                reader.insert(len).copy_from_slice(&rest[..len]);
+                reader.notify_read(len);
+                rest = &rest[len..];
+                continue;
+            }
+            mcap::sans_io::MessageReadEvent::Message(message) => message,
+        };
         let channel = &message.channel;
         let message_type = channel.schema.as_ref().map_or("", |s| s.name.as_str());
         visit(RawMessage {
@@ -274,6 +299,50 @@ fn visit_mcap(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usiz
         index += 1;
     }
     Ok(index)
+}
+
+/// The most bytes one MCAP record (a chunk's uncompressed data included)
+/// may claim in a file of `file_len` bytes: 64 times the file, at least
+/// 64 MiB, at most 4 GiB (writers cut chunks at a few MiB), so that a
+/// damaged length is an error, not an allocation that aborts the process.
+fn mcap_record_limit(file_len: usize) -> usize {
+    file_len.saturating_mul(64).clamp(64 << 20, 4 << 30)
+}
+
+/// What is known of the MCAP chunk whose stored CRC `saved` disagrees with
+/// the `calculated` one: where it starts and the messages' time range its
+/// header gives, found by walking the file's records (every length checked
+/// against the file).
+fn bad_chunk_detail(bytes: &[u8], saved: u32, calculated: u32) -> String {
+    let secs = |ns: u64| ns as f64 * 1e-9;
+    let mut detail =
+        format!("a damaged chunk (its CRC is {saved:08X}, its data give {calculated:08X})");
+    let mut at = mcap::MAGIC.len();
+    while let Some(head) = at.checked_add(9).and_then(|end| bytes.get(at..end)) {
+        let op = head[0];
+        let Some(end) = <[u8; 8]>::try_from(&head[1..9])
+            .ok()
+            .and_then(|l| usize::try_from(u64::from_le_bytes(l)).ok())
+            .and_then(|len| (at + 9).checked_add(len))
+            .filter(|&end| end <= bytes.len())
+        else {
+            break;
+        };
+        if op == mcap::records::op::CHUNK
+            && let Ok(mcap::records::Record::Chunk { header, .. }) =
+                mcap::parse_record(op, &bytes[at + 9..end])
+            && header.uncompressed_crc == saved
+        {
+            detail.push_str(&format!(
+                " at byte {at}, holding messages stamped {:.3} … {:.3} s",
+                secs(header.message_start_time),
+                secs(header.message_end_time)
+            ));
+            break;
+        }
+        at = end;
+    }
+    detail
 }
 
 /// The `index_pos` field of a ROS 1 bag's header record: where its index

@@ -130,6 +130,11 @@ impl ImportReport {
     }
 }
 
+/// The most rows the common clock may have per message of the densest
+/// stream: a clock a hundred times faster than every sensor interpolates
+/// nothing new, and a larger span can only come from a damaged stamp.
+pub const ROWS_PER_MESSAGE: usize = 100;
+
 /// Why a recording could not be imported.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
@@ -139,6 +144,25 @@ pub enum ImportError {
     /// The topic map is unusable.
     #[error("topic map: {0}")]
     Map(String),
+    /// The common clock would have far more rows than the recording has
+    /// messages: a stamp far outside the recording, or a `rate_hz` typo.
+    #[error(
+        "{file}: `rate_hz: {rate_hz}` over the {span_secs:.1} s the streams span would make {rows} rows, more than {limit} ({ROWS_PER_MESSAGE}× the {messages} messages of the densest stream); check `rate_hz`, or the stamps (a stamp far outside the recording stretches the span)"
+    )]
+    TooManyRows {
+        /// The bag.
+        file: String,
+        /// The clock's rate.
+        rate_hz: f64,
+        /// The span every stream covers (s).
+        span_secs: f64,
+        /// The rows it would make.
+        rows: f64,
+        /// The largest number allowed.
+        limit: usize,
+        /// Messages of the densest stream.
+        messages: usize,
+    },
     /// Nothing was left on the common clock.
     #[error(
         "{file}: no row of the common clock has every stream within max_gap_secs ({gap} s): {detail}"
@@ -279,11 +303,24 @@ pub fn import_bag(
     }
     let (start, end) = common_span(&mut streams);
     let dt = 1.0 / map.rate_hz;
-    let steps = if end > start {
-        ((end - start) / dt).floor() as usize + 1
+    let rows = if end > start {
+        ((end - start) / dt).floor() + 1.0
     } else {
-        0
+        0.0
     };
+    let messages = streams.iter().map(|s| s.times.len()).max().unwrap_or(0);
+    let limit = ROWS_PER_MESSAGE.saturating_mul(messages.max(1));
+    if rows > limit as f64 {
+        return Err(ImportError::TooManyRows {
+            file: path.display().to_string(),
+            rate_hz: map.rate_hz,
+            span_secs: end - start,
+            rows,
+            limit,
+            messages,
+        });
+    }
+    let steps = rows as usize;
     let mut samples = Vec::new();
     let mut ground_truth = Vec::new();
     let mut dropped = 0;

@@ -1,0 +1,178 @@
+//! Damaged recordings fail fast and clearly. An MCAP written by gpodo's
+//! own writer is damaged at 200 seeded offsets (8 bytes overwritten) and
+//! cut at 20 seeded lengths. Every import returns within a watchdog far
+//! above the intact file's time, never panics, and either fails with an
+//! error naming the file or returns exactly the intact file's rows. A
+//! stamp far outside the recording and a `rate_hz` typo are refused
+//! before the common clock is walked.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use gpodo_datasets::bags::import::{ImportError, TopicMap, import_bag};
+use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
+use gpodo_datasets::log::RoverLog;
+use gpodo_traits::ProprioceptiveSample;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A robot driving straight at 0.3 m/s, 10 Hz, 60 s.
+fn straight() -> RoverLog {
+    let n = 600;
+    let mut samples = Vec::new();
+    let mut ground_truth = Vec::new();
+    for k in 0..n {
+        let t = k as f64 * 0.1;
+        let mut s = ProprioceptiveSample {
+            time_secs: t,
+            ..Default::default()
+        };
+        s.imu.accel_mps2 = Vector3::new(0.0, 0.0, 9.81);
+        samples.push(s);
+        ground_truth.push(Isometry3::from_parts(
+            Translation3::new(0.3 * t, 0.0, 0.0),
+            UnitQuaternion::identity(),
+        ));
+    }
+    RoverLog {
+        name: "straight".into(),
+        wheel_names: vec![],
+        steer_names: vec![],
+        bogie_names: vec![],
+        samples,
+        ground_truth,
+        camera_times_secs: vec![],
+    }
+}
+
+type Imported = Result<(RoverLog, usize), String>;
+
+/// `import_bag` on another thread, or `None` when it has not returned
+/// within `limit` (a hang) or panicked.
+fn import_within(path: &Path, map: &TopicMap, limit: Duration) -> Option<Imported> {
+    let (tx, rx) = mpsc::channel();
+    let (path, map): (PathBuf, TopicMap) = (path.to_path_buf(), map.clone());
+    std::thread::spawn(move || {
+        let out = import_bag(&path, "x", &map)
+            .map(|(log, report)| (log, report.rows))
+            .map_err(|e| e.to_string());
+        let _ = tx.send(out);
+    });
+    rx.recv_timeout(limit).ok()
+}
+
+#[test]
+fn damaged_bytes_and_truncations_give_the_intact_rows_or_a_clear_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let log = straight();
+    let bag = write_mcap(&log, tmp.path()).unwrap();
+    let map = written_topic_map(&log, 10.0);
+    let start = Instant::now();
+    let (intact, rows) = import_bag(&bag.path, "x", &map).unwrap();
+    assert_eq!(rows.rows, 600);
+    // Generous: only a hang trips it.
+    let limit = (start.elapsed() * 100).max(Duration::from_secs(5));
+    let bytes = std::fs::read(&bag.path).unwrap();
+    let damaged = tmp.path().join("damaged.mcap");
+    let mut rng = ChaCha8Rng::seed_from_u64(39);
+    let mut cases: Vec<Vec<u8>> = (0..200)
+        .map(|_| {
+            let mut b = bytes.clone();
+            let at = rng.random_range(0..b.len() - 8);
+            b[at..at + 8].copy_from_slice(&rng.random::<u64>().to_le_bytes());
+            b
+        })
+        .collect();
+    cases.extend((0..20).map(|_| bytes[..rng.random_range(0..bytes.len())].to_vec()));
+    let (mut failed, mut same) = (0, 0);
+    for (k, case) in cases.iter().enumerate() {
+        std::fs::write(&damaged, case).unwrap();
+        match import_within(&damaged, &map, limit) {
+            None => panic!("case {k}: no answer within {limit:?} (a hang or a panic)"),
+            Some(Err(e)) => {
+                assert!(e.contains("damaged.mcap"), "case {k}: {e}");
+                failed += 1;
+            }
+            Some(Ok((got, _))) => {
+                assert_eq!(got.samples, intact.samples, "case {k}: different rows");
+                assert_eq!(got.ground_truth, intact.ground_truth, "case {k}");
+                same += 1;
+            }
+        }
+    }
+    // The damage reached the messages (caught by the chunk CRCs) as well
+    // as the records that only index them.
+    assert!(
+        failed >= 50 && same >= 20,
+        "{failed} failed, {same} identical"
+    );
+}
+
+/// `BagInfo::read` (every message visited) on another thread, or `None`
+/// when it has not returned within `limit` or panicked.
+fn info_within(path: &Path, limit: Duration) -> Option<Result<usize, String>> {
+    let (tx, rx) = mpsc::channel();
+    let path = path.to_path_buf();
+    std::thread::spawn(move || {
+        let out = gpodo_datasets::bags::BagInfo::read(&path)
+            .map(|i| i.messages)
+            .map_err(|e| e.to_string());
+        let _ = tx.send(out);
+    });
+    rx.recv_timeout(limit).ok()
+}
+
+#[test]
+fn the_shipped_fixtures_damaged_give_their_messages_or_a_clear_error() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let tmp = tempfile::tempdir().unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    for name in ["messages.mcap", "messages.bag"] {
+        let bytes = std::fs::read(fixtures.join(name)).unwrap();
+        let intact = gpodo_datasets::bags::BagInfo::read(&fixtures.join(name))
+            .unwrap()
+            .messages;
+        let damaged = tmp.path().join(format!("damaged-{name}"));
+        for k in 0..200 {
+            let mut b = bytes.clone();
+            if k % 10 == 9 {
+                b.truncate(rng.random_range(0..bytes.len()));
+            } else {
+                let at = rng.random_range(0..b.len() - 8);
+                b[at..at + 8].copy_from_slice(&rng.random::<u64>().to_le_bytes());
+            }
+            std::fs::write(&damaged, &b).unwrap();
+            match info_within(&damaged, Duration::from_secs(5)) {
+                None => panic!("{name} case {k}: no answer (a hang or a panic)"),
+                Some(Err(e)) => assert!(e.contains("damaged-"), "{name} case {k}: {e}"),
+                Some(Ok(n)) => assert_eq!(n, intact, "{name} case {k}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn a_stamp_far_outside_the_recording_or_a_rate_typo_is_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut log = straight();
+    // One sample (and its pose) stamped 30 years after the others: the
+    // file's CRCs are right, its stamps are not.
+    log.samples[599].time_secs = 1.0e9;
+    let bag = write_mcap(&log, tmp.path()).unwrap();
+    let map = written_topic_map(&log, 10.0);
+    match import_within(&bag.path, &map, Duration::from_secs(20)) {
+        Some(Err(e)) => assert!(e.contains("rate_hz") && e.contains("stamps"), "{e}"),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    let log = straight();
+    let bag = write_mcap(&log, tmp.path()).unwrap();
+    let mut map = written_topic_map(&log, 10.0);
+    map.rate_hz = 1.0e9;
+    let e = import_bag(&bag.path, "x", &map).unwrap_err();
+    assert!(matches!(e, ImportError::TooManyRows { .. }), "{e}");
+    assert!(e.to_string().contains("`rate_hz: 1000000000`"), "{e}");
+}
