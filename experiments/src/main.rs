@@ -296,9 +296,7 @@ fn report(dir: &Path) -> anyhow::Result<()> {
 
 fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
     let config = ExperimentConfig::from_path(file)?;
-    let base = file.parent().unwrap_or_else(|| Path::new("."));
-    let results =
-        run_bench(&config, base).with_context(|| format!("benchmark {}", file.display()))?;
+    let results = run_bench(&config).with_context(|| format!("benchmark {}", file.display()))?;
     let plan_dir = results_dir(
         &load_plan(file)?,
         &RunOptions {
@@ -324,9 +322,7 @@ fn bench(file: &Path, out: Option<PathBuf>) -> anyhow::Result<()> {
 
 fn fit(file: &Path, label: &str, save: &Path) -> anyhow::Result<()> {
     let config = ExperimentConfig::from_path(file)?;
-    let base = file.parent().unwrap_or_else(|| Path::new("."));
-    let fitted =
-        fit_model(&config, base, label).with_context(|| format!("fit {}", file.display()))?;
+    let fitted = fit_model(&config, label).with_context(|| format!("fit {}", file.display()))?;
     fitted.file.save(save)?;
     println!(
         "wrote {} (`{}`, {} training rows; held-out RMSE {:.6}, MAE {:.6} over {} test rows)",

@@ -181,8 +181,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         folder = %dir.display(),
         "sweep"
     );
-    let base = plan.base_dir.as_path();
-    let configs: Vec<(&ExperimentConfig, &Path)> = todo.iter().map(|r| (&r.config, base)).collect();
+    let configs: Vec<&ExperimentConfig> = todo.iter().map(|r| &r.config).collect();
     let multi = if options.quiet {
         MultiProgress::with_draw_target(ProgressDrawTarget::hidden())
     } else {
@@ -212,7 +211,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
             if crate::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
-            let results = shared.results(&run.config, base);
+            let results = shared.results(&run.config);
             // A run the stop cut short records nothing.
             if crate::stop::requested() {
                 return Err(RunnerError::Stopped);

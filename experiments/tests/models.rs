@@ -52,7 +52,7 @@ fn a_saved_model_predicts_what_the_in_process_model_predicted() {
         "ILGR",
         "sparse GP (VFE, m=20): rbf [hyperopt.max_iters=20]",
     ] {
-        let fitted = fit_model(&config, tmp.path(), label).unwrap();
+        let fitted = fit_model(&config, label).unwrap();
         let path = tmp.path().join("m.gpodo");
         fitted.file.save(&path).unwrap();
         let loaded = ModelFile::load(&path).unwrap();
@@ -132,7 +132,7 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
         ]
     );
     let config = ExperimentConfig::from_path(&file).unwrap();
-    let fitted = fit_model(&config, tmp.path(), "exact GP: rbf [hyperopt.max_iters=30]").unwrap();
+    let fitted = fit_model(&config, "exact GP: rbf [hyperopt.max_iters=30]").unwrap();
     assert_eq!(values.nrows(), fitted.test_predictions.mean.nrows());
     for i in 0..values.nrows() {
         for j in 0..3 {
@@ -153,7 +153,7 @@ fn bad_model_files_and_rows_are_refused_with_their_reason() {
     let tmp = tempfile::tempdir().unwrap();
     let file = write_config(tmp.path());
     let config = ExperimentConfig::from_path(&file).unwrap();
-    let fitted = fit_model(&config, tmp.path(), "ILGR").unwrap();
+    let fitted = fit_model(&config, "ILGR").unwrap();
     let path = tmp.path().join("m.gpodo");
     fitted.file.save(&path).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
@@ -198,13 +198,9 @@ fn bad_model_files_and_rows_are_refused_with_their_reason() {
     assert!(e.contains(&format!("no column `{}`", names[1])), "{e}");
 
     // Kinds without a saved state, and unknown labels.
-    let e = fit_model(&config, tmp.path(), "k-NN (k=10)")
-        .unwrap_err()
-        .to_string();
+    let e = fit_model(&config, "k-NN (k=10)").unwrap_err().to_string();
     assert!(e.contains("cannot be saved"), "{e}");
-    let e = fit_model(&config, tmp.path(), "exact GP")
-        .unwrap_err()
-        .to_string();
+    let e = fit_model(&config, "exact GP").unwrap_err().to_string();
     assert!(
         e.contains("no regressor labelled `exact GP`") && e.contains("ILGR"),
         "{e}"

@@ -5,7 +5,6 @@
 //! from VO), and [`run_frontend`] over the traverse. [`run_scheme`] is the
 //! one call an experiment runner makes per scheme and traverse.
 
-use std::path::Path;
 use std::time::Instant;
 
 use gpodo_traits::{FrameSelector, ResidualRegressor};
@@ -121,8 +120,6 @@ impl<'a> SchemeSpecRef<'a> {
 pub struct SchemeContext<'a> {
     /// The front end's settings.
     pub params: &'a FrontendParams,
-    /// The folder relative VO-log paths start from.
-    pub base: &'a Path,
     /// For an oracle matched to another scheme (`same_as`): that scheme's
     /// frames on this traverse.
     pub matched_frames: Option<usize>,
@@ -136,8 +133,9 @@ pub struct SchemeContext<'a> {
 
 impl VoSpec {
     /// The visual odometry this specification describes over `traverse`;
-    /// a replayed log's relative path starts at `base`, and a replay
-    /// without a path replays `recorded` (the traverse's own VO).
+    /// a replay reads its log's path as given (an experiment file's loader
+    /// has made it absolute), and a replay without a path replays
+    /// `recorded` (the traverse's own VO).
     ///
     /// # Errors
     /// [`FrontendError::Parse`] naming a VO log that cannot be read or
@@ -147,7 +145,6 @@ impl VoSpec {
     pub fn build(
         &self,
         traverse: &Traverse,
-        base: &Path,
         recorded: Option<&[StampedPose]>,
     ) -> Result<Box<dyn VisualOdometry>, FrontendError> {
         Ok(match self {
@@ -163,12 +160,8 @@ impl VoSpec {
                 Box::new(ReplayVo::new(p.clone(), traverse, log)?)
             }
             Self::Replay(p) => {
-                let path = if p.path.is_absolute() {
-                    p.path.clone()
-                } else {
-                    base.join(&p.path)
-                };
-                let text = std::fs::read_to_string(&path).map_err(|e| FrontendError::Parse {
+                let path = &p.path;
+                let text = std::fs::read_to_string(path).map_err(|e| FrontendError::Parse {
                     path: path.display().to_string(),
                     line: 0,
                     detail: format!("cannot read the VO log: {e}"),
@@ -284,7 +277,7 @@ pub fn run_scheme(
                 selector = Box::new(RescaleKeyframes::new(selector, *rescale)?);
             }
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
-            let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
+            let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
             let run = run_frontend(
                 traverse,
                 &frontend,
@@ -310,7 +303,7 @@ pub fn run_scheme(
                     "a trained regressor's predictions (an oracle cannot learn online)".into(),
                 ));
             };
-            let vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
+            let vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
             let corrections = predictions
                 .iter()
                 .map(|p| scheme.odometry.window(p).map(|w| w.correction))
@@ -334,7 +327,7 @@ pub fn run_scheme(
             let evaluate = |times: &[f64]| {
                 let mut selector = planned(times)?;
                 let mut source = Precomputed::new(label.clone(), predictions.clone());
-                let mut vo = ctx.params.vo.build(traverse, ctx.base, ctx.recorded_vo)?;
+                let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
                 run_frontend(
                     traverse,
                     &frontend,
@@ -363,11 +356,11 @@ pub fn run_scheme(
                     // its score comes from an independent set.
                     let mut selector = planned(&found.times_secs)?;
                     let mut source = Precomputed::new(label.clone(), predictions.clone());
-                    let mut fresh_vo = ctx.params.vo.with_fresh_draws().build(
-                        traverse,
-                        ctx.base,
-                        ctx.recorded_vo,
-                    )?;
+                    let mut fresh_vo = ctx
+                        .params
+                        .vo
+                        .with_fresh_draws()
+                        .build(traverse, ctx.recorded_vo)?;
                     let fresh = run_frontend(
                         traverse,
                         &frontend,

@@ -374,7 +374,6 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
         });
         let ctx = SchemeContext {
             params: &p,
-            base: std::path::Path::new("."),
             matched_frames: None,
             matched_times: None,
             recorded_vo: None,
@@ -460,14 +459,13 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
     std::fs::write(dir.join("log.tum"), format_tum("replay", &log)).unwrap();
     let p = FrontendParams {
         vo: VoSpec::Replay(ReplayVoParams {
-            path: "log.tum".into(),
+            path: dir.join("log.tum"),
             ..ReplayVoParams::default()
         }),
         ..FrontendParams::default()
     };
     let ctx = SchemeContext {
         params: &p,
-        base: &dir,
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,
@@ -552,7 +550,6 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
     let p = params(SimulatedVoParams::default());
     let ctx = SchemeContext {
         params: &p,
-        base: std::path::Path::new("."),
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,
@@ -646,14 +643,12 @@ fn the_odometry_mode_decides_correction_covariance_and_budget() {
     use gpodo_frontends::SelectorSpec;
     use gpodo_frontends::prediction::AbsolutePrediction;
     use gpodo_frontends::scheme::{SchemeContext, SchemeResiduals, SchemeSpecRef, run_scheme};
-    use std::path::Path;
 
     let bias = Vector3::new(0.004, 0.0, 0.0);
     let t = traverse(60.0, |t| (0.05 * t, 0.0, 0.0), bias, &[0.0]);
     let p = FrontendParams::default();
     let ctx = SchemeContext {
         params: &p,
-        base: Path::new("."),
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,

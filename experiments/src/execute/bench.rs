@@ -6,7 +6,6 @@
 //! error after every N samples of one prequential pass). Ratios to the
 //! exact-GP baseline are taken in the report.
 
-use std::path::Path;
 use std::time::Instant;
 
 use gpodo_regressors::RegressorSpec;
@@ -18,7 +17,6 @@ use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::code_version;
 use crate::execute::data::prepare_model_rows;
-use crate::execute::fit::build_regressor;
 use crate::execute::results::{DatasetSummary, ModelRows};
 
 /// Latency statistics (µs).
@@ -164,11 +162,10 @@ fn curve_point(
 /// One prequential pass of a fresh learner over the training rows in order.
 fn online_pass(
     spec: &RegressorSpec,
-    base: &Path,
     rows: &ModelRows,
     every: usize,
 ) -> Result<OnlinePass, PipelineError> {
-    let mut model = build_regressor(spec, base)?;
+    let mut model = spec.build()?;
     let (mut steps, mut updates, mut curve) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..rows.train.len() {
         let x = rows.train.inputs.row(i);
@@ -217,16 +214,16 @@ pub fn baseline_index(config: &ExperimentConfig) -> Option<usize> {
 ///
 /// # Errors
 /// [`PipelineError`] naming the stage or regressor that failed.
-pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults, PipelineError> {
+pub fn run_bench(config: &ExperimentConfig) -> Result<BenchResults, PipelineError> {
     let start = Instant::now();
-    let (rows, dataset) = prepare_model_rows(config, base)?;
+    let (rows, dataset) = prepare_model_rows(config)?;
     let settings = &config.bench;
     let mut out = Vec::with_capacity(config.regressors.len());
     let mut failures = Vec::new();
     // A regressor that fails (e.g. a plugin that crashes) is reported as
     // failed; the others are benchmarked.
     for spec in &config.regressors {
-        match bench_one(spec, base, &rows, settings) {
+        match bench_one(spec, &rows, settings) {
             Ok(row) => out.push(row),
             Err(e) => {
                 tracing::warn!(regressor = %spec.label(), error = %e, "benchmark failed");
@@ -252,7 +249,6 @@ pub fn run_bench(config: &ExperimentConfig, base: &Path) -> Result<BenchResults,
 /// Benchmarks one regressor.
 fn bench_one(
     spec: &RegressorSpec,
-    base: &Path,
     rows: &ModelRows,
     settings: &crate::config::bench::BenchSettings,
 ) -> Result<BenchRow, PipelineError> {
@@ -262,7 +258,7 @@ fn bench_one(
         source,
     };
     tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
-    let mut model = build_regressor(spec, base)?;
+    let mut model = spec.build()?;
     let fit = model.fit(&rows.train).map_err(wrap)?;
     let t = Instant::now();
     let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
@@ -270,12 +266,7 @@ fn bench_one(
     let evaluation = evaluate(&predictions, &rows.test.targets)?;
     let predict_latency = predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
     let online = if model.supports_online_update() {
-        Some(online_pass(
-            spec,
-            base,
-            rows,
-            settings.learning_curve_every,
-        )?)
+        Some(online_pass(spec, rows, settings.learning_curve_every)?)
     } else {
         None
     };

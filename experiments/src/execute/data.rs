@@ -3,7 +3,7 @@
 //! rows, and the rows standardised as the regressors see them.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use gpodo_frontends::tum::StampedPose;
 
@@ -23,14 +23,6 @@ use crate::execute::calibration::{ResidualStatistics, residual_statistics};
 use crate::execute::odometry::{DeadReckoning, dead_reckoning};
 use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
 
-fn resolve(base: &Path, p: &Path) -> PathBuf {
-    if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        base.join(p)
-    }
-}
-
 fn summarize(log: &RoverLog) -> RunSummary {
     RunSummary {
         name: log.name.clone(),
@@ -44,10 +36,9 @@ fn summarize(log: &RoverLog) -> RunSummary {
 /// reported odometry without a description).
 fn motion_model(
     spec: &MotionModelSpec,
-    base: &Path,
 ) -> Result<(Box<dyn MotionModel>, Option<RoverDescription>), PipelineError> {
     let load = |rover: &Option<PathBuf>| match rover {
-        Some(p) => RoverDescription::from_path(&resolve(base, p)),
+        Some(p) => RoverDescription::from_path(&p.clone()),
         None => Ok(RoverDescription::exoter()),
     };
     Ok(match spec {
@@ -67,7 +58,7 @@ fn motion_model(
         }
         MotionModelSpec::ReportedOdometry { rover, angular } => {
             let d = match rover {
-                Some(p) => Some(RoverDescription::from_path(&resolve(base, p))?),
+                Some(p) => Some(RoverDescription::from_path(&p.clone())?),
                 None => None,
             };
             (Box::new(ReportedOdometryModel::new(*angular)), d)
@@ -103,13 +94,12 @@ fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
 
 fn from_logs(
     config: &ExperimentConfig,
-    base: &Path,
     train_logs: &[RoverLog],
     test_logs: &[RoverLog],
     source: String,
     terrain_max_slope_deg: Option<f64>,
 ) -> Result<PreparedData, PipelineError> {
-    let (model, rover) = motion_model(&config.motion_model, base)?;
+    let (model, rover) = motion_model(&config.motion_model)?;
     // Models read joints by position: put every log in the rover's order.
     let in_rover_order = |logs: &[RoverLog]| match &rover {
         Some(rover) => logs
@@ -167,10 +157,7 @@ fn from_logs(
     })
 }
 
-pub(crate) fn prepare(
-    config: &ExperimentConfig,
-    base: &Path,
-) -> Result<PreparedData, PipelineError> {
+pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, PipelineError> {
     match &config.dataset {
         DatasetSpec::Simulated {
             preset,
@@ -196,7 +183,6 @@ pub(crate) fn prepare(
             let source = format!("simulated `{}` testbed, seed {seed}", preset.name());
             let mut prepared = from_logs(
                 config,
-                base,
                 &testbed.train,
                 &testbed.test,
                 source,
@@ -210,11 +196,11 @@ pub(crate) fn prepare(
             let read = |paths: &[PathBuf]| {
                 paths
                     .iter()
-                    .map(|p| read_log_csv(&resolve(base, p)))
+                    .map(|p| read_log_csv(&p.clone()))
                     .collect::<Result<Vec<_>, _>>()
             };
             let (train, test) = (read(train)?, read(test)?);
-            from_logs(config, base, &train, &test, "rover logs".into(), None)
+            from_logs(config, &train, &test, "rover logs".into(), None)
         }
         DatasetSpec::Bags {
             train,
@@ -228,7 +214,7 @@ pub(crate) fn prepare(
                 paths
                     .iter()
                     .map(|p| {
-                        let path = resolve(base, p);
+                        let path = p.clone();
                         let name = path
                             .file_stem()
                             .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
@@ -277,7 +263,7 @@ pub(crate) fn prepare(
                 topics.max_gap_secs,
                 imported.into_inner().join("; ")
             );
-            let mut prepared = from_logs(config, base, &train, &test, source, None)?;
+            let mut prepared = from_logs(config, &train, &test, source, None)?;
             prepared.recorded_vo = vo;
             Ok(prepared)
         }
@@ -291,7 +277,7 @@ pub(crate) fn prepare(
                 inputs: inputs.clone(),
                 targets: targets.clone(),
             };
-            let data = read_residual_table(&resolve(base, path), &spec)?;
+            let data = read_residual_table(&path.clone(), &spec)?;
             let (train, test) = split_fraction(&data, *train_fraction)?;
             Ok(PreparedData {
                 summary: DatasetSummary {
@@ -320,10 +306,9 @@ pub(crate) fn prepare(
 
 pub(crate) fn reference_statistics(
     config: &ExperimentConfig,
-    base: &Path,
 ) -> Option<(String, ResidualStatistics)> {
     let reference = config.compare_with.as_ref()?;
-    let path = resolve(base, &reference.path);
+    let path = reference.path.clone();
     let spec = TableSpec {
         inputs: None,
         targets: reference.targets.clone(),
@@ -386,8 +371,7 @@ fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) ->
 /// [`PipelineError`] saying which stage failed.
 pub fn prepare_model_rows(
     config: &ExperimentConfig,
-    base: &Path,
 ) -> Result<(ModelRows, DatasetSummary), PipelineError> {
-    let data = prepare(config, base)?;
+    let data = prepare(config)?;
     Ok((model_rows(&data)?.0, data.summary))
 }

@@ -60,11 +60,7 @@ pub enum ModelError {
 ///
 /// # Errors
 /// [`ModelError`].
-pub fn fit_model(
-    config: &ExperimentConfig,
-    base: &Path,
-    label: &str,
-) -> Result<FittedModel, ModelError> {
+pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, ModelError> {
     let labels = config.regressor_labels();
     let index = labels
         .iter()
@@ -74,7 +70,7 @@ pub fn fit_model(
             labels: labels.clone(),
         })?;
     let spec = &config.regressors[index];
-    let data = prepare(config, base)?;
+    let data = prepare(config)?;
     let (rows, scaler) = model_rows(&data)?;
     let provenance = Provenance {
         experiment: config.name.clone(),

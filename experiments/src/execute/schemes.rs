@@ -4,8 +4,6 @@
 //! first; every scheme is deterministic, so the table does not depend on
 //! the number of threads or the order.
 
-use std::path::Path;
-
 use gpodo_frontends::odometry_mode::OdometryMode;
 use gpodo_frontends::prediction::{AbsolutePrediction, ResidualPrediction};
 use gpodo_frontends::scheme::{
@@ -18,14 +16,11 @@ use rayon::prelude::*;
 use crate::config::schemes::ResolvedOdometry;
 use crate::config::{ExperimentConfig, SchemeSpec};
 use crate::error::PipelineError;
-use crate::execute::fit::build_regressor;
 
 /// Everything a scheme needs that is shared between schemes.
 pub struct SchemeInputs<'a> {
     /// The experiment.
     pub config: &'a ExperimentConfig,
-    /// Its folder (relative paths).
-    pub base: &'a Path,
     /// The test runs.
     pub traverses: &'a [Traverse],
     /// Each trained regressor's predictions on each traverse
@@ -52,7 +47,7 @@ impl SchemeInputs<'_> {
         if let Some(online) = &scheme.online {
             return Ok(SchemeResiduals::Online {
                 label: online.regressor.label(),
-                regressor: build_regressor(&online.regressor, self.base)?,
+                regressor: online.regressor.build()?,
                 mode: online.mode(),
             });
         }
@@ -135,7 +130,6 @@ impl SchemeInputs<'_> {
             matched.map(|r| r.run.processed.iter().map(|p| p.time_secs).collect());
         let ctx = SchemeContext {
             params: &self.config.frontend,
-            base: self.base,
             matched_frames: matched.map(|r| r.run.frames),
             matched_times: matched_times.as_deref(),
             recorded_vo: self.recorded_vo.get(traverse.name()).map(Vec::as_slice),

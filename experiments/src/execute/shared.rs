@@ -8,7 +8,6 @@
 //! items: no run waits for another's half-done work.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -59,12 +58,7 @@ type References = BTreeMap<String, Option<(String, ResidualStatistics)>>;
 
 /// A distinct fit to make: the regressor, whether on |residual| targets,
 /// its data and the folder its paths start from.
-type FitJob<'a> = (
-    &'a gpodo_regressors::RegressorSpec,
-    bool,
-    Arc<Prepared>,
-    &'a Path,
-);
+type FitJob<'a> = (&'a gpodo_regressors::RegressorSpec, bool, Arc<Prepared>);
 
 /// A distinct fit, or why it failed: the regressor's label and the error.
 type FitOutcome = Result<Arc<Fitted>, (String, String)>;
@@ -84,12 +78,11 @@ fn json<T: serde::Serialize>(v: &T) -> String {
     serde_json::to_string(v).unwrap_or_default()
 }
 
-/// The identity of a run's data: where relative paths start, and the
-/// dataset, motion model and residual settings.
-pub fn dataset_key(config: &ExperimentConfig, base: &Path) -> String {
+/// The identity of a run's data: the dataset (its paths absolute), motion
+/// model and residual settings.
+pub fn dataset_key(config: &ExperimentConfig) -> String {
     format!(
-        "{}|{}|{}|{}",
-        base.display(),
+        "{}|{}|{}",
         json(&config.dataset),
         json(&config.motion_model),
         json(&config.residuals)
@@ -97,8 +90,8 @@ pub fn dataset_key(config: &ExperimentConfig, base: &Path) -> String {
 }
 
 /// The identity of a run's reference table.
-fn reference_key(config: &ExperimentConfig, base: &Path) -> String {
-    format!("{}|{}", base.display(), json(&config.compare_with))
+fn reference_key(config: &ExperimentConfig) -> String {
+    json(&config.compare_with)
 }
 
 fn fit_key(dataset: &str, spec: &gpodo_regressors::RegressorSpec, absolute: bool) -> String {
@@ -139,7 +132,6 @@ fn fit_cost(spec: &gpodo_regressors::RegressorSpec, n: usize) -> f64 {
 fn fit_shared(
     spec: &gpodo_regressors::RegressorSpec,
     absolute: bool,
-    base: &Path,
     p: &Prepared,
     progress: Option<&MultiProgress>,
 ) -> Result<Arc<Fitted>, PipelineError> {
@@ -156,9 +148,9 @@ fn fit_shared(
     });
     let (mut result, model) = if absolute {
         let (train, test) = (absolute_rows(&p.rows.train), absolute_rows(&p.rows.test));
-        fit_and_score(spec, base, &train, &test, sink)?
+        fit_and_score(spec, &train, &test, sink)?
     } else {
-        fit_and_score(spec, base, &p.rows.train, &p.rows.test, sink)?
+        fit_and_score(spec, &p.rows.train, &p.rows.test, sink)?
     };
     result.label = label;
     if let Some(s) = spinner {
@@ -182,29 +174,27 @@ fn fit_shared(
 
 impl SharedWork {
     /// Prepares every distinct dataset and fits every distinct regressor of
-    /// `runs` (experiment, folder), in parallel within each stage.
+    /// `runs`, in parallel within each stage.
     ///
     /// # Errors
     /// The first failure.
     pub fn build(
-        runs: &[(&ExperimentConfig, &Path)],
+        runs: &[&ExperimentConfig],
         progress: Option<&MultiProgress>,
     ) -> Result<Self, PipelineError> {
         // Distinct datasets, and whether any run of each needs traverses.
-        let mut datasets: BTreeMap<String, (&ExperimentConfig, PathBuf, bool)> = BTreeMap::new();
-        for (config, base) in runs {
-            let entry = datasets.entry(dataset_key(config, base)).or_insert((
-                config,
-                base.to_path_buf(),
-                false,
-            ));
-            entry.2 |= !config.schemes.is_empty();
+        let mut datasets: BTreeMap<String, (&ExperimentConfig, bool)> = BTreeMap::new();
+        for config in runs {
+            let entry = datasets
+                .entry(dataset_key(config))
+                .or_insert((config, false));
+            entry.1 |= !config.schemes.is_empty();
         }
         let prepared: Vec<(String, Arc<Prepared>)> = datasets
             .into_par_iter()
-            .map(|(key, (config, base, needs_traverses))| {
+            .map(|(key, (config, needs_traverses))| {
                 let start = Instant::now();
-                let data = prepare(config, &base)?;
+                let data = prepare(config)?;
                 let (rows, scaler) = model_rows(&data)?;
                 let traverses = if needs_traverses {
                     build_traverses(config, &data, &scaler)?
@@ -225,8 +215,8 @@ impl SharedWork {
         let prepared: BTreeMap<String, Arc<Prepared>> = prepared.into_iter().collect();
         // Distinct fits: each regressor, and each |residual| regressor.
         let mut fits: BTreeMap<String, FitJob<'_>> = BTreeMap::new();
-        for (config, base) in runs {
-            let key = dataset_key(config, base);
+        for config in runs {
+            let key = dataset_key(config);
             let Some(p) = prepared.get(&key) else {
                 continue;
             };
@@ -237,7 +227,6 @@ impl SharedWork {
                     spec,
                     absolute,
                     Arc::clone(p),
-                    base,
                 ));
             }
         }
@@ -254,8 +243,8 @@ impl SharedWork {
             .into_iter()
             .map(|(_, key, fit)| (key, fit))
             .par_bridge()
-            .map(|(key, (spec, absolute, p, base))| {
-                let fitted = fit_shared(spec, absolute, base, &p, progress).map_err(|e| {
+            .map(|(key, (spec, absolute, p))| {
+                let fitted = fit_shared(spec, absolute, &p, progress).map_err(|e| {
                     if crate::stop::requested() {
                         tracing::info!(regressor = %spec.label(), "fit stopped");
                     } else {
@@ -271,10 +260,10 @@ impl SharedWork {
             fits: fitted.len(),
         };
         let mut references = References::new();
-        for (config, base) in runs {
+        for config in runs {
             references
-                .entry(reference_key(config, base))
-                .or_insert_with(|| reference_statistics(config, base));
+                .entry(reference_key(config))
+                .or_insert_with(|| reference_statistics(config));
         }
         Ok(Self {
             prepared,
@@ -301,13 +290,9 @@ impl SharedWork {
     /// # Errors
     /// [`PipelineError::Inconsistent`] for a run the work was not built
     /// for; what the schemes report.
-    pub fn results(
-        &self,
-        config: &ExperimentConfig,
-        base: &Path,
-    ) -> Result<ExperimentResults, PipelineError> {
+    pub fn results(&self, config: &ExperimentConfig) -> Result<ExperimentResults, PipelineError> {
         let start = Instant::now();
-        let key = dataset_key(config, base);
+        let key = dataset_key(config);
         let missing =
             || PipelineError::Inconsistent(format!("no shared work for `{}`", config.name));
         let p = self.prepared.get(&key).ok_or_else(missing)?;
@@ -346,7 +331,6 @@ impl SharedWork {
             let config = &with_derived_odometry(config, p);
             run_schemes(&SchemeInputs {
                 config,
-                base,
                 traverses: &traverses,
                 predictions: &predictions,
                 regressor_labels: &labels,
@@ -363,7 +347,7 @@ impl SharedWork {
             test_statistics: residual_statistics(&data.test),
             reference_statistics: self
                 .references
-                .get(&reference_key(config, base))
+                .get(&reference_key(config))
                 .cloned()
                 .flatten(),
             dataset: data.summary.clone(),

@@ -130,7 +130,7 @@ pub struct RunSpec {
     /// The seed the run's data and visual odometry were given (derived from
     /// the sweep seed and the replicate), if `seeds:` is used.
     pub seed: Option<u64>,
-    /// The resolved experiment.
+    /// The resolved experiment (every path in it absolute).
     pub config: ExperimentConfig,
 }
 
@@ -139,8 +139,6 @@ pub struct RunSpec {
 pub struct SweepPlan {
     /// The experiment file.
     pub file: PathBuf,
-    /// Its folder: relative paths in every run are resolved against it.
-    pub base_dir: PathBuf,
     /// The sweep's name (the results folder).
     pub name: String,
     /// The sweep seed.
@@ -242,6 +240,10 @@ pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
             .collect()
     };
     dimensions.extend(one_at_a_time);
+    let base_dir = file
+        .parent()
+        .unwrap_or_else(|| Path::new("."))
+        .to_path_buf();
     let mut runs = Vec::with_capacity(settings.len() * seeds.len());
     for (setting_dimensions, combination) in &settings {
         for &replicate in &seeds {
@@ -255,6 +257,7 @@ pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
             )?;
             runs.push(RunSpec {
                 index: runs.len(),
+                config: run.config.with_paths_resolved(&base_dir),
                 ..run
             });
         }
@@ -265,10 +268,6 @@ pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
         .unwrap_or_default();
     Ok(SweepPlan {
         file: file.to_path_buf(),
-        base_dir: file
-            .parent()
-            .unwrap_or_else(|| Path::new("."))
-            .to_path_buf(),
         name,
         seed: controls.seed,
         dimensions,

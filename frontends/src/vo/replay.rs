@@ -35,9 +35,9 @@ pub enum LoggedFrame {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ReplayVoParams {
-    /// The TUM trajectory file (relative to the experiment file); omitted,
-    /// the visual odometry recorded with each test run (a bag's `vo`
-    /// topic).
+    /// The TUM trajectory file (in an experiment file, relative to it: the
+    /// loader makes it absolute); omitted, the visual odometry recorded
+    /// with each test run (a bag's `vo` topic).
     pub path: std::path::PathBuf,
     /// Largest difference between a camera frame's time and a logged time
     /// stamp for them to match (s; default 0.02).
