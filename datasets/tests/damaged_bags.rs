@@ -1,6 +1,7 @@
 //! Damaged recordings fail fast and clearly. An MCAP written by gpodo's
 //! own writer is damaged at 200 seeded offsets (8 bytes overwritten) and
-//! cut at 20 seeded lengths. Every import returns within a watchdog far
+//! cut at 20 seeded lengths; so are the shipped MCAP, ROS 1 and (with the
+//! `db3` feature) SQLite fixtures. Every import returns within a watchdog far
 //! above the intact file's time, never panics, and either fails with an
 //! error naming the file or returns exactly the intact file's rows. A
 //! stamp far outside the recording and a `rate_hz` typo are refused
@@ -131,7 +132,11 @@ fn the_shipped_fixtures_damaged_give_their_messages_or_a_clear_error() {
     let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
     let tmp = tempfile::tempdir().unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(6);
-    for name in ["messages.mcap", "messages.bag"] {
+    let mut names = vec!["messages.mcap", "messages.bag"];
+    if cfg!(feature = "db3") {
+        names.push("messages.db3");
+    }
+    for name in names {
         let bytes = std::fs::read(fixtures.join(name)).unwrap();
         let intact = gpodo_datasets::bags::BagInfo::read(&fixtures.join(name))
             .unwrap()
@@ -168,6 +173,16 @@ fn a_stamp_far_outside_the_recording_or_a_rate_typo_is_refused_at_once() {
         Some(Err(e)) => assert!(e.contains("rate_hz") && e.contains("stamps"), "{e}"),
         other => panic!("expected a refusal, got {other:?}"),
     }
+    // `bag info` gives the topics' real rate, and says the stamps are far
+    // apart, instead of a rate of 0.00 Hz over 30 years.
+    let info = gpodo_datasets::bags::BagInfo::read(&bag.path).unwrap();
+    let imu = info.topics.iter().find(|t| t.topic == "/imu/data").unwrap();
+    assert!((imu.typical_rate_hz().unwrap() - 10.0).abs() < 1e-6);
+    let text = info.to_text();
+    assert!(
+        text.contains("stamps far apart") && !text.contains(" 0.00 Hz "),
+        "{text}"
+    );
     let log = straight();
     let bag = write_mcap(&log, tmp.path()).unwrap();
     let mut map = written_topic_map(&log, 10.0);

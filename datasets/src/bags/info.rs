@@ -22,11 +22,14 @@ pub struct TopicInfo {
     pub first_ns: u64,
     /// Last receive time (ns).
     pub last_ns: u64,
+    /// The median interval between successive messages in time order
+    /// (ns); `None` with fewer than two messages at distinct times.
+    pub median_interval_ns: Option<u64>,
 }
 
 impl TopicInfo {
     /// Mean rate: `(count − 1)` intervals over the span (Hz; 0 for fewer
-    /// than two messages).
+    /// than two messages). One stamp far from the others makes it tiny.
     pub fn rate_hz(&self) -> f64 {
         let span = self.last_ns.saturating_sub(self.first_ns) as f64 * 1e-9;
         if self.count < 2 || span <= 0.0 {
@@ -35,6 +38,30 @@ impl TopicInfo {
             (self.count - 1) as f64 / span
         }
     }
+
+    /// The typical rate: one over the median interval (Hz), which a few
+    /// stamps far from the others do not move; `None` when it cannot be
+    /// computed.
+    pub fn typical_rate_hz(&self) -> Option<f64> {
+        self.median_interval_ns
+            .filter(|&dt| dt > 0)
+            .map(|dt| 1e9 / dt as f64)
+    }
+}
+
+/// The median of the positive intervals between the sorted `stamps`.
+fn median_interval(mut stamps: Vec<u64>) -> Option<u64> {
+    stamps.sort_unstable();
+    let mut intervals: Vec<u64> = stamps
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|&d| d > 0)
+        .collect();
+    if intervals.is_empty() {
+        return None;
+    }
+    let mid = intervals.len() / 2;
+    Some(*intervals.select_nth_unstable(mid).1)
 }
 
 /// A bag's summary.
@@ -61,7 +88,12 @@ impl BagInfo {
     /// [`BagError`].
     pub fn read(path: &Path) -> Result<Self, BagError> {
         let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+        let mut stamps: BTreeMap<String, Vec<u64>> = BTreeMap::new();
         let (format, messages) = visit_messages(path, |m| {
+            stamps
+                .entry(m.topic.to_string())
+                .or_default()
+                .push(m.log_time_ns);
             let entry = topics
                 .entry(m.topic.to_string())
                 .or_insert_with(|| TopicInfo {
@@ -71,11 +103,15 @@ impl BagInfo {
                     count: 0,
                     first_ns: m.log_time_ns,
                     last_ns: m.log_time_ns,
+                    median_interval_ns: None,
                 });
             entry.count += 1;
             entry.first_ns = entry.first_ns.min(m.log_time_ns);
             entry.last_ns = entry.last_ns.max(m.log_time_ns);
         })?;
+        for (topic, info) in &mut topics {
+            info.median_interval_ns = stamps.remove(topic).and_then(median_interval);
+        }
         let topics: Vec<TopicInfo> = topics.into_values().collect();
         let start_ns = topics.iter().map(|t| t.first_ns).min().unwrap_or(0);
         let end_ns = topics.iter().map(|t| t.last_ns).max().unwrap_or(0);
@@ -115,12 +151,22 @@ impl BagInfo {
         for t in &self.topics {
             let decoded = super::messages::SUPPORTED_TYPES
                 .contains(&super::ros1_type_name(&t.message_type).as_str());
+            // The typical rate; where the mean over the whole span is far
+            // below it, a stamp lies far from the others.
+            let rate = match t.typical_rate_hz() {
+                Some(r) if t.rate_hz() < 0.5 * r => format!(
+                    "{r:8.2} Hz, but {:.3} Hz over its {:.1} s: stamps far apart",
+                    t.rate_hz(),
+                    t.last_ns.saturating_sub(t.first_ns) as f64 * 1e-9
+                ),
+                Some(r) => format!("{r:8.2} Hz"),
+                None => "rate unknown (fewer than two distinct stamps)".into(),
+            };
             s.push_str(&format!(
-                "  {:width$}  {:type_width$}  {:>7} msgs  {:8.2} Hz  ({}{})\n",
+                "  {:width$}  {:type_width$}  {:>7} msgs  {rate}  ({}{})\n",
                 t.topic,
                 t.message_type,
                 t.count,
-                t.rate_hz(),
                 t.encoding,
                 if decoded {
                     ""
@@ -130,5 +176,20 @@ impl BagInfo {
             ));
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_median_interval_ignores_a_stamp_far_from_the_others() {
+        // 10 Hz for 5 s, then one stamp an hour later, out of order.
+        let mut stamps: Vec<u64> = (0..50).map(|k| k * 100_000_000).collect();
+        stamps.insert(7, 3_600_000_000_000);
+        assert_eq!(median_interval(stamps), Some(100_000_000));
+        assert_eq!(median_interval(vec![5, 5, 5]), None);
+        assert_eq!(median_interval(vec![]), None);
     }
 }
