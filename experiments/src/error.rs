@@ -69,6 +69,20 @@ pub enum PipelineError {
     /// The rover description or motion model is invalid.
     #[error(transparent)]
     Kinematics(#[from] gpodo_kinematics::KinematicsError),
+    /// A regressor's fit would need more memory than the machine has.
+    #[error(
+        "regressor `{label}`: a fit on {rows} rows would need about {needed} at its peak; {available} are available (fewer rows, a sparse GP, or a larger machine)"
+    )]
+    TooLarge {
+        /// The regressor.
+        label: String,
+        /// Its training rows.
+        rows: usize,
+        /// What the fit would need.
+        needed: String,
+        /// What is available.
+        available: String,
+    },
     /// A regressor failed.
     #[error("regressor `{label}`: {source}")]
     Regressor {

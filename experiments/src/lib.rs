@@ -21,6 +21,7 @@ pub mod config;
 pub mod cpu;
 pub mod error;
 pub mod execute;
+pub mod memory;
 pub mod output;
 pub mod plan;
 pub mod report;

@@ -235,7 +235,7 @@ fn a_run_piped_to_a_file_logs_without_colour_codes() {
 }
 
 #[test]
-fn a_residual_table_report_gives_its_own_units_and_no_empty_columns() {
+fn a_residual_table_report_gives_its_own_units_no_empty_columns_and_the_counts_used() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // A yaw-rate target (rad/s) and no wheels: no statistic of wheel
@@ -248,7 +248,7 @@ fn a_residual_table_report_gives_its_own_units_and_no_empty_columns() {
     write(&d.join("yaw.csv"), &csv);
     write(
         &d.join("yaw.yaml"),
-        "name: yaw\ndataset: {kind: residual_table, path: yaw.csv, targets: [yaw_rate_error], train_fraction: 0.75}\nregressors:\n  - kind: zero\n",
+        "name: yaw\ndataset: {kind: residual_table, path: yaw.csv, targets: [yaw_rate_error], train_fraction: 0.75}\nregressors:\n  - kind: zero\n  - kind: sparse_gp\n    inducing: {count: 1000000000}\n    hyperopt: {max_iters: 5}\n",
     );
     let out = gpodo(&["-q", "run", "yaw.yaml"], d);
     assert!(
@@ -282,4 +282,9 @@ fn a_residual_table_report_gives_its_own_units_and_no_empty_columns() {
     );
     // The fits' times say what they are.
     assert!(report.contains("fit wall [s]") && report.contains("CPU time:"));
+    // A count the rows cannot give is said, with the count used.
+    assert!(
+        report.contains("used 60 inducing points, one per training row, not the 1000000000 asked"),
+        "{report}"
+    );
 }

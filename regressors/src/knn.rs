@@ -88,6 +88,13 @@ impl ResidualRegressor for Knn {
                 "k-NN needs at least one training row".into(),
             ));
         }
+        if self.params.k > data.len() {
+            tracing::warn!(
+                asked = self.params.k,
+                used = data.len(),
+                "k-NN: more neighbours asked than training rows: every row is one"
+            );
+        }
         for (i, row) in data.inputs.rows().chain(data.targets.rows()).enumerate() {
             if row.iter().any(|v| !v.is_finite()) {
                 return Err(Error::InvalidInput(format!(

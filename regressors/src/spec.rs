@@ -128,6 +128,25 @@ impl RegressorSpec {
         }
     }
 
+    /// The memory a fit on `n` rows of `d` inputs and `p` outputs will
+    /// need at its peak (bytes), for the models whose need grows with the
+    /// data (`None` for the others): an exact GP holds about five `n × n`
+    /// matrices (the Gram matrix, its Cholesky factor, its inverse and the
+    /// gradient's scratch), a sparse GP about eight `m × n` ones and its
+    /// `m × m` factors, with `m` the inducing points it will use.
+    pub fn fit_memory_bytes(&self, n: usize, d: usize, p: usize) -> Option<u64> {
+        let f64s = |count: u128| u64::try_from(count.saturating_mul(8)).unwrap_or(u64::MAX);
+        let (n, d, p) = (n as u128, d as u128, p as u128);
+        match self {
+            Self::ExactGp(_) => Some(f64s(5 * n * n + 4 * n * (d + p))),
+            Self::SparseGp(s) => {
+                let m = (s.inducing.count as u128).min(n);
+                Some(f64s(8 * m * n + 6 * m * m + 4 * n * (d + p)))
+            }
+            Self::Zero { .. } | Self::Ilgr(_) | Self::Knn(_) | Self::External(_) => None,
+        }
+    }
+
     /// Builds the runtime regressor.
     ///
     /// # Errors
@@ -212,6 +231,26 @@ mod tests {
             "exact GP: matern52 + linear [hyperopt.restarts=2]"
         );
         assert!(spec.build().is_ok());
+    }
+
+    #[test]
+    fn an_exact_gp_on_twenty_thousand_rows_needs_gigabytes() {
+        let exact = parse(r#"{"kind": "exact_gp"}"#).unwrap();
+        // Five 20 000 × 20 000 matrices of f64: 16 GB.
+        let need = exact.fit_memory_bytes(20_000, 28, 3).unwrap();
+        assert!((16.0e9..16.1e9).contains(&(need as f64)), "{need}");
+        let sparse = parse(r#"{"kind": "sparse_gp", "inducing": {"count": 1000000000}}"#).unwrap();
+        // The inducing points it will use are the rows.
+        assert_eq!(
+            sparse.fit_memory_bytes(100, 2, 1),
+            Some(8 * (8 * 100 * 100 + 6 * 100 * 100 + 4 * 100 * 3))
+        );
+        assert_eq!(
+            parse(r#"{"kind": "ilgr"}"#)
+                .unwrap()
+                .fit_memory_bytes(10, 2, 1),
+            None
+        );
     }
 
     #[test]

@@ -79,6 +79,31 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     s.push('\n');
 }
 
+/// A line for each sparse GP that used fewer inducing points than its
+/// label asks (there were fewer training rows).
+fn clamped_counts(s: &mut String, regressors: &[RegressorResult]) {
+    for reg in regressors {
+        let gpodo_regressors::RegressorSpec::SparseGp(p) = &reg.spec else {
+            continue;
+        };
+        let used = reg
+            .fit
+            .parameters
+            .iter()
+            .find(|(name, _)| name == "inducing_points")
+            .map(|(_, v)| *v as usize);
+        if let Some(used) = used
+            && used < p.inducing.count
+        {
+            let _ = writeln!(
+                s,
+                "`{}` used {used} inducing points, one per training row, not the {} asked.\n",
+                reg.label, p.inducing.count
+            );
+        }
+    }
+}
+
 fn table_one(s: &mut String, r: &ExperimentResults) {
     let targets = r.dataset.target_names.join(", ");
     let units = match (&r.config.dataset, r.config.residuals.window_secs) {
@@ -127,6 +152,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
         pooled.markdown(),
         detail.markdown()
     );
+    clamped_counts(s, &r.regressors);
     if !r.absolute_regressors.is_empty() {
         let mut absolute = Table::new(&["Regressor", "RMSE", "MAE", "fit wall [s]"]);
         for reg in &r.absolute_regressors {

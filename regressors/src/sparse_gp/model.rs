@@ -209,6 +209,13 @@ impl SparseGp {
         let scaled = ScaledTraining::new(data, self.params.standardize)?;
         let (x, y) = (to_faer(&scaled.x), to_faer(&scaled.y));
         let p = &self.params;
+        if p.inducing.count > x.nrows() {
+            tracing::warn!(
+                asked = p.inducing.count,
+                used = x.nrows(),
+                "more inducing points asked than training rows: every row is one"
+            );
+        }
         let z0 = place_inducing(x.as_ref(), &p.inducing, p.seed);
         let kernel0 = p.kernel.build(x.ncols(), &p.init);
         let objective = SparseObjective {
