@@ -196,8 +196,14 @@ fn run(
         slurm_task,
         quiet,
     };
-    let outcome =
-        run_sweep(&plan, &options).with_context(|| format!("sweep {}", file.display()))?;
+    let outcome = run_sweep(&plan, &options).with_context(|| {
+        let what = if plan.runs.len() == 1 {
+            "experiment"
+        } else {
+            "sweep"
+        };
+        format!("{what} {}", file.display())
+    })?;
     println!(
         "{} run(s) done in {:.1} s ({} skipped as recorded, {} left to other shards; {} dataset(s) prepared, {} fit(s))",
         outcome.ran,

@@ -49,6 +49,12 @@ impl TopicInfo {
     }
 }
 
+/// Nanoseconds since the epoch as exact decimal seconds (`s.nnnnnnnnn`),
+/// the same digits `--json` gives, never rounded through an `f64`.
+fn exact_secs(ns: u64) -> String {
+    format!("{}.{:09}", ns / 1_000_000_000, ns % 1_000_000_000)
+}
+
 /// The median of the positive intervals between the sorted `stamps`.
 fn median_interval(mut stamps: Vec<u64>) -> Option<u64> {
     stamps.sort_unstable();
@@ -133,12 +139,12 @@ impl BagInfo {
     /// The summary as `ros2 bag info` lays it out.
     pub fn to_text(&self) -> String {
         let mut s = format!(
-            "Files:             {}\nFormat:            {}\nDuration:          {:.3} s\nStart:             {:.9} (s since epoch)\nEnd:               {:.9}\nMessages:          {}\nTopics:\n",
+            "Files:             {}\nFormat:            {}\nDuration:          {:.3} s\nStart:             {} (s since epoch)\nEnd:               {}\nMessages:          {}\nTopics:\n",
             self.path.display(),
             self.format,
             self.duration_secs(),
-            self.start_ns as f64 * 1e-9,
-            self.end_ns as f64 * 1e-9,
+            exact_secs(self.start_ns),
+            exact_secs(self.end_ns),
             self.messages
         );
         let width = self.topics.iter().map(|t| t.topic.len()).max().unwrap_or(0);
@@ -191,5 +197,14 @@ mod tests {
         assert_eq!(median_interval(stamps), Some(100_000_000));
         assert_eq!(median_interval(vec![5, 5, 5]), None);
         assert_eq!(median_interval(vec![]), None);
+    }
+
+    #[test]
+    fn times_are_printed_to_the_nanosecond() {
+        assert_eq!(
+            exact_secs(1_432_235_498_025_043_011),
+            "1432235498.025043011"
+        );
+        assert_eq!(exact_secs(5), "0.000000005");
     }
 }

@@ -164,6 +164,8 @@ pub fn visit_messages(
     path: &Path,
     mut visit: impl FnMut(RawMessage<'_>),
 ) -> Result<(BagFormat, usize), BagError> {
+    let file = bag_file(path)?;
+    let path = file.as_path();
     let format = detect_format(path)?;
     let count = match format {
         BagFormat::Mcap => visit_mcap(path, &mut visit)?,
@@ -171,6 +173,47 @@ pub fn visit_messages(
         BagFormat::Db3 => visit_db3(path, &mut visit)?,
     };
     Ok((format, count))
+}
+
+/// The file of the bag at `path`: `path` itself, or, for a ROS 2 bag
+/// folder (what `ros2 bag record` writes: `metadata.yaml` beside its
+/// storage files), the one `.mcap` or `.db3` file inside it.
+///
+/// # Errors
+/// [`BagError::UnknownFormat`] for a folder without exactly one such file,
+/// naming what it holds.
+pub fn bag_file(path: &Path) -> Result<PathBuf, BagError> {
+    if !path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut storage: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "mcap" || e == "db3"))
+        .collect();
+    storage.sort();
+    match storage.as_slice() {
+        [one] => Ok(one.clone()),
+        [] => Err(BagError::UnknownFormat {
+            path: path.to_path_buf(),
+            detail: "a folder without a `.mcap` or `.db3` file; expected a bag file, or a ROS 2 bag folder holding one".into(),
+        }),
+        many => Err(BagError::UnknownFormat {
+            path: path.to_path_buf(),
+            detail: format!(
+                "a ROS 2 bag folder split into {} files ({}); name each file",
+                many.len(),
+                many.iter()
+                    .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }),
+    }
 }
 
 /// Every message of a ROS 2 SQLite bag, in time order (as `ros2 bag play`
@@ -466,6 +509,30 @@ mod tests {
         assert_eq!(ros1_type_name("sensor_msgs/msg/Imu"), "sensor_msgs/Imu");
         assert_eq!(ros1_type_name("sensor_msgs/Imu"), "sensor_msgs/Imu");
         assert_eq!(ros1_type_name("weird"), "weird");
+    }
+
+    #[test]
+    fn a_ros2_bag_folder_is_read_through_its_one_storage_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let folder = dir.path().join("run_1");
+        std::fs::create_dir(&folder).unwrap();
+        std::fs::write(
+            folder.join("metadata.yaml"),
+            "rosbag2_bagfile_information: {}\n",
+        )
+        .unwrap();
+        let e = bag_file(&folder).unwrap_err().to_string();
+        assert!(
+            e.contains("run_1") && e.contains("without a `.mcap`"),
+            "{e}"
+        );
+        std::fs::write(folder.join("run_1_0.mcap"), b"x").unwrap();
+        assert_eq!(bag_file(&folder).unwrap(), folder.join("run_1_0.mcap"));
+        std::fs::write(folder.join("run_1_1.mcap"), b"x").unwrap();
+        let e = bag_file(&folder).unwrap_err().to_string();
+        assert!(e.contains("run_1_0.mcap, run_1_1.mcap"), "{e}");
+        let file = dir.path().join("a.bag");
+        assert_eq!(bag_file(&file).unwrap(), file);
     }
 
     #[test]
