@@ -240,10 +240,10 @@ fn a_residual_table_report_gives_its_own_units_no_empty_columns_and_the_counts_u
     let d = dir.path();
     // A yaw-rate target (rad/s) and no wheels: no statistic of wheel
     // speed, slip or attitude applies.
-    let mut csv = String::from("speed,steer,yaw_rate_error\n");
+    let mut csv = String::from("speed,steer,unplugged,yaw_rate_error\n");
     for i in 0..80 {
         let x = i as f64 * 0.1;
-        csv.push_str(&format!("{x},{},{}\n", x.cos(), 0.01 * x.sin()));
+        csv.push_str(&format!("{x},{},0,{}\n", x.cos(), 0.01 * x.sin()));
     }
     write(&d.join("yaw.csv"), &csv);
     write(
@@ -282,6 +282,23 @@ fn a_residual_table_report_gives_its_own_units_no_empty_columns_and_the_counts_u
     );
     // The fits' times say what they are.
     assert!(report.contains("fit wall [s]") && report.contains("CPU time:"));
+    // A constant input is named as such, not as a short lengthscale.
+    let hyper = report
+        .split("## Learned hyperparameters")
+        .nth(1)
+        .unwrap()
+        .split("\n## ")
+        .next()
+        .unwrap();
+    assert!(
+        hyper.contains("left out of the shortest lengthscales: unplugged."),
+        "{hyper}"
+    );
+    let sparse_row = hyper
+        .lines()
+        .find(|l| l.starts_with("| sparse GP"))
+        .unwrap();
+    assert!(!sparse_row.contains("unplugged"), "{sparse_row}");
     // A count the rows cannot give is said, with the count used.
     assert!(
         report.contains("used 60 inducing points, one per training row, not the 1000000000 asked"),

@@ -289,6 +289,22 @@ fn learning_curves(s: &mut String, rows: &[&SchemeResult]) {
     s.push('\n');
 }
 
+/// The input columns that do not vary over `rows` (population standard
+/// deviation at most [`gpodo_traits::MIN_STD`]): a kernel cannot learn
+/// from them, so their lengthscales say nothing.
+fn constant_inputs(rows: &gpodo_traits::ResidualDataset) -> Vec<String> {
+    let n = rows.inputs.nrows() as f64;
+    (0..rows.inputs.ncols())
+        .filter(|&c| {
+            let column = || (0..rows.inputs.nrows()).map(move |i| rows.inputs.get(i, c));
+            let mean = column().sum::<f64>() / n;
+            let var = column().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+            var.sqrt() <= gpodo_traits::MIN_STD
+        })
+        .filter_map(|c| rows.input_names.get(c).cloned())
+        .collect()
+}
+
 /// How many of the shortest lengthscales to list per model.
 const RELEVANT_INPUTS: usize = 6;
 
@@ -301,6 +317,11 @@ fn hyperparameter_section(s: &mut String, r: &ExperimentResults) {
     if fitted.is_empty() {
         return;
     }
+    let constant = r
+        .train_rows
+        .as_ref()
+        .map(constant_inputs)
+        .unwrap_or_default();
     let _ = writeln!(
         s,
         "## Learned hyperparameters\n\nStandardised units. The shortest lengthscales mark the inputs the model relies on most (all values in `metrics.json`).\n\n| Regressor | noise variance | signal variance | shortest lengthscales |\n|---|---:|---:|---|"
@@ -326,6 +347,7 @@ fn hyperparameter_section(s: &mut String, r: &ExperimentResults) {
                 Some((&n[start + ".lengthscale[".len()..n.len() - 1], *v))
             })
             .collect();
+        lengthscales.retain(|(name, _)| !constant.iter().any(|c| c == name));
         lengthscales.sort_by(|a, b| a.1.total_cmp(&b.1));
         let shortest: Vec<String> = lengthscales
             .iter()
@@ -343,6 +365,13 @@ fn hyperparameter_section(s: &mut String, r: &ExperimentResults) {
             } else {
                 shortest.join(", ")
             }
+        );
+    }
+    if !constant.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nConstant on the training rows, so left out of the shortest lengthscales: {}.",
+            constant.join(", ")
         );
     }
     s.push('\n');
