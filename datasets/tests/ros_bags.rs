@@ -852,3 +852,41 @@ mod fixtures {
         }
     }
 }
+
+mod names {
+    //! `bag info` shows what a topic map needs: joint names, frame ids and
+    //! TF pairs, from the independently written fixtures.
+
+    use std::path::Path;
+
+    #[test]
+    fn bag_info_lists_joint_names_frames_and_transforms() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+        for file in ["messages.bag", "messages.mcap"] {
+            let info = gpodo_datasets::bags::BagInfo::read(&dir.join(file)).unwrap();
+            let names = |topic: &str| {
+                info.topics
+                    .iter()
+                    .find(|t| t.topic == topic)
+                    .map(|t| t.names.clone())
+                    .unwrap()
+            };
+            assert_eq!(
+                names("/joint_states"),
+                ["left_wheel", "right_wheel_joint"],
+                "{file}"
+            );
+            assert_eq!(names("/odom"), ["odom → base_link"], "{file}");
+            let text = info.to_text();
+            assert!(
+                text.contains("joints: left_wheel, right_wheel_joint"),
+                "{file}: {text}"
+            );
+            assert!(text.contains("frames: odom → base_link"), "{file}: {text}");
+            assert!(
+                text.contains("transforms: map → odom, odom → base_link"),
+                "{file}: {text}"
+            );
+        }
+    }
+}

@@ -25,6 +25,34 @@ pub struct TopicInfo {
     /// The median interval between successive messages in time order
     /// (ns); `None` with fewer than two messages at distinct times.
     pub median_interval_ns: Option<u64>,
+    /// What a topic map needs of its messages: frame ids (`frame` or
+    /// `frame → child` for odometry), joint names, or a TF message's
+    /// `parent → child` pairs, each once, in the order first seen (from
+    /// the first [`NAMES_FROM_MESSAGES`] messages; every message of a TF
+    /// topic).
+    pub names: Vec<String>,
+}
+
+/// How many messages of a topic `bag info` decodes for its frame ids and
+/// joint names (a TF topic: all of them).
+pub const NAMES_FROM_MESSAGES: usize = 100;
+
+/// The names a topic map needs from one decoded message.
+fn names_of(message: &super::messages::RosMessage) -> Vec<String> {
+    use super::messages::RosMessage as M;
+    match message {
+        M::Imu(m) => vec![m.header.frame_id.clone()],
+        M::Odometry(m) => vec![format!("{} → {}", m.header.frame_id, m.child_frame_id)],
+        M::NavSatFix(m) => vec![m.header.frame_id.clone()],
+        M::JointState(m) => m.name.clone(),
+        M::PoseStamped(h, _) | M::PoseWithCovarianceStamped(h, _, _) | M::TwistStamped(h, _) => {
+            vec![h.frame_id.clone()]
+        }
+        M::Tf(transforms) => transforms
+            .iter()
+            .map(|t| format!("{} → {}", t.header.frame_id, t.child_frame_id))
+            .collect(),
+    }
 }
 
 impl TopicInfo {
@@ -110,8 +138,19 @@ impl BagInfo {
                     first_ns: m.log_time_ns,
                     last_ns: m.log_time_ns,
                     median_interval_ns: None,
+                    names: Vec::new(),
                 });
             entry.count += 1;
+            let is_tf = super::ros1_type_name(m.message_type) == "tf2_msgs/TFMessage";
+            if (is_tf || entry.count <= NAMES_FROM_MESSAGES)
+                && let Ok(message) = super::messages::decode(m.message_type, m.encoding, m.data)
+            {
+                for name in names_of(&message) {
+                    if !entry.names.contains(&name) {
+                        entry.names.push(name);
+                    }
+                }
+            }
             entry.first_ns = entry.first_ns.min(m.log_time_ns);
             entry.last_ns = entry.last_ns.max(m.log_time_ns);
         })?;
@@ -180,6 +219,18 @@ impl BagInfo {
                     "; not a type gpodo reads"
                 }
             ));
+            if !t.names.is_empty() {
+                let what = match super::ros1_type_name(&t.message_type).as_str() {
+                    "sensor_msgs/JointState" => "joints",
+                    "tf2_msgs/TFMessage" => "transforms",
+                    _ => "frames",
+                };
+                s.push_str(&format!(
+                    "  {:width$}  {what}: {}\n",
+                    "",
+                    t.names.join(", ")
+                ));
+            }
         }
         s
     }
