@@ -28,14 +28,13 @@ pub struct TopicInfo {
     /// What a topic map needs of its messages: frame ids (`frame` or
     /// `frame → child` for odometry), joint names, or a TF message's
     /// `parent → child` pairs, each once, in the order first seen (from
-    /// the first [`NAMES_FROM_MESSAGES`] messages; every message of a TF
-    /// topic).
+    /// the first 100 messages; every message of a TF topic).
     pub names: Vec<String>,
 }
 
 /// How many messages of a topic `bag info` decodes for its frame ids and
 /// joint names (a TF topic: all of them).
-pub const NAMES_FROM_MESSAGES: usize = 100;
+const NAMES_FROM_MESSAGES: usize = 100;
 
 /// The names a topic map needs from one decoded message.
 fn names_of(message: &super::messages::RosMessage) -> Vec<String> {
