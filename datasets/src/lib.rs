@@ -9,6 +9,7 @@ mod error;
 pub mod log;
 pub mod residuals;
 pub mod sim;
+pub mod speed_check;
 pub mod table;
 
 pub use error::DatasetError;

@@ -242,3 +242,49 @@ fn bad_simulator_settings_are_rejected_by_name() {
         assert!(err.contains(field), "{field}: {err}");
     }
 }
+
+/// The median ratio of the model's speed to the true one over the moving
+/// seconds of `config`'s training runs, with every wheel rate multiplied
+/// by `wheel_scale` (a unit error).
+fn speed_ratio(config: &SimulatorConfig, wheel_scale: f64) -> f64 {
+    let bed = config.simulate().unwrap();
+    let model =
+        WeightedJacobianModel::new(bed.description.clone(), WeightedJacobianConfig::default())
+            .unwrap();
+    let mut steps = Vec::new();
+    for log in &bed.train {
+        let mut log = log.clone();
+        for s in &mut log.samples {
+            for w in &mut s.wheels {
+                w.rate_radps *= wheel_scale;
+            }
+        }
+        steps.extend(
+            gpodo_datasets::residuals::log_steps(&log, &model, bed.description.wheel_radius_m)
+                .unwrap(),
+        );
+    }
+    gpodo_datasets::speed_check::median_speed_ratio(&steps).unwrap()
+}
+
+#[test]
+fn the_speed_check_passes_slipping_runs_and_catches_a_two_pi_unit_error() {
+    use gpodo_datasets::speed_check::plausible;
+    let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 7);
+    config.training_runs = 2;
+    config.training_run_secs = 120.0;
+    config.test_max_secs = 10.0;
+    let ratio = speed_ratio(&config, 1.0);
+    assert!(plausible(ratio) && (ratio - 1.0).abs() < 0.3, "{ratio}");
+    // All loose sand: the rover slips, the check stays silent.
+    config.soils.sand_fraction = 1.0;
+    config.soils.gravel_fraction = 0.0;
+    let sand = speed_ratio(&config, 1.0);
+    assert!(plausible(sand), "{sand}");
+    // Wheel speeds in rpm read as rad/s would be 60/2π too large; rad/s
+    // read as rpm, 2π/60 too small; here a 2π error either way.
+    let fast = speed_ratio(&config, std::f64::consts::TAU);
+    let slow = speed_ratio(&config, 1.0 / std::f64::consts::TAU);
+    assert!(!plausible(fast) && fast > 4.0, "{fast}");
+    assert!(!plausible(slow) && slow < 0.25, "{slow}");
+}

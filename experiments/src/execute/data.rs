@@ -8,8 +8,9 @@ use std::path::PathBuf;
 use gpodo_frontends::tum::StampedPose;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
-use gpodo_datasets::residuals::residual_dataset;
+use gpodo_datasets::residuals::{log_steps, residual_dataset};
 use gpodo_datasets::sim::preset::SimulatorConfig;
+use gpodo_datasets::speed_check::{median_speed_ratio, plausible};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{
     ReportedOdometryModel, RoverDescription, SkidSteerModel, WeightedJacobianModel,
@@ -22,6 +23,32 @@ use crate::error::PipelineError;
 use crate::execute::calibration::{ResidualStatistics, residual_statistics};
 use crate::execute::odometry::{DeadReckoning, dead_reckoning};
 use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
+
+/// Warns when the motion model's speed is far from the ground truth's over
+/// the moving parts of the training runs (median ratio outside
+/// [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]): most likely a joint in the wrong unit. A warning,
+/// never a silent fix.
+fn check_speed_units(
+    logs: &[RoverLog],
+    model: &dyn MotionModel,
+    radius: f64,
+) -> Result<(), PipelineError> {
+    let mut steps = Vec::new();
+    for log in logs {
+        steps.extend(log_steps(log, model, radius)?);
+    }
+    if let Some(ratio) = median_speed_ratio(&steps)
+        && !plausible(ratio)
+    {
+        tracing::warn!(
+            ratio = format!("{ratio:.2}"),
+            "the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds of the training runs): \
+             check the wheels' units (a topic map's `rate_scale` and `position_scale`: 2π/60 for rpm, 1/gear ratio at the motor; \
+             a rover description's `wheel_radius_m`)"
+        );
+    }
+    Ok(())
+}
 
 fn summarize(log: &RoverLog) -> RunSummary {
     RunSummary {
@@ -127,6 +154,7 @@ fn from_logs(
     };
     let (train_logs, test_logs) = (&in_rover_order(train_logs)?, &in_rover_order(test_logs)?);
     let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
+    check_speed_units(train_logs, model.as_ref(), radius)?;
     let train = residual_dataset(&refs(train_logs), model.as_ref(), radius, &config.residuals)?;
     let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
     let dead_reckoning = test_logs
