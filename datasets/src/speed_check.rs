@@ -21,9 +21,7 @@ pub const PLAUSIBLE_RATIO: [f64; 2] = [0.5, 2.0];
 /// horizontal speed over the true one (each averaged over
 /// [`SPEED_WINDOW_SECS`]); `None` when no window moves.
 pub fn median_speed_ratio(steps: &[LogStep]) -> Option<f64> {
-    let Some(t0) = steps.first().map(|s| s.time_secs) else {
-        return None;
-    };
+    let t0 = steps.first().map(|s| s.time_secs)?;
     let mut ratios = Vec::new();
     let mut window = 0usize;
     let (mut model, mut truth, mut secs) = ([0.0f64; 2], [0.0f64; 2], 0.0);
@@ -62,5 +60,5 @@ pub fn median_speed_ratio(steps: &[LogStep]) -> Option<f64> {
 /// Whether a median speed ratio is plausible for a model with the right
 /// units.
 pub fn plausible(ratio: f64) -> bool {
-    ratio >= PLAUSIBLE_RATIO[0] && ratio <= PLAUSIBLE_RATIO[1]
+    (PLAUSIBLE_RATIO[0]..=PLAUSIBLE_RATIO[1]).contains(&ratio)
 }
