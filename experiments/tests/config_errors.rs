@@ -559,3 +559,16 @@ fn an_optimiser_setting_at_the_top_of_a_gp_names_its_place_in_hyperopt() {
     std::fs::write(&path, text).unwrap();
     assert!(load_plan(&path).is_ok());
 }
+
+#[test]
+fn a_ground_truth_of_the_wrong_shape_names_the_shapes_it_takes() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "name: t\ndataset:\n  kind: bags\n  train: [a.mcap]\n  topics:\n    imu: /imu\n    ground_truth: {topic: /mocap/pose}\nregressors: [{ kind: zero }]\n";
+    let e = error_of(dir.path(), "x.yaml", text);
+    assert!(
+        e.contains("x.yaml:")
+            && e.contains("ground_truth: /mocap/pose")
+            && e.contains("a TF chain"),
+        "{e}"
+    );
+}

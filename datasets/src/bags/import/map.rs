@@ -69,7 +69,10 @@ pub struct JointMap {
 
 /// Where the ground-truth pose comes from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a `ground_truth` of another shape, expected a pose, odometry or GNSS topic (`ground_truth: /mocap/pose`, `ground_truth: /fix`) or a TF chain (`ground_truth: {tf: {parent: map, child: base_link, topics: [/tf, /tf_static]}}`)"
+)]
 pub enum GroundTruthSource {
     /// A pose, odometry or GNSS topic.
     Topic(String),
