@@ -229,6 +229,28 @@ pub fn residual_dataset(
     config: &ResidualConfig,
 ) -> Result<ResidualDataset, DatasetError> {
     config.validate()?;
+    let steps = logs
+        .iter()
+        .map(|log| {
+            log.validate()?;
+            log_steps(log, model, wheel_radius_m)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    residual_dataset_from_steps(logs, &steps, config)
+}
+
+/// [`residual_dataset`] from the logs' steps already computed
+/// ([`log_steps`], one entry per log, in the same order), so that a caller
+/// that also needs the steps runs the motion model once.
+///
+/// # Errors
+/// As [`residual_dataset`], but for the motion model's.
+pub fn residual_dataset_from_steps(
+    logs: &[&RoverLog],
+    steps: &[Vec<LogStep>],
+    config: &ResidualConfig,
+) -> Result<ResidualDataset, DatasetError> {
+    config.validate()?;
     let Some(first) = logs.first() else {
         return Err(DatasetError::InvalidConfig {
             field: "runs".into(),
@@ -238,26 +260,24 @@ pub fn residual_dataset(
     let names = feature_names(first);
     let mut inputs = Vec::new();
     let mut targets = Vec::new();
-    for log in logs {
+    for (log, rows) in logs.iter().zip(steps) {
         if feature_names(log) != names {
             return Err(DatasetError::InvalidConfig {
                 field: format!("runs ({})", log.name),
                 expected: format!("the same inputs (joints, odometry) as run {}", first.name),
             });
         }
-        log.validate()?;
-        let rows = log_steps(log, model, wheel_radius_m)?;
-        let rows: Vec<(Vec<f64>, Vector3<f64>)> = match config.window_secs {
-            Some(w) => window_rows(&rows, w)
-                .into_iter()
-                .map(|r| (r.inputs, r.residual))
-                .collect(),
-            None => rows.into_iter().map(|r| (r.inputs, r.residual)).collect(),
-        };
-        for (x, y) in rows {
-            inputs.extend(x);
-            let y = if config.absolute_targets { y.abs() } else { y };
-            targets.extend(y.iter());
+        match config.window_secs {
+            Some(w) => {
+                for r in window_rows(rows, w) {
+                    push_row(&mut inputs, &mut targets, &r.inputs, r.residual, config);
+                }
+            }
+            None => {
+                for r in rows {
+                    push_row(&mut inputs, &mut targets, &r.inputs, r.residual, config);
+                }
+            }
         }
     }
     let n = targets.len() / 3;
@@ -267,6 +287,19 @@ pub fn residual_dataset(
         names,
         TARGET_NAMES.iter().map(|s| s.to_string()).collect(),
     )?)
+}
+
+/// Appends one row (its target absolute when the config says so).
+fn push_row(
+    inputs: &mut Vec<f64>,
+    targets: &mut Vec<f64>,
+    x: &[f64],
+    y: Vector3<f64>,
+    config: &ResidualConfig,
+) {
+    inputs.extend_from_slice(x);
+    let y = if config.absolute_targets { y.abs() } else { y };
+    targets.extend(y.iter());
 }
 
 #[cfg(test)]

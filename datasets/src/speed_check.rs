@@ -17,12 +17,26 @@ pub const MOVING_SPEED_MPS: f64 = 0.005;
 /// it (loose sand on a slope slips over half), a unit error by far more.
 pub const PLAUSIBLE_RATIO: [f64; 2] = [0.5, 2.0];
 
-/// The median, over the moving windows of `steps`, of the model's
-/// horizontal speed over the true one (each averaged over
+/// The median, over the moving windows of every run's steps, of the
+/// model's horizontal speed over the true one (each averaged over
 /// [`SPEED_WINDOW_SECS`]); `None` when no window moves.
-pub fn median_speed_ratio(steps: &[LogStep]) -> Option<f64> {
-    let t0 = steps.first().map(|s| s.time_secs)?;
+pub fn median_speed_ratio(runs: &[Vec<LogStep>]) -> Option<f64> {
     let mut ratios = Vec::new();
+    for steps in runs {
+        window_ratios(steps, &mut ratios);
+    }
+    if ratios.is_empty() {
+        return None;
+    }
+    let mid = ratios.len() / 2;
+    Some(*ratios.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
+/// Appends to `ratios` the speed ratio of every moving window of one run.
+fn window_ratios(steps: &[LogStep], ratios: &mut Vec<f64>) {
+    let Some(t0) = steps.first().map(|s| s.time_secs) else {
+        return;
+    };
     let mut window = 0usize;
     let (mut model, mut truth, mut secs) = ([0.0f64; 2], [0.0f64; 2], 0.0);
     let mut flush = |model: [f64; 2], truth: [f64; 2], secs: f64| {
@@ -50,11 +64,6 @@ pub fn median_speed_ratio(steps: &[LogStep]) -> Option<f64> {
         secs += step.dt_secs;
     }
     flush(model, truth, secs);
-    if ratios.is_empty() {
-        return None;
-    }
-    let mid = ratios.len() / 2;
-    Some(*ratios.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// Whether a median speed ratio is plausible for a model with the right

@@ -259,7 +259,7 @@ fn speed_ratio(config: &SimulatorConfig, wheel_scale: f64) -> f64 {
                 w.rate_radps *= wheel_scale;
             }
         }
-        steps.extend(
+        steps.push(
             gpodo_datasets::residuals::log_steps(&log, &model, bed.description.wheel_radius_m)
                 .unwrap(),
         );

@@ -120,16 +120,12 @@ impl BagInfo {
     /// # Errors
     /// [`BagError`].
     pub fn read(path: &Path) -> Result<Self, BagError> {
-        let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-        let mut stamps: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+        // Per topic: what is reported, every stamp (for the median
+        // interval) and whether it is a TF topic (decoded whole).
+        let mut topics: BTreeMap<String, (TopicInfo, Vec<u64>, bool)> = BTreeMap::new();
         let (format, messages) = visit_messages(path, |m| {
-            stamps
-                .entry(m.topic.to_string())
-                .or_default()
-                .push(m.log_time_ns);
-            let entry = topics
-                .entry(m.topic.to_string())
-                .or_insert_with(|| TopicInfo {
+            if !topics.contains_key(m.topic) {
+                let info = TopicInfo {
                     topic: m.topic.to_string(),
                     message_type: m.message_type.to_string(),
                     encoding: m.encoding.to_string(),
@@ -138,10 +134,16 @@ impl BagInfo {
                     last_ns: m.log_time_ns,
                     median_interval_ns: None,
                     names: Vec::new(),
-                });
+                };
+                let is_tf = super::ros1_type_name(m.message_type) == "tf2_msgs/TFMessage";
+                topics.insert(m.topic.to_string(), (info, Vec::new(), is_tf));
+            }
+            let Some((entry, stamps, is_tf)) = topics.get_mut(m.topic) else {
+                return;
+            };
             entry.count += 1;
-            let is_tf = super::ros1_type_name(m.message_type) == "tf2_msgs/TFMessage";
-            if (is_tf || entry.count <= NAMES_FROM_MESSAGES)
+            stamps.push(m.log_time_ns);
+            if (*is_tf || entry.count <= NAMES_FROM_MESSAGES)
                 && let Ok(message) = super::messages::decode(m.message_type, m.encoding, m.data)
             {
                 for name in names_of(&message) {
@@ -153,10 +155,13 @@ impl BagInfo {
             entry.first_ns = entry.first_ns.min(m.log_time_ns);
             entry.last_ns = entry.last_ns.max(m.log_time_ns);
         })?;
-        for (topic, info) in &mut topics {
-            info.median_interval_ns = stamps.remove(topic).and_then(median_interval);
-        }
-        let topics: Vec<TopicInfo> = topics.into_values().collect();
+        let topics: Vec<TopicInfo> = topics
+            .into_values()
+            .map(|(mut info, stamps, _)| {
+                info.median_interval_ns = median_interval(stamps);
+                info
+            })
+            .collect();
         let start_ns = topics.iter().map(|t| t.first_ns).min().unwrap_or(0);
         let end_ns = topics.iter().map(|t| t.last_ns).max().unwrap_or(0);
         Ok(Self {

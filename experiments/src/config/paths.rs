@@ -57,6 +57,8 @@ impl ExperimentConfig {
     /// the folder of the file it was read from.
     #[must_use]
     pub fn with_paths_resolved(mut self, base: &Path) -> Self {
+        let absolute = std::path::absolute(base).unwrap_or_else(|_| base.to_path_buf());
+        let base = absolute.as_path();
         match &mut self.dataset {
             DatasetSpec::Simulated { .. } => {}
             DatasetSpec::Logs { train, test } | DatasetSpec::Bags { train, test, .. } => {

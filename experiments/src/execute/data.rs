@@ -8,7 +8,9 @@ use std::path::PathBuf;
 use gpodo_frontends::tum::StampedPose;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
-use gpodo_datasets::residuals::{log_steps, residual_dataset};
+use gpodo_datasets::residuals::{
+    LogStep, log_steps, residual_dataset, residual_dataset_from_steps,
+};
 use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::speed_check::{median_speed_ratio, plausible};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
@@ -25,19 +27,11 @@ use crate::execute::odometry::{DeadReckoning, dead_reckoning};
 use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
 
 /// Warns when the motion model's speed is far from the ground truth's over
-/// the moving parts of the training runs (median ratio outside
-/// [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]): most likely a joint in the wrong unit. A warning,
-/// never a silent fix.
-fn check_speed_units(
-    logs: &[RoverLog],
-    model: &dyn MotionModel,
-    radius: f64,
-) -> Result<(), PipelineError> {
-    let mut steps = Vec::new();
-    for log in logs {
-        steps.extend(log_steps(log, model, radius)?);
-    }
-    if let Some(ratio) = median_speed_ratio(&steps)
+/// the moving parts of the training runs' `steps` (median ratio outside
+/// [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]): most likely a joint in
+/// the wrong unit. A warning, never a silent fix.
+fn warn_on_speed_units(steps: &[Vec<LogStep>]) {
+    if let Some(ratio) = median_speed_ratio(steps)
         && !plausible(ratio)
     {
         tracing::warn!(
@@ -47,7 +41,6 @@ fn check_speed_units(
              a rover description's `wheel_radius_m`)"
         );
     }
-    Ok(())
 }
 
 fn summarize(log: &RoverLog) -> RunSummary {
@@ -154,8 +147,12 @@ fn from_logs(
     };
     let (train_logs, test_logs) = (&in_rover_order(train_logs)?, &in_rover_order(test_logs)?);
     let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
-    check_speed_units(train_logs, model.as_ref(), radius)?;
-    let train = residual_dataset(&refs(train_logs), model.as_ref(), radius, &config.residuals)?;
+    let train_steps = train_logs
+        .iter()
+        .map(|log| log_steps(log, model.as_ref(), radius))
+        .collect::<Result<Vec<_>, _>>()?;
+    warn_on_speed_units(&train_steps);
+    let train = residual_dataset_from_steps(&refs(train_logs), &train_steps, &config.residuals)?;
     let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
     let dead_reckoning = test_logs
         .iter()
