@@ -3,9 +3,10 @@
 //! cut at 20 seeded lengths; so are the shipped MCAP, ROS 1 and (with the
 //! `db3` feature) SQLite fixtures. Every import returns within a watchdog far
 //! above the intact file's time, never panics, and either fails with an
-//! error naming the file or returns exactly the intact file's rows. A
-//! stamp far outside the recording and a `rate_hz` typo are refused
-//! before the common clock is walked.
+//! error naming the file or returns exactly the intact file's rows.
+//! Skipping damaged chunks reads the intact file less whole chunks and
+//! counts what it lost. A stamp far outside the recording and a `rate_hz`
+//! typo are refused before the common clock is walked.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -15,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use gpodo_datasets::bags::import::{ImportError, TopicMap, import_bag};
 use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
+use gpodo_datasets::bags::{Damage, OnDamage, visit_messages_with};
 use gpodo_datasets::log::RoverLog;
 use gpodo_traits::ProprioceptiveSample;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -66,6 +68,36 @@ fn import_within(path: &Path, map: &TopicMap, limit: Duration) -> Option<Importe
     rx.recv_timeout(limit).ok()
 }
 
+/// One message as stored: topic, receive time, bytes.
+type Message = (String, u64, Vec<u8>);
+
+/// Every message of the bag at `path` (and what was skipped) on another
+/// thread, or `None` when it has not returned within `limit` or panicked.
+fn messages_within(
+    path: &Path,
+    on_damage: OnDamage,
+    limit: Duration,
+) -> Option<Result<(Vec<Message>, Damage), String>> {
+    let (tx, rx) = mpsc::channel();
+    let path = path.to_path_buf();
+    std::thread::spawn(move || {
+        let mut messages = Vec::new();
+        let out = visit_messages_with(&path, on_damage, |m| {
+            messages.push((m.topic.to_string(), m.log_time_ns, m.data.to_vec()));
+        })
+        .map(|v| (messages, v.damage))
+        .map_err(|e| e.to_string());
+        let _ = tx.send(out);
+    });
+    rx.recv_timeout(limit).ok()
+}
+
+/// Whether `part` is `whole` with some runs of messages left out.
+fn is_subsequence(part: &[Message], whole: &[Message]) -> bool {
+    let mut rest = whole.iter();
+    part.iter().all(|m| rest.any(|w| w == m))
+}
+
 #[test]
 fn damaged_bytes_and_truncations_give_the_intact_rows_or_a_clear_error() {
     let tmp = tempfile::tempdir().unwrap();
@@ -77,6 +109,10 @@ fn damaged_bytes_and_truncations_give_the_intact_rows_or_a_clear_error() {
     assert_eq!(rows.rows, 600);
     // Generous: only a hang trips it.
     let limit = (start.elapsed() * 100).max(Duration::from_secs(5));
+    let (all, none) = messages_within(&bag.path, OnDamage::Stop, limit)
+        .unwrap()
+        .unwrap();
+    assert!(none.is_empty());
     let bytes = std::fs::read(&bag.path).unwrap();
     let damaged = tmp.path().join("damaged.mcap");
     let mut rng = ChaCha8Rng::seed_from_u64(39);
@@ -89,7 +125,7 @@ fn damaged_bytes_and_truncations_give_the_intact_rows_or_a_clear_error() {
         })
         .collect();
     cases.extend((0..20).map(|_| bytes[..rng.random_range(0..bytes.len())].to_vec()));
-    let (mut failed, mut same) = (0, 0);
+    let (mut failed, mut same, mut recovered, mut lossless) = (0, 0, 0, 0);
     for (k, case) in cases.iter().enumerate() {
         std::fs::write(&damaged, case).unwrap();
         match import_within(&damaged, &map, limit) {
@@ -104,12 +140,122 @@ fn damaged_bytes_and_truncations_give_the_intact_rows_or_a_clear_error() {
                 same += 1;
             }
         }
+        // Skipping: what is read is the intact file less whole chunks, and
+        // the count of what was lost is right.
+        match messages_within(&damaged, OnDamage::Skip, limit) {
+            None => panic!("case {k}: no answer when skipping (a hang or a panic)"),
+            Some(Err(e)) => assert!(e.contains("damaged.mcap"), "case {k}: {e}"),
+            Some(Ok((got, damage))) => {
+                assert!(
+                    is_subsequence(&got, &all),
+                    "case {k}: messages not in the file"
+                );
+                if damage.is_empty() {
+                    assert_eq!(got, all, "case {k}: messages lost without a word");
+                }
+                if let Some(lost) = damage.messages_lost {
+                    assert_eq!(lost as usize, all.len() - got.len(), "case {k}: {damage}");
+                }
+                if got.len() == all.len() {
+                    lossless += 1;
+                } else if !got.is_empty() {
+                    recovered += 1;
+                }
+            }
+        }
     }
-    // The damage reached the messages (caught by the chunk CRCs) as well
-    // as the records that only index them.
+    // Every byte is covered by a CRC or a length check, so stopping fails
+    // nearly every case; skipping keeps every message of the intact
+    // chunks.
+    assert!(failed >= 200, "{failed} failed, {same} identical");
     assert!(
-        failed >= 50 && same >= 20,
-        "{failed} failed, {same} identical"
+        recovered >= 80 && lossless >= 80,
+        "skipping: {recovered} kept part, {lossless} kept everything"
+    );
+}
+
+#[test]
+fn a_damaged_chunk_is_named_or_skipped_with_what_it_held() {
+    let tmp = tempfile::tempdir().unwrap();
+    let log = straight();
+    let bag = write_mcap(&log, tmp.path()).unwrap();
+    let mut bytes = std::fs::read(&bag.path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    assert!(
+        summary.chunk_indexes.len() >= 5,
+        "{}",
+        summary.chunk_indexes.len()
+    );
+    let chunk = summary.chunk_indexes[2].clone();
+    let (all, _) = messages_within(&bag.path, OnDamage::Stop, Duration::from_secs(20))
+        .unwrap()
+        .unwrap();
+    let held = all
+        .iter()
+        .filter(|m| (chunk.message_start_time..=chunk.message_end_time).contains(&m.1))
+        .count();
+    // Its stored CRC changed (after opcode, length, two stamps and the
+    // uncompressed size): the data decompress, but disagree with it.
+    let crc_at = chunk.chunk_start_offset as usize + 9 + 24;
+    let saved = u32::from_le_bytes(bytes[crc_at..crc_at + 4].try_into().unwrap());
+    bytes[crc_at..crc_at + 4].copy_from_slice(&(saved ^ 0xFFFF).to_le_bytes());
+    let damaged = tmp.path().join("damaged.mcap");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let e = messages_within(&damaged, OnDamage::Stop, Duration::from_secs(20))
+        .unwrap()
+        .unwrap_err();
+    let secs = |ns: u64| format!("{:.3}", ns as f64 * 1e-9);
+    let names_the_chunk = |e: &str| {
+        e.contains("damaged.mcap")
+            && e.contains(&format!("chunk at byte {}", chunk.chunk_start_offset))
+            && e.contains(&secs(chunk.message_start_time))
+            && e.contains(&secs(chunk.message_end_time))
+            && e.contains("skip_damaged: true")
+    };
+    assert!(
+        names_the_chunk(&e)
+            && e.contains(&format!(
+                "its CRC is {:08X}, its data give {saved:08X}",
+                saved ^ 0xFFFF
+            )),
+        "{e}"
+    );
+    // Eight bytes in the middle of its compressed data: zstd finds them.
+    bytes[crc_at..crc_at + 4].copy_from_slice(&saved.to_le_bytes());
+    let at = (chunk.chunk_start_offset + chunk.chunk_length / 2) as usize;
+    bytes[at..at + 8].copy_from_slice(&0x0123_4567_89ab_cdef_u64.to_le_bytes());
+    std::fs::write(&damaged, &bytes).unwrap();
+    let e = messages_within(&damaged, OnDamage::Stop, Duration::from_secs(20))
+        .unwrap()
+        .unwrap_err();
+    assert!(names_the_chunk(&e) && e.contains("decompression"), "{e}");
+    let (got, damage) = messages_within(&damaged, OnDamage::Skip, Duration::from_secs(20))
+        .unwrap()
+        .unwrap();
+    assert_eq!(damage.chunks_skipped, 1, "{damage}");
+    assert_eq!(damage.messages_lost, Some(held as u64), "{damage}");
+    assert_eq!(got.len(), all.len() - held);
+    let span = (chunk.message_end_time - chunk.message_start_time) as f64 * 1e-9;
+    assert!((damage.seconds_lost - span).abs() < 1e-9, "{damage}");
+    // The import goes on past the chunk when asked, and says what it lost.
+    let mut map = written_topic_map(&log, 10.0);
+    assert!(import_bag(&damaged, "x", &map).is_err());
+    map.skip_damaged = true;
+    let (imported, report) = import_bag(&damaged, "x", &map).unwrap();
+    assert!(imported.samples.len() < 600 && report.rows_dropped > 0);
+    let note = report.damage.to_string();
+    assert!(
+        note.starts_with(&format!(
+            "skipped 1 damaged chunk: {held} messages and {span:.3} s of recording lost"
+        )),
+        "{note}"
+    );
+    // So does `bag info`, which counts against the summary.
+    let info = gpodo_datasets::bags::BagInfo::read_with(&damaged, OnDamage::Skip).unwrap();
+    let text = info.to_text();
+    assert!(
+        text.contains("Damage:") && text.contains("the summary declares"),
+        "{text}"
     );
 }
 

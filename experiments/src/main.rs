@@ -166,6 +166,10 @@ enum BagCommand {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Skip damaged MCAP chunks and report what they held, instead of
+        /// stopping at the first.
+        #[arg(long)]
+        skip_damaged: bool,
     },
 }
 
@@ -402,6 +406,9 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
         for note in report.gnss_notes() {
             println!("  {note}");
         }
+        if !report.damage.is_empty() {
+            println!("  {}", report.damage);
+        }
     }
     Ok(())
 }
@@ -513,9 +520,20 @@ fn main() -> anyhow::Result<()> {
         } => fit(&file, &regressor, &save),
         Command::Import { files, topics, out } => import(&files, &topics, &out),
         Command::Bag {
-            command: BagCommand::Info { file, json },
+            command:
+                BagCommand::Info {
+                    file,
+                    json,
+                    skip_damaged,
+                },
         } => {
-            let info = gpodo_datasets::bags::BagInfo::read(&file)?;
+            use gpodo_datasets::bags::{BagInfo, OnDamage};
+            let on_damage = if skip_damaged {
+                OnDamage::Skip
+            } else {
+                OnDamage::Stop
+            };
+            let info = BagInfo::read_with(&file, on_damage)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&info)?);
             } else {

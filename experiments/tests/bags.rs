@@ -208,6 +208,49 @@ mod synthetic {
     }
 
     #[test]
+    fn a_damaged_chunk_stops_a_run_at_once_or_is_skipped_and_reported() {
+        let tmp = tempfile::tempdir().unwrap();
+        simulate("mcap", &tmp.path().join("mcap"));
+        let bag = tmp.path().join("mcap/train_01.mcap");
+        let mut bytes = std::fs::read(&bag).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let chunk = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
+        let at = (chunk.chunk_start_offset + chunk.chunk_length / 2) as usize;
+        bytes[at..at + 8].copy_from_slice(&[0xA5; 8]);
+        std::fs::write(&bag, &bytes).unwrap();
+        let topics = std::fs::read_to_string(tmp.path().join("mcap/topics.yaml")).unwrap();
+        let yaml = |topics: &str| {
+            let indented: String = topics.lines().map(|l| format!("    {l}\n")).collect();
+            format!(
+                "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - kind: zero\n"
+            )
+        };
+        let file = tmp.path().join("bag.yaml");
+        std::fs::write(&file, yaml(&topics)).unwrap();
+        let out = common::gpodo_on("run", &file, &tmp.path().join("stop"), &[]);
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success()
+                && e.contains("train_01.mcap")
+                && e.contains(&format!("chunk at byte {}", chunk.chunk_start_offset))
+                && e.contains("skip_damaged: true"),
+            "{e}"
+        );
+        assert!(topics.contains("skip_damaged: false"), "{topics}");
+        let skipping = topics.replace("skip_damaged: false", "skip_damaged: true");
+        std::fs::write(&file, yaml(&skipping)).unwrap();
+        let out = common::gpodo_on("run", &file, &tmp.path().join("skip"), &[]);
+        common::assert_succeeded(&out, "");
+        let report = std::fs::read_to_string(tmp.path().join("skip/report.md")).unwrap();
+        let lost = (chunk.message_end_time - chunk.message_start_time) as f64 * 1e-9;
+        assert!(
+            report.contains("skipped 1 damaged chunk: ")
+                && report.contains(&format!("{lost:.3} s of recording lost")),
+            "{report}"
+        );
+    }
+
+    #[test]
     fn mcap_written_by_gpodo_is_decoded_by_mcap_ros2_support() {
         let Some(python) = common::python() else {
             return;

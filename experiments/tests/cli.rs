@@ -304,4 +304,10 @@ fn a_residual_table_report_gives_its_own_units_no_empty_columns_and_the_counts_u
         report.contains("used 60 inducing points, one per training row, not the 1000000000 asked"),
         "{report}"
     );
+    // Table I's label shows the count used.
+    let table_one = report.split("## Table I").nth(1).unwrap();
+    assert!(
+        table_one.contains("| sparse GP (VFE, m=60 of 1000000000 asked): rbf"),
+        "{table_one}"
+    );
 }

@@ -107,7 +107,8 @@ impl ResidualRegressor for Knn {
         Ok(FitReport {
             n_samples: data.len(),
             duration_secs: start.elapsed().as_secs_f64(),
-            parameters: vec![("k".into(), self.params.k as f64)],
+            // The neighbours actually used.
+            parameters: vec![("k".into(), self.params.k.min(data.len()) as f64)],
             ..FitReport::default()
         })
     }
@@ -189,6 +190,28 @@ mod tests {
         let far = SampleMatrix::from_row_major(1, 1, vec![50.0]).unwrap();
         let p = m.predict(&far).unwrap();
         assert_eq!(p.mean.get(0, 0), (100.0 + 4.0 + 3.0) / 3.0);
+    }
+
+    #[test]
+    fn more_neighbours_than_rows_uses_every_row_and_says_so() {
+        let rows = data().len();
+        let mut all = Knn::new(KnnParams {
+            k: rows,
+            min_variance: 1e-8,
+        })
+        .unwrap();
+        let mut more = Knn::new(KnnParams {
+            k: 1_000_000,
+            min_variance: 1e-8,
+        })
+        .unwrap();
+        all.fit(&data()).unwrap();
+        let report = more.fit(&data()).unwrap();
+        assert_eq!(report.parameters, vec![("k".to_string(), rows as f64)]);
+        let q = SampleMatrix::from_row_major(1, 1, vec![1.1]).unwrap();
+        let (a, b) = (all.predict(&q).unwrap(), more.predict(&q).unwrap());
+        assert_eq!(a.mean.get(0, 0), b.mean.get(0, 0));
+        assert_eq!(a.variance.get(0, 0), b.variance.get(0, 0));
     }
 
     #[test]

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::{BagError, BagFormat, visit_messages};
+use super::{BagError, BagFormat, Damage, OnDamage, visit_messages_with};
 
 /// One topic of a bag.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -25,6 +25,9 @@ pub struct TopicInfo {
     /// The median interval between successive messages in time order
     /// (ns); `None` with fewer than two messages at distinct times.
     pub median_interval_ns: Option<u64>,
+    /// Messages the file's summary declares for the topic (MCAP with
+    /// summary statistics), beside the `count` actually read.
+    pub declared_count: Option<u64>,
     /// What a topic map needs of its messages: frame ids (`frame` or
     /// `frame → child` for odometry), joint names, or a TF message's
     /// `parent → child` pairs, each once, in the order first seen (from
@@ -112,18 +115,30 @@ pub struct BagInfo {
     pub end_ns: u64,
     /// Every topic, by name.
     pub topics: Vec<TopicInfo>,
+    /// The damaged chunks skipped ([`OnDamage::Skip`]); empty for an
+    /// intact file.
+    pub damage: Damage,
 }
 
 impl BagInfo {
-    /// Reads every message of the bag at `path`.
+    /// Reads every message of the bag at `path`; any damage is an error.
     ///
     /// # Errors
     /// [`BagError`].
     pub fn read(path: &Path) -> Result<Self, BagError> {
+        Self::read_with(path, OnDamage::Stop)
+    }
+
+    /// Reads every message of the bag at `path`, stopping at damage or
+    /// skipping damaged MCAP chunks as `on_damage` says.
+    ///
+    /// # Errors
+    /// [`BagError`].
+    pub fn read_with(path: &Path, on_damage: OnDamage) -> Result<Self, BagError> {
         // Per topic: what is reported, every stamp (for the median
         // interval) and whether it is a TF topic (decoded whole).
         let mut topics: BTreeMap<String, (TopicInfo, Vec<u64>, bool)> = BTreeMap::new();
-        let (format, messages) = visit_messages(path, |m| {
+        let visited = visit_messages_with(path, on_damage, |m| {
             if !topics.contains_key(m.topic) {
                 let info = TopicInfo {
                     topic: m.topic.to_string(),
@@ -133,6 +148,7 @@ impl BagInfo {
                     first_ns: m.log_time_ns,
                     last_ns: m.log_time_ns,
                     median_interval_ns: None,
+                    declared_count: None,
                     names: Vec::new(),
                 };
                 let is_tf = super::ros1_type_name(m.message_type) == "tf2_msgs/TFMessage";
@@ -159,6 +175,10 @@ impl BagInfo {
             .into_values()
             .map(|(mut info, stamps, _)| {
                 info.median_interval_ns = median_interval(stamps);
+                info.declared_count = visited
+                    .declared_counts
+                    .as_ref()
+                    .map(|c| c.get(&info.topic).copied().unwrap_or(0));
                 info
             })
             .collect();
@@ -166,12 +186,26 @@ impl BagInfo {
         let end_ns = topics.iter().map(|t| t.last_ns).max().unwrap_or(0);
         Ok(Self {
             path: path.to_path_buf(),
-            format,
-            messages,
+            format: visited.format,
+            messages: visited.messages,
             start_ns,
             end_ns,
             topics,
+            damage: visited.damage,
         })
+    }
+
+    /// What reading the file checked, by format.
+    pub fn checked(&self) -> &'static str {
+        match self.format {
+            BagFormat::Mcap => {
+                "every record's length, every chunk's CRC, the data section's CRC, stamps within the summary's span, counts against the summary; rates from the messages read"
+            }
+            BagFormat::Ros1 => {
+                "every record's header and length, the index section; rates from the messages read"
+            }
+            BagFormat::Db3 => "SQLite's own checks; rates from the messages read",
+        }
     }
 
     /// Duration from the first to the last message (s).
@@ -190,6 +224,16 @@ impl BagInfo {
             exact_secs(self.end_ns),
             self.messages
         );
+        s.insert_str(
+            s.find("Topics:").unwrap_or(s.len()),
+            &format!("Checked:           {}\n", self.checked()),
+        );
+        if !self.damage.is_empty() {
+            s.insert_str(
+                s.find("Topics:").unwrap_or(s.len()),
+                &format!("Damage:            {}\n", self.damage),
+            );
+        }
         let width = self.topics.iter().map(|t| t.topic.len()).max().unwrap_or(0);
         let type_width = self
             .topics
@@ -211,8 +255,12 @@ impl BagInfo {
                 Some(r) => format!("{r:8.2} Hz"),
                 None => "rate unknown (fewer than two distinct stamps)".into(),
             };
+            let declared = match t.declared_count {
+                Some(n) if n != t.count as u64 => format!("; the summary declares {n}"),
+                _ => String::new(),
+            };
             s.push_str(&format!(
-                "  {:width$}  {:type_width$}  {:>7} msgs  {rate}  ({}{})\n",
+                "  {:width$}  {:type_width$}  {:>7} msgs  {rate}  ({}{}{declared})\n",
                 t.topic,
                 t.message_type,
                 t.count,

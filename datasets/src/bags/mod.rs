@@ -7,17 +7,21 @@
 //! ([`wire`]); [`BagInfo`] is what `gpodo bag info` prints (what `ros2 bag
 //! info` shows); [`write::write_mcap`] writes a rover log as a ROS 2 MCAP.
 
+mod damage;
 pub mod enu;
 pub mod import;
 mod info;
+mod mcap_walk;
 pub mod messages;
 pub mod tf;
 pub mod topic;
 pub mod wire;
 pub mod write;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+pub use damage::{Damage, OnDamage};
 pub use info::{BagInfo, TopicInfo};
 
 /// The first bytes of an MCAP file.
@@ -28,10 +32,11 @@ const ROSBAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
 const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 
 /// The container formats gpodo reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BagFormat {
     /// ROS 2 MCAP (messages in CDR).
+    #[default]
     Mcap,
     /// ROS 1 bag v2.0 (messages in ROS 1 serialisation).
     Ros1,
@@ -156,23 +161,59 @@ pub fn detect_format(path: &Path) -> Result<BagFormat, BagError> {
 }
 
 /// Calls `visit` with every message of the bag at `path`, in file order,
-/// and returns the format and the number of messages.
+/// and returns the format and the number of messages; any damage is an
+/// error.
 ///
 /// # Errors
 /// [`BagError`] naming the file and, for damage, the message index.
 pub fn visit_messages(
     path: &Path,
-    mut visit: impl FnMut(RawMessage<'_>),
+    visit: impl FnMut(RawMessage<'_>),
 ) -> Result<(BagFormat, usize), BagError> {
+    let visited = visit_messages_with(path, OnDamage::Stop, visit)?;
+    Ok((visited.format, visited.messages))
+}
+
+/// What a walk over a bag found.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Visited {
+    /// The container format.
+    pub format: BagFormat,
+    /// Messages visited.
+    pub messages: usize,
+    /// What was skipped ([`OnDamage::Skip`]); empty for an intact file.
+    pub damage: Damage,
+    /// Messages per topic as the file's summary declares them (MCAP with
+    /// summary statistics; `None` otherwise).
+    pub declared_counts: Option<BTreeMap<String, u64>>,
+}
+
+/// Calls `visit` with every message of the bag at `path`, in file order;
+/// a damaged MCAP chunk stops the walk or is skipped, as `on_damage` says.
+///
+/// # Errors
+/// [`BagError`] naming the file and, for damage, the message index.
+pub fn visit_messages_with(
+    path: &Path,
+    on_damage: OnDamage,
+    mut visit: impl FnMut(RawMessage<'_>),
+) -> Result<Visited, BagError> {
     let file = bag_file(path)?;
     let path = file.as_path();
     let format = detect_format(path)?;
-    let count = match format {
-        BagFormat::Mcap => visit_mcap(path, &mut visit)?,
-        BagFormat::Ros1 => visit_ros1(path, &mut visit)?,
-        BagFormat::Db3 => visit_db3(path, &mut visit)?,
-    };
-    Ok((format, count))
+    Ok(match format {
+        BagFormat::Mcap => mcap_walk::visit_mcap(path, on_damage, &mut visit)?,
+        BagFormat::Ros1 => Visited {
+            format,
+            messages: visit_ros1(path, &mut visit)?,
+            ..Visited::default()
+        },
+        BagFormat::Db3 => Visited {
+            format,
+            messages: visit_db3(path, &mut visit)?,
+            ..Visited::default()
+        },
+    })
 }
 
 /// The file of the bag at `path`: `path` itself, or, for a ROS 2 bag
@@ -288,104 +329,6 @@ fn visit_db3(path: &Path, _visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usiz
         path: path.to_path_buf(),
         detail: "a ROS 2 .db3 bag: build gpodo with `--features db3` to read it".into(),
     })
-}
-
-fn visit_mcap(path: &Path, visit: &mut dyn FnMut(RawMessage<'_>)) -> Result<usize, BagError> {
-    let bytes = std::fs::read(path).map_err(|source| BagError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let corrupt = |index: usize, e: mcap::McapError| BagError::Corrupt {
-        path: path.to_path_buf(),
-        index,
-        detail: e.to_string(),
-    };
-    // Every chunk's CRC is checked (a damaged byte in a chunk otherwise
-    // decodes as a wrong stamp or value, or as nothing at all), and no
-    // record or chunk may claim more bytes than a damaged length could
-    // make the reader allocate.
-    let options = mcap::sans_io::LinearReaderOptions::default()
-        .with_validate_chunk_crcs(true)
-        .with_record_length_limit(mcap_record_limit(bytes.len()));
-    let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
-    let mut rest: &[u8] = &bytes;
-    let mut index = 0;
-    while let Some(event) = reader.next_event() {
-        let event = event.map_err(|e| match e {
-            mcap::McapError::BadChunkCrc { saved, calculated } => BagError::Corrupt {
-                path: path.to_path_buf(),
-                index,
-                detail: bad_chunk_detail(&bytes, saved, calculated),
-            },
-            e => corrupt(index, e),
-        })?;
-        let message = match event {
-            mcap::sans_io::MessageReadEvent::ReadRequest(need) => {
-                let len = need.min(rest.len());
-                reader.insert(len).copy_from_slice(&rest[..len]);
-                reader.notify_read(len);
-                rest = &rest[len..];
-                continue;
-            }
-            mcap::sans_io::MessageReadEvent::Message(message) => message,
-        };
-        let channel = &message.channel;
-        let message_type = channel.schema.as_ref().map_or("", |s| s.name.as_str());
-        visit(RawMessage {
-            index,
-            topic: &channel.topic,
-            message_type,
-            encoding: &channel.message_encoding,
-            log_time_ns: message.log_time,
-            data: &message.data,
-        });
-        index += 1;
-    }
-    Ok(index)
-}
-
-/// The most bytes one MCAP record (a chunk's uncompressed data included)
-/// may claim in a file of `file_len` bytes: 64 times the file, at least
-/// 64 MiB, at most 4 GiB (writers cut chunks at a few MiB), so that a
-/// damaged length is an error, not an allocation that aborts the process.
-fn mcap_record_limit(file_len: usize) -> usize {
-    file_len.saturating_mul(64).clamp(64 << 20, 4 << 30)
-}
-
-/// What is known of the MCAP chunk whose stored CRC `saved` disagrees with
-/// the `calculated` one: where it starts and the messages' time range its
-/// header gives, found by walking the file's records (every length checked
-/// against the file).
-fn bad_chunk_detail(bytes: &[u8], saved: u32, calculated: u32) -> String {
-    let secs = |ns: u64| ns as f64 * 1e-9;
-    let mut detail =
-        format!("a damaged chunk (its CRC is {saved:08X}, its data give {calculated:08X})");
-    let mut at = mcap::MAGIC.len();
-    while let Some(head) = at.checked_add(9).and_then(|end| bytes.get(at..end)) {
-        let op = head[0];
-        let Some(end) = <[u8; 8]>::try_from(&head[1..9])
-            .ok()
-            .and_then(|l| usize::try_from(u64::from_le_bytes(l)).ok())
-            .and_then(|len| (at + 9).checked_add(len))
-            .filter(|&end| end <= bytes.len())
-        else {
-            break;
-        };
-        if op == mcap::records::op::CHUNK
-            && let Ok(mcap::records::Record::Chunk { header, .. }) =
-                mcap::parse_record(op, &bytes[at + 9..end])
-            && header.uncompressed_crc == saved
-        {
-            detail.push_str(&format!(
-                " at byte {at}, holding messages stamped {:.3} … {:.3} s",
-                secs(header.message_start_time),
-                secs(header.message_end_time)
-            ));
-            break;
-        }
-        at = end;
-    }
-    detail
 }
 
 /// The `index_pos` field of a ROS 1 bag's header record: where its index

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use super::messages::{RosMessage, decode};
-use super::{BagError, ros1_type_name, visit_messages};
+use super::{BagError, Damage, OnDamage, ros1_type_name, visit_messages_with};
 
 /// A decoded message with its receive time.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,19 +79,21 @@ pub struct TopicRequest<'a> {
 
 /// Every message of each requested topic in the bag at `path`, decoded, in
 /// one pass over the file (a bag is decompressed once, whatever the number
-/// of roles); one vector per request, in request order.
+/// of roles); one vector per request, in request order, and what damaged
+/// chunks were skipped (`on_damage`).
 ///
 /// # Errors
 /// [`TopicError`] naming the file, topic, type and message index.
 pub fn read_topics(
     path: &Path,
     requests: &[TopicRequest<'_>],
-) -> Result<Vec<Vec<Stamped>>, TopicError> {
+    on_damage: OnDamage,
+) -> Result<(Vec<Vec<Stamped>>, Damage), TopicError> {
     let file = path.display().to_string();
     let mut topics = std::collections::BTreeSet::new();
     let mut out: Vec<Vec<Stamped>> = vec![Vec::new(); requests.len()];
     let mut failure: Option<TopicError> = None;
-    visit_messages(path, |m| {
+    let visited = visit_messages_with(path, on_damage, |m| {
         if failure.is_some() {
             return;
         }
@@ -143,7 +145,7 @@ pub fn read_topics(
             available: topics.into_iter().collect(),
         });
     }
-    Ok(out)
+    Ok((out, visited.damage))
 }
 
 /// Every message of `topic` in the bag at `path`, decoded, for `role`
@@ -163,5 +165,5 @@ pub fn read_topic(
         expected,
         optional: false,
     };
-    Ok(read_topics(path, &[request])?.remove(0))
+    Ok(read_topics(path, &[request], OnDamage::Stop)?.0.remove(0))
 }

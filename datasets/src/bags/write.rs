@@ -247,6 +247,7 @@ pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
         rate_hz,
         max_gap_secs: 0.5,
         time: Default::default(),
+        skip_damaged: false,
     }
 }
 
@@ -260,6 +261,12 @@ pub struct WrittenBag {
     /// Its size (bytes).
     pub bytes: u64,
 }
+
+/// Uncompressed bytes per MCAP chunk: small enough that a damaged chunk
+/// (skipped with `skip_damaged`) loses seconds of a recording, not
+/// minutes. It makes a file 2 % larger than the 768 KiB default (the
+/// simulated 1723-s test run: 9.76 MB against 9.56 MB).
+const CHUNK_BYTES: u64 = 64 * 1024;
 
 /// Writes `log` as the ROS 2 MCAP bag `<dir>/<name>.mcap` (zstd chunks),
 /// atomically: in full under a temporary name, then renamed.
@@ -290,6 +297,7 @@ pub fn write_mcap_with_vo(
     };
     let mut writer = mcap::WriteOptions::new()
         .profile("ros2")
+        .chunk_size(Some(CHUNK_BYTES))
         .create(Cursor::new(Vec::new()))
         .map_err(mcap_error)?;
     let none = BTreeMap::new();

@@ -381,6 +381,9 @@ fn import_summary(name: &str, r: &gpodo_datasets::bags::import::ImportReport) ->
             .join(", "),
     ];
     parts.extend(r.gnss_notes());
+    if !r.damage.is_empty() {
+        parts.push(r.damage.to_string());
+    }
     format!(
         "{name}: {} rows, {} dropped in gaps; {}",
         r.rows,

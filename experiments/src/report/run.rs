@@ -79,26 +79,49 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     s.push('\n');
 }
 
-/// A line for each sparse GP that used fewer inducing points than its
-/// label asks (there were fewer training rows).
+/// A count the regressor used below the one it asked (a sparse GP's
+/// inducing points, k-NN's neighbours, with fewer training rows): the
+/// label's setting (`m`, `k`), what it names, the count asked and used.
+fn clamped(reg: &RegressorResult) -> Option<(&'static str, &'static str, usize, usize)> {
+    let (key, noun, parameter, asked) = match &reg.spec {
+        gpodo_regressors::RegressorSpec::SparseGp(p) => {
+            ("m", "inducing points", "inducing_points", p.inducing.count)
+        }
+        gpodo_regressors::RegressorSpec::Knn(p) => ("k", "neighbours", "k", p.k),
+        _ => return None,
+    };
+    let used = reg
+        .fit
+        .parameters
+        .iter()
+        .find(|(name, _)| name == parameter)
+        .map(|(_, v)| *v as usize)?;
+    (used < asked).then_some((key, noun, asked, used))
+}
+
+/// The regressor's label as a table shows it: with the count it used
+/// where that is below the one its label asks (`m=1869 of 1000000000
+/// asked`).
+fn shown_label(reg: &RegressorResult) -> String {
+    match clamped(reg) {
+        Some((key, _, asked, used)) => reg.label.replacen(
+            &format!("{key}={asked}"),
+            &format!("{key}={used} of {asked} asked"),
+            1,
+        ),
+        None => reg.label.clone(),
+    }
+}
+
+/// A line for each regressor that used a smaller count than its label
+/// asks (there were fewer training rows).
 fn clamped_counts(s: &mut String, regressors: &[RegressorResult]) {
     for reg in regressors {
-        let gpodo_regressors::RegressorSpec::SparseGp(p) = &reg.spec else {
-            continue;
-        };
-        let used = reg
-            .fit
-            .parameters
-            .iter()
-            .find(|(name, _)| name == "inducing_points")
-            .map(|(_, v)| *v as usize);
-        if let Some(used) = used
-            && used < p.inducing.count
-        {
+        if let Some((_, noun, asked, used)) = clamped(reg) {
             let _ = writeln!(
                 s,
-                "`{}` used {used} inducing points, one per training row, not the {} asked.\n",
-                reg.label, p.inducing.count
+                "`{}` used {used} {noun}, one per training row, not the {asked} asked.\n",
+                reg.label
             );
         }
     }
@@ -127,7 +150,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
     for reg in &r.regressors {
         let e = &reg.evaluation.pooled;
         pooled.push(vec![
-            reg.label.clone(),
+            shown_label(reg),
             format!("{:.6}", e.rmse),
             format!("{:.6}", e.mae),
         ]);
@@ -135,7 +158,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
         let rmse: Vec<String> = per.iter().map(|p| mm(p.rmse)).collect();
         let mae: Vec<String> = per.iter().map(|p| mm(p.mae)).collect();
         detail.push(vec![
-            reg.label.clone(),
+            shown_label(reg),
             rmse.join(" / "),
             mae.join(" / "),
             format!("{:.3}", e.nlpd),

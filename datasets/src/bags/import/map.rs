@@ -146,4 +146,9 @@ pub struct TopicMap {
     /// Header stamps (default) or receive times.
     #[serde(default)]
     pub time: TimeSource,
+    /// Skip damaged MCAP chunks (a CRC that disagrees with the data, an
+    /// unreadable record) and import the rest, reporting the messages and
+    /// seconds lost (default `false`: damage stops the import).
+    #[serde(default)]
+    pub skip_damaged: bool,
 }

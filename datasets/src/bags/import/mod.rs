@@ -26,6 +26,7 @@ use gpodo_traits::{BodyTwist, ImuSample, JointState as Joint, ProprioceptiveSamp
 
 use super::messages::RosMessage;
 use super::topic::{Stamped, TopicError, TopicRequest, read_topics};
+use super::{Damage, OnDamage};
 use crate::log::RoverLog;
 use heading::course_headings;
 use roles::{
@@ -77,6 +78,9 @@ pub struct ImportReport {
     /// Median horizontal and vertical position standard deviations the
     /// GNSS receiver reported (m), when its fixes carry a covariance.
     pub gnss_sigma_m: Option<[f64; 2]>,
+    /// The damaged chunks skipped (`skip_damaged: true`) and what they
+    /// held; empty for an intact recording.
+    pub damage: Damage,
     /// The `vo` role's poses, on the log's clock (s), in time order.
     #[serde(skip)]
     pub vo_poses: Vec<(f64, Isometry3<f64>)>,
@@ -265,7 +269,13 @@ pub fn import_bag(
             optional: false,
         });
     }
-    let mut read = read_topics(path, &requests)?.into_iter();
+    let on_damage = if map.skip_damaged {
+        OnDamage::Skip
+    } else {
+        OnDamage::Stop
+    };
+    let (read, damage) = read_topics(path, &requests, on_damage)?;
+    let mut read = read.into_iter();
     let imu_messages = read.next().unwrap_or_default();
     let gt_topics = match &map.ground_truth {
         GroundTruthSource::Topic(_) => 1,
@@ -468,6 +478,7 @@ pub fn import_bag(
         streams: reports,
         gnss_heading,
         gnss_sigma_m: median_sigmas(&sigmas),
+        damage,
         vo_poses,
     };
     Ok((log, report))
