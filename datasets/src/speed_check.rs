@@ -71,3 +71,15 @@ fn window_ratios(steps: &[LogStep], ratios: &mut Vec<f64>) {
 pub fn plausible(ratio: f64) -> bool {
     (PLAUSIBLE_RATIO[0]..=PLAUSIBLE_RATIO[1]).contains(&ratio)
 }
+
+/// The warning a ratio outside [`PLAUSIBLE_RATIO`] earns, naming the likely
+/// causes; `None` for a plausible ratio.
+pub fn unit_warning(ratio: f64) -> Option<String> {
+    (!plausible(ratio)).then(|| {
+        format!(
+            "the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds): \
+             check the wheels' units (a topic map's `rate_scale` and `position_scale`: 2π/60 for rpm, 1/gear ratio at the motor; \
+             a rover description's `wheel_radius_m`)"
+        )
+    })
+}

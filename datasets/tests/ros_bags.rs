@@ -492,6 +492,66 @@ mod written {
     }
 
     #[test]
+    fn wheels_recorded_in_ticks_and_motor_rpm_come_back_in_rad_through_the_scales() {
+        use gpodo_datasets::bags::write::{
+            WheelRate, WheelUnits, write_mcap_with, written_topic_map_in,
+        };
+        use gpodo_traits::JointState;
+        let mut log = circle();
+        log.wheel_names = vec!["left".into(), "right".into()];
+        for s in &mut log.samples {
+            let t = s.time_secs;
+            s.wheels = vec![
+                JointState {
+                    position_rad: 3.0 * t,
+                    rate_radps: 3.0,
+                },
+                JointState {
+                    position_rad: 5.0 * t,
+                    rate_radps: 5.0,
+                },
+            ];
+        }
+        let units = WheelUnits::encoders(Some(42.0), 5.0, WheelRate::MotorRpm);
+        // 2π / (42 · 5) rad per tick; 2π / (60 · 5) wheel rad/s per motor rpm.
+        assert!((units.position_scale - 0.029_919_930_034_188_5).abs() < 1e-15);
+        assert!((units.rate_scale - 0.020_943_951_023_931_95).abs() < 1e-15);
+        let per_min = WheelUnits::encoders(None, 5.0, WheelRate::MotorRadPerMin);
+        assert_eq!(
+            (per_min.position_scale, per_min.rate_scale),
+            (1.0, 1.0 / 300.0)
+        );
+        let tmp = tempfile::tempdir().unwrap();
+        let bag = write_mcap_with(&log, tmp.path(), &[], units).unwrap();
+        // Recorded in ticks and motor rpm: 3 rad/s is 143.2 motor rpm.
+        let recorded = gpodo_datasets::bags::topic::read_topic(
+            &bag.path,
+            "/joint_states",
+            "joints",
+            &["sensor_msgs/JointState"],
+        )
+        .unwrap();
+        let gpodo_datasets::bags::messages::RosMessage::JointState(m) = &recorded[10].message
+        else {
+            panic!("not a JointState");
+        };
+        assert!((m.velocity[0] - 3.0 * 300.0 / std::f64::consts::TAU).abs() < 1e-9);
+        assert!((m.position[1] - 5.0 * 1.0 * 210.0 / std::f64::consts::TAU).abs() < 1e-9);
+        let (back, _) = import_bag(
+            &bag.path,
+            "circle",
+            &written_topic_map_in(&log, 10.0, units),
+        )
+        .unwrap();
+        for (a, b) in back.samples.iter().zip(&log.samples) {
+            for (x, y) in a.wheels.iter().zip(&b.wheels) {
+                assert!((x.position_rad - y.position_rad).abs() < 1e-9);
+                assert!((x.rate_radps - y.rate_radps).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
     fn the_tf_ground_truth_equals_the_pose_topic_and_odometry_round_trips() {
         let tmp = tempfile::tempdir().unwrap();
         let log = circle();

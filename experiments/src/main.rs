@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
-use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
+use gpodo_datasets::bags::write::{write_mcap_with, written_topic_map_in};
 use gpodo_datasets::log::write_log_csv;
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_experiments::config::ExperimentConfig;
@@ -116,6 +116,11 @@ enum Command {
         /// The folder to write NAME.csv into (NAME: each bag's file stem).
         #[arg(long)]
         out: PathBuf,
+        /// The robot's description (kinematics/rovers/*.yaml): checks the
+        /// wheels' units by comparing the weighted-Jacobian model's speed
+        /// with the ground truth's.
+        #[arg(long)]
+        rover: Option<PathBuf>,
     },
     /// Look inside a ROS bag (ROS 2 MCAP or ROS 1 .bag, recognised by its
     /// first bytes).
@@ -144,7 +149,29 @@ enum Command {
         /// Override the training run duration (s).
         #[arg(long)]
         training_run_secs: Option<f64>,
+        /// MCAP only: record wheel positions in encoder ticks, this many
+        /// per motor turn (default: the wheel's rad).
+        #[arg(long)]
+        wheel_ticks_per_turn: Option<f64>,
+        /// MCAP only: motor turns per wheel turn, for ticks and motor
+        /// rates.
+        #[arg(long, default_value_t = 1.0)]
+        wheel_gear_ratio: f64,
+        /// MCAP only: the unit of recorded wheel rates.
+        #[arg(long, value_enum, default_value_t = WheelRateArg::RadPerS)]
+        wheel_rate: WheelRateArg,
     },
+}
+
+/// The unit `gpodo simulate` records wheel rates in.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum WheelRateArg {
+    /// rad/s of the wheel (ROS's unit).
+    RadPerS,
+    /// Revolutions per minute of the motor, before the gearbox.
+    Rpm,
+    /// rad/min of the motor, before the gearbox.
+    RadPerMin,
 }
 
 /// What `gpodo simulate` writes.
@@ -346,7 +373,12 @@ fn fit(file: &Path, label: &str, save: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
+fn import(
+    files: &[PathBuf],
+    topics: &Path,
+    out: &Path,
+    rover: Option<&Path>,
+) -> anyhow::Result<()> {
     use gpodo_datasets::bags::import::{TopicMap, import_bag};
     let text = std::fs::read_to_string(topics)
         .with_context(|| format!("reading the topic map {}", topics.display()))?;
@@ -363,6 +395,7 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
         }
     }
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut logs = Vec::new();
     for file in files {
         let name = file.file_stem().map_or_else(
             || "recording".to_string(),
@@ -409,6 +442,36 @@ fn import(files: &[PathBuf], topics: &Path, out: &Path) -> anyhow::Result<()> {
         if !report.damage.is_empty() {
             println!("  {}", report.damage);
         }
+        logs.push(log);
+    }
+    unit_check(&logs, rover)
+}
+
+/// The unit check of `gpodo import --rover`: the weighted-Jacobian model's
+/// speed against the ground truth's, printed, and a warning when it is
+/// far off.
+fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> anyhow::Result<()> {
+    use gpodo_experiments::config::MotionModelSpec;
+    let Some(rover) = rover else {
+        println!(
+            "no unit check: give `--rover` (the robot's description) to compare the wheels' speed with the ground truth's"
+        );
+        return Ok(());
+    };
+    let spec = MotionModelSpec::WeightedJacobian {
+        rover: Some(rover.to_path_buf()),
+        config: Default::default(),
+    };
+    match gpodo_experiments::execute::data::speed_ratio(&spec, logs)? {
+        None => println!("no unit check: the ground truth never moves"),
+        Some(ratio) => {
+            println!(
+                "unit check: the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds; [0.5, 2] passes)"
+            );
+            if let Some(warning) = gpodo_datasets::speed_check::unit_warning(ratio) {
+                tracing::warn!("{warning}");
+            }
+        }
     }
     Ok(())
 }
@@ -418,8 +481,8 @@ fn simulate(
     preset: Preset,
     seed: u64,
     out: &Path,
-    training_runs: Option<usize>,
-    training_run_secs: Option<f64>,
+    (training_runs, training_run_secs): (Option<usize>, Option<f64>),
+    units: gpodo_datasets::bags::write::WheelUnits,
 ) -> anyhow::Result<()> {
     let mut config = SimulatorConfig::preset(preset, seed);
     if let Some(n) = training_runs {
@@ -433,7 +496,7 @@ fn simulate(
     if format == SimulateFormat::Mcap {
         let logs: Vec<_> = testbed.train.iter().chain(&testbed.test).collect();
         for log in &logs {
-            let bag = write_mcap(log, out)?;
+            let bag = write_mcap_with(log, out, &[], units)?;
             println!(
                 "wrote {} ({} messages, {:.1} MB, {:.1} m)",
                 bag.path.display(),
@@ -453,7 +516,7 @@ fn simulate(
             let rate_hz = dts
                 .get(dts.len() / 2)
                 .map_or(10.0, |dt| (1e6 / dt).round() / 1e6);
-            let map = written_topic_map(first, rate_hz);
+            let map = written_topic_map_in(first, rate_hz, units);
             let path = out.join("topics.yaml");
             let text = serde_saphyr::to_string(&map).context("writing the topic map")?;
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
@@ -518,7 +581,12 @@ fn main() -> anyhow::Result<()> {
             regressor,
             save,
         } => fit(&file, &regressor, &save),
-        Command::Import { files, topics, out } => import(&files, &topics, &out),
+        Command::Import {
+            files,
+            topics,
+            out,
+            rover,
+        } => import(&files, &topics, &out, rover.as_deref()),
         Command::Bag {
             command:
                 BagCommand::Info {
@@ -553,6 +621,24 @@ fn main() -> anyhow::Result<()> {
             out,
             training_runs,
             training_run_secs,
-        } => simulate(format, preset, seed, &out, training_runs, training_run_secs),
+            wheel_ticks_per_turn,
+            wheel_gear_ratio,
+            wheel_rate,
+        } => {
+            use gpodo_datasets::bags::write::{WheelRate, WheelUnits};
+            let rate = match wheel_rate {
+                WheelRateArg::RadPerS => WheelRate::RadPerSec,
+                WheelRateArg::Rpm => WheelRate::MotorRpm,
+                WheelRateArg::RadPerMin => WheelRate::MotorRadPerMin,
+            };
+            let units = WheelUnits::encoders(wheel_ticks_per_turn, wheel_gear_ratio, rate);
+            if format == SimulateFormat::Csv && units != WheelUnits::default() {
+                anyhow::bail!(
+                    "--wheel-ticks-per-turn and --wheel-rate apply to `--format mcap`; a rover-log CSV is in rad and rad/s"
+                );
+            }
+            let runs = (training_runs, training_run_secs);
+            simulate(format, preset, seed, &out, runs, units)
+        }
     }
 }

@@ -210,10 +210,71 @@ fn joint_names(log: &RoverLog) -> Vec<String> {
         .collect()
 }
 
+/// How a written bag records its wheel joints: the radians per recorded
+/// unit a topic map's `position_scale` and `rate_scale` give (the default,
+/// 1 and 1, is the wheel's own rad and rad/s, as ROS specifies).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelUnits {
+    /// Wheel radians per recorded position unit.
+    pub position_scale: f64,
+    /// Wheel rad/s per recorded rate unit.
+    pub rate_scale: f64,
+}
+
+impl Default for WheelUnits {
+    fn default() -> Self {
+        Self {
+            position_scale: 1.0,
+            rate_scale: 1.0,
+        }
+    }
+}
+
+/// The unit of a recorded wheel rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WheelRate {
+    /// rad/s of the wheel.
+    #[default]
+    RadPerSec,
+    /// Revolutions per minute of the motor, before the gearbox.
+    MotorRpm,
+    /// rad/min of the motor, before the gearbox.
+    MotorRadPerMin,
+}
+
+impl WheelUnits {
+    /// Wheel encoders as motor controllers record them: positions in
+    /// `ticks_per_turn` ticks per motor turn (`None`: the wheel's rad),
+    /// rates in `rate`, behind a `gear_ratio`:1 gearbox (motor turns per
+    /// wheel turn).
+    pub fn encoders(ticks_per_turn: Option<f64>, gear_ratio: f64, rate: WheelRate) -> Self {
+        use std::f64::consts::TAU;
+        Self {
+            position_scale: ticks_per_turn.map_or(1.0, |t| TAU / (t * gear_ratio)),
+            rate_scale: match rate {
+                WheelRate::RadPerSec => 1.0,
+                WheelRate::MotorRpm => TAU / (60.0 * gear_ratio),
+                WheelRate::MotorRadPerMin => 1.0 / (60.0 * gear_ratio),
+            },
+        }
+    }
+}
+
 /// The topic map that imports a bag written by [`write_mcap`] back into the
 /// log's joints, at `rate_hz`.
 pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
+    written_topic_map_in(log, rate_hz, WheelUnits::default())
+}
+
+/// The topic map that imports a bag written by [`write_mcap_with`] with
+/// its wheels in `units`.
+pub fn written_topic_map_in(log: &RoverLog, rate_hz: f64, units: WheelUnits) -> TopicMap {
     let refs = |names: &[String], suffix: &str| -> BTreeMap<String, JointRef> {
+        let scales = if suffix == "wheel" {
+            units
+        } else {
+            WheelUnits::default()
+        };
         names
             .iter()
             .map(|n| {
@@ -221,8 +282,8 @@ pub fn written_topic_map(log: &RoverLog, rate_hz: f64) -> TopicMap {
                     n.clone(),
                     JointRef {
                         joint: format!("{n}_{suffix}"),
-                        position_scale: 1.0,
-                        rate_scale: 1.0,
+                        position_scale: scales.position_scale,
+                        rate_scale: scales.rate_scale,
                     },
                 )
             })
@@ -289,6 +350,31 @@ pub fn write_mcap_with_vo(
     dir: &Path,
     vo: &[(f64, nalgebra::Isometry3<f64>)],
 ) -> Result<WrittenBag, DatasetError> {
+    write_mcap_with(log, dir, vo, WheelUnits::default())
+}
+
+/// [`write_mcap_with_vo`], with the wheel joints recorded in `units` (as a
+/// motor controller that counts encoder ticks and motor rpm would).
+///
+/// # Errors
+/// As [`write_mcap`].
+pub fn write_mcap_with(
+    log: &RoverLog,
+    dir: &Path,
+    vo: &[(f64, nalgebra::Isometry3<f64>)],
+    units: WheelUnits,
+) -> Result<WrittenBag, DatasetError> {
+    if !(units.position_scale.is_finite()
+        && units.position_scale > 0.0
+        && units.rate_scale.is_finite()
+        && units.rate_scale > 0.0)
+    {
+        return Err(DatasetError::InvalidLog {
+            log: log.name.clone(),
+            sample: None,
+            detail: format!("wheel units must be positive: {units:?}"),
+        });
+    }
     log.validate()?;
     let path = dir.join(format!("{}.mcap", log.name));
     let mcap_error = |e: mcap::McapError| DatasetError::Io {
@@ -351,14 +437,25 @@ pub fn write_mcap_with_vo(
         for n in &names {
             m.string(n);
         }
-        let all: Vec<_> = s
+        let wheel = |j: &gpodo_traits::JointState| {
+            (
+                j.position_rad / units.position_scale,
+                j.rate_radps / units.rate_scale,
+            )
+        };
+        let all: Vec<(f64, f64)> = s
             .wheels
             .iter()
-            .chain(&s.steering)
-            .chain(&s.bogies)
+            .map(wheel)
+            .chain(
+                s.steering
+                    .iter()
+                    .chain(&s.bogies)
+                    .map(|j| (j.position_rad, j.rate_radps)),
+            )
             .collect();
-        m.sequence(&all.iter().map(|j| j.position_rad).collect::<Vec<_>>());
-        m.sequence(&all.iter().map(|j| j.rate_radps).collect::<Vec<_>>());
+        m.sequence(&all.iter().map(|j| j.0).collect::<Vec<_>>());
+        m.sequence(&all.iter().map(|j| j.1).collect::<Vec<_>>());
         m.sequence(&[]);
 
         let yaw = p.rotation.euler_angles().2;

@@ -12,7 +12,7 @@ use gpodo_datasets::residuals::{
     LogStep, log_steps, residual_dataset, residual_dataset_from_steps,
 };
 use gpodo_datasets::sim::preset::SimulatorConfig;
-use gpodo_datasets::speed_check::{median_speed_ratio, plausible};
+use gpodo_datasets::speed_check::{median_speed_ratio, unit_warning};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::{
     ReportedOdometryModel, RoverDescription, SkidSteerModel, WeightedJacobianModel,
@@ -31,15 +31,61 @@ use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
 /// [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]): most likely a joint in
 /// the wrong unit. A warning, never a silent fix.
 fn warn_on_speed_units(steps: &[Vec<LogStep>]) {
-    if let Some(ratio) = median_speed_ratio(steps)
-        && !plausible(ratio)
-    {
-        tracing::warn!(
-            ratio = format!("{ratio:.2}"),
-            "the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds of the training runs): \
-             check the wheels' units (a topic map's `rate_scale` and `position_scale`: 2π/60 for rpm, 1/gear ratio at the motor; \
-             a rover description's `wheel_radius_m`)"
-        );
+    if let Some(warning) = median_speed_ratio(steps).and_then(unit_warning) {
+        tracing::warn!("{warning} (the training runs)");
+    }
+}
+
+/// The median ratio of the motion model's translational speed to the
+/// ground truth's over the moving seconds of `logs` (the unit check a run
+/// makes before it fits anything; `gpodo import --rover`); `None` when the
+/// logs never move.
+///
+/// # Errors
+/// [`PipelineError`] when the model cannot be built or a log does not fit
+/// its rover.
+pub fn speed_ratio(
+    spec: &MotionModelSpec,
+    logs: &[RoverLog],
+) -> Result<Option<f64>, PipelineError> {
+    let (model, rover) = motion_model(spec)?;
+    let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
+    let steps = in_rover_order(logs, rover.as_ref())?
+        .iter()
+        .map(|log| log_steps(log, model.as_ref(), radius))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(median_speed_ratio(&steps))
+}
+
+/// `logs` with their joints in `rover`'s order (models read joints by
+/// position); without a rover, logs must have no wheel joints.
+fn in_rover_order(
+    logs: &[RoverLog],
+    rover: Option<&RoverDescription>,
+) -> Result<Vec<RoverLog>, gpodo_datasets::DatasetError> {
+    match rover {
+        Some(rover) => logs
+            .iter()
+            .map(|l| {
+                l.with_joint_order(
+                    &rover.wheel_names(),
+                    &rover.steer_names(),
+                    &rover.bogie_names(),
+                )
+            })
+            .collect(),
+        None => match logs.iter().find(|l| !l.wheel_names.is_empty()) {
+            Some(l) => Err(gpodo_datasets::DatasetError::InvalidLog {
+                log: l.name.clone(),
+                sample: None,
+                detail: format!(
+                    "the log has wheel joints {:?}: give the motion model a `rover:` \
+                     description so that their speeds can be put in m/s",
+                    l.wheel_names
+                ),
+            }),
+            None => Ok(logs.to_vec()),
+        },
     }
 }
 
@@ -120,32 +166,10 @@ fn from_logs(
     terrain_max_slope_deg: Option<f64>,
 ) -> Result<PreparedData, PipelineError> {
     let (model, rover) = motion_model(&config.motion_model)?;
-    // Models read joints by position: put every log in the rover's order.
-    let in_rover_order = |logs: &[RoverLog]| match &rover {
-        Some(rover) => logs
-            .iter()
-            .map(|l| {
-                l.with_joint_order(
-                    &rover.wheel_names(),
-                    &rover.steer_names(),
-                    &rover.bogie_names(),
-                )
-            })
-            .collect::<Result<Vec<_>, _>>(),
-        None => match logs.iter().find(|l| !l.wheel_names.is_empty()) {
-            Some(l) => Err(gpodo_datasets::DatasetError::InvalidLog {
-                log: l.name.clone(),
-                sample: None,
-                detail: format!(
-                    "the log has wheel joints {:?}: give the motion model a `rover:` \
-                     description so that their speeds can be put in m/s",
-                    l.wheel_names
-                ),
-            }),
-            None => Ok(logs.to_vec()),
-        },
-    };
-    let (train_logs, test_logs) = (&in_rover_order(train_logs)?, &in_rover_order(test_logs)?);
+    let (train_logs, test_logs) = (
+        &in_rover_order(train_logs, rover.as_ref())?,
+        &in_rover_order(test_logs, rover.as_ref())?,
+    );
     let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
     let train_steps = train_logs
         .iter()
