@@ -299,6 +299,10 @@ impl RoverLog {
             }
             _ => {}
         }
+        if sample.imu.is_some() != layout.has_imu() {
+            let detail = "the IMU must be given in every sample or in none".to_string();
+            return Err(self.invalid(Some(i), detail));
+        }
         if sample.odometry.is_some() != layout.has_odometry() {
             let detail = "odometry must be given in every sample or in none".to_string();
             return Err(self.invalid(Some(i), detail));

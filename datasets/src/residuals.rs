@@ -70,13 +70,19 @@ impl ResidualConfig {
 /// The input column names for a log's joints, in the order the rows hold
 /// them.
 pub fn feature_names(log: &RoverLog) -> Vec<String> {
-    let mut names = vec!["roll".to_string(), "pitch".to_string()];
+    let has_imu = log.samples.first().is_some_and(|s| s.imu.is_some());
+    let mut names = Vec::new();
+    if has_imu {
+        names.extend(["roll", "pitch"].map(String::from));
+    }
     names.extend(log.bogie_names.iter().map(|b| format!("pos_{b}_passive")));
     names.extend(log.steer_names.iter().map(|s| format!("pos_{s}_steer")));
     names.extend(log.bogie_names.iter().map(|b| format!("spd_{b}_passive")));
     names.extend(log.steer_names.iter().map(|s| format!("spd_{s}_steer")));
     names.extend(log.wheel_names.iter().map(|w| format!("spd_{w}_transl")));
-    names.extend(["acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"].map(String::from));
+    if has_imu {
+        names.extend(["acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"].map(String::from));
+    }
     if log.samples.first().is_some_and(|s| s.odometry.is_some()) {
         names.extend(ODOMETRY_FEATURES.map(String::from));
     }
@@ -91,14 +97,18 @@ pub const ODOMETRY_FEATURES: [&str; 6] = [
 /// The inputs of step `k`.
 fn step_features(log: &RoverLog, k: usize, wheel_radius_m: f64) -> Vec<f64> {
     let s = &log.samples[k];
-    let mut x = vec![s.imu.roll_rad, s.imu.pitch_rad];
+    let mut x = Vec::new();
+    if let Some(imu) = &s.imu {
+        x.extend([imu.roll_rad, imu.pitch_rad]);
+    }
     x.extend(s.bogies.iter().map(|j| j.position_rad));
     x.extend(s.steering.iter().map(|j| j.position_rad));
     x.extend(s.bogies.iter().map(|j| j.rate_radps));
     x.extend(s.steering.iter().map(|j| j.rate_radps));
     x.extend(s.wheels.iter().map(|j| j.rate_radps * wheel_radius_m));
-    x.extend(s.imu.accel_mps2.iter());
-    x.extend(s.imu.gyro_radps.iter());
+    if let Some(imu) = &s.imu {
+        x.extend(imu.accel_mps2.iter().chain(imu.gyro_radps.iter()));
+    }
     if let Some(odometry) = &s.odometry {
         x.extend(
             odometry

@@ -34,7 +34,7 @@ fn straight() -> RoverLog {
             time_secs: t,
             ..Default::default()
         };
-        s.imu.accel_mps2 = Vector3::new(0.0, 0.0, 9.81);
+        s.imu.get_or_insert_default().accel_mps2 = Vector3::new(0.0, 0.0, 9.81);
         samples.push(s);
         ground_truth.push(Isometry3::from_parts(
             Translation3::new(0.3 * t, 0.0, 0.0),

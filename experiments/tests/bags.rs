@@ -294,8 +294,11 @@ mod synthetic {
         assert_eq!(f(&j["velocity"][0]), s.wheels[0].rate_radps);
         assert_eq!(f(&j["position"][12]), s.bogies[2].position_rad);
         let imu = &decoded["imu"];
-        assert_eq!(f(&imu["angular_velocity"][2]), s.imu.gyro_radps.z);
-        assert_eq!(f(&imu["linear_acceleration"][0]), s.imu.accel_mps2.x);
+        assert_eq!(f(&imu["angular_velocity"][2]), s.imu.unwrap().gyro_radps.z);
+        assert_eq!(
+            f(&imu["linear_acceleration"][0]),
+            s.imu.unwrap().accel_mps2.x
+        );
         let pose = &decoded["pose"];
         assert_eq!(pose["frame_id"], "world");
         assert_eq!(f(&pose["position"][1]), p.translation.vector.y);

@@ -49,7 +49,7 @@ impl MotionModel for ReportedOdometryModel {
         };
         let angular_radps = match self.angular {
             AngularSource::Odometry => reported.angular_radps,
-            AngularSource::Gyro => s.imu.gyro_radps,
+            AngularSource::Gyro => s.gyro_for("angular: gyro", "angular: odometry")?,
         };
         Ok(MotionEstimate {
             twist: BodyTwist {
@@ -74,7 +74,10 @@ mod tests {
             }),
             ..Default::default()
         };
-        s.imu.gyro_radps = Vector3::new(0.01, 0.02, 0.25);
+        s.imu = Some(gpodo_traits::ImuSample {
+            gyro_radps: Vector3::new(0.01, 0.02, 0.25),
+            ..Default::default()
+        });
         s
     }
 
@@ -93,6 +96,16 @@ mod tests {
             .unwrap();
         assert_eq!(e.twist.linear_mps, Vector3::new(0.8, 0.0, 0.0));
         assert_eq!(e.twist.angular_radps, Vector3::new(0.01, 0.02, 0.25));
+        let mut no_imu = sample();
+        no_imu.imu = None;
+        let e = ReportedOdometryModel::new(AngularSource::Gyro)
+            .estimate(&no_imu, 0.1)
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("no IMU: `angular: gyro` needs its gyros; use `angular: odometry`"),
+            "{e}"
+        );
     }
 
     #[test]

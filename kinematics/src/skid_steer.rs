@@ -100,7 +100,7 @@ impl MotionModel for SkidSteerModel {
             self.side_speed(s, &self.right),
         );
         let angular_radps = match self.yaw_source {
-            YawSource::Gyro => s.imu.gyro_radps,
+            YawSource::Gyro => s.gyro_for("yaw: gyro", "yaw: wheels")?,
             YawSource::Wheels => Vector3::new(0.0, 0.0, (v_right - v_left) / self.track_width_m),
         };
         Ok(MotionEstimate {

@@ -8,6 +8,11 @@
 //! * non-sensed: the body linear velocity, and per contact the contact-angle
 //!   rate and the slip `(δ_x, δ_y, δ_ψ)`.
 //!
+//! A robot without an IMU has no sensed angular rate: the yaw rate then
+//! joins the non-sensed quantities and is solved from the wheels (through
+//! their lever arms about the body's centre), and the roll and pitch rates
+//! are taken as zero, as the ground is taken as level.
+//!
 //! `Ω v = b` is solved by minimising `E = eᵀ C e` (eq. 5), where `C` weights
 //! each contact's six rows by its static normal force (or uniformly). Left
 //! alone, the in-plane slips would absorb every wheel's disagreement and leave
@@ -43,14 +48,38 @@ const LOCAL: usize = 5;
 /// Offset of the roller rate among a contact's unknowns.
 const ROLLER: usize = 4;
 
-/// The non-zero block of one contact's rows of Ω: columns are the body
-/// velocity (3) and the contact's own unknowns (5).
-type ContactBlock = SMatrix<f64, 6, 8>;
+/// Columns of one contact's block of Ω: the body velocity (3), the body
+/// yaw rate (1) and the contact's own unknowns ([`LOCAL`]).
+const BLOCK: usize = 4 + LOCAL;
 
-/// Where the columns of contact `i`'s block sit among all unknowns.
-fn block_index(i: usize) -> [usize; 8] {
-    let o = 3 + LOCAL * i;
-    [0, 1, 2, o, o + 1, o + 2, o + 3, o + 4]
+/// The column of the body yaw rate in a contact's block.
+const YAW: usize = 3;
+
+/// The first column of a contact's own unknowns in its block.
+const OWN: usize = 4;
+
+/// The non-zero block of one contact's rows of Ω.
+type ContactBlock = SMatrix<f64, 6, BLOCK>;
+
+/// The unknowns shared by every contact: the body velocity, and the yaw
+/// rate when no gyro senses it.
+fn shared_unknowns(yaw_unknown: bool) -> usize {
+    if yaw_unknown { 4 } else { 3 }
+}
+
+/// Where the columns of contact `i`'s block sit among all unknowns; `None`
+/// for the yaw-rate column when a gyro senses it.
+fn block_index(i: usize, yaw_unknown: bool) -> [Option<usize>; BLOCK] {
+    let shared = shared_unknowns(yaw_unknown);
+    let mut index = [None; BLOCK];
+    for (k, slot) in index.iter_mut().enumerate() {
+        *slot = match k {
+            0..YAW => Some(k),
+            YAW => yaw_unknown.then_some(YAW),
+            _ => Some(shared + LOCAL * i + (k - OWN)),
+        };
+    }
+    index
 }
 
 /// How each contact's equations are weighted (the matrix `C` of eq. 5).
@@ -143,11 +172,25 @@ impl WeightedJacobianConfig {
     }
 }
 
+/// The normal equations of one sample (`H v = g`), each contact's block
+/// of Ω with its joint terms, the contacts' weights and the gyro's rate.
+struct Assembly {
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    systems: Vec<(ContactBlock, Vector6<f64>)>,
+    weights: Vec<f64>,
+    gyro: Option<Vector3<f64>>,
+}
+
 /// The full solution of one step, beyond the body twist.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WeightedJacobianSolution {
     /// Body linear velocity (m/s).
     pub linear_mps: Vector3<f64>,
+    /// Body angular rate (rad/s): the gyros' when the sample has an IMU;
+    /// without one, the yaw rate solved from the wheels, and roll and pitch
+    /// rates of zero (the ground is taken as level).
+    pub angular_radps: Vector3<f64>,
     /// Contact angle rate per contact (rad/s).
     pub contact_angle_rates_radps: Vec<f64>,
     /// Slip `(δ_x, δ_y, δ_ψ)` per contact (m/s, m/s, rad/s).
@@ -270,14 +313,114 @@ impl WeightedJacobianModel {
         let raw = match self.config.weighting {
             Weighting::Uniform => vec![1.0; contacts.len()],
             Weighting::NormalForce => {
-                let (sr, cr) = s.imu.roll_rad.sin_cos();
-                let (sp, cp) = s.imu.pitch_rad.sin_cos();
+                let (roll, pitch) = s.roll_pitch_rad();
+                let (sr, cr) = roll.sin_cos();
+                let (sp, cp) = pitch.sin_cos();
                 let gravity = Vector3::new(sp, -sr * cp, -cr * cp);
                 static_normal_forces(&self.description, contacts, &gravity)?
             }
         };
         let total: f64 = raw.iter().sum();
         Ok(raw.iter().map(|w| w / total).collect())
+    }
+
+    /// The normal equations' matrix `H` of eq. (5) with the slip prior, for
+    /// one sample: over the body velocity, the yaw rate when no gyro senses
+    /// it, and each contact's unknowns.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for a sample of another rover.
+    pub fn normal_equations(&self, s: &ProprioceptiveSample) -> Result<DMatrix<f64>, Error> {
+        Ok(self.assemble(s)?.h)
+    }
+
+    /// The normal equations of one sample, and what the solve needs beside.
+    fn assemble(&self, s: &ProprioceptiveSample) -> Result<Assembly, Error> {
+        let contacts = self.contacts(s)?;
+        let weights = self.weights(s, &contacts)?;
+        let n_contacts = contacts.len();
+        // Without a gyro the yaw rate joins the unknowns, and the roll and
+        // pitch rates are taken as zero (level ground).
+        let gyro = s.gyro_radps();
+        let yaw_unknown = gyro.is_none();
+        let shared = shared_unknowns(yaw_unknown);
+        let n_unknowns = shared + LOCAL * n_contacts;
+
+        // Normal equations of eq. (5) plus the slip prior, assembled contact
+        // by contact: H = Σ_i w_i Ω_iᵀ Ω_i, g = Σ_i w_i Ω_iᵀ b_i. Contact i's
+        // rows touch only the body velocity, the yaw rate and its own
+        // unknowns, so Ω_i is kept as its 6 × 9 non-zero block; the rows
+        // hold `[v; ω] − J_c ċ = J_q q̇` for the contact unknowns `c` and the
+        // joint rates `q̇`.
+        let mut h = DMatrix::<f64>::zeros(n_unknowns, n_unknowns);
+        let mut g = DVector::<f64>::zeros(n_unknowns);
+        let mut systems = Vec::with_capacity(n_contacts);
+        for (i, (contact, chain)) in contacts.iter().zip(&self.chains).enumerate() {
+            let j = contact_jacobian(contact);
+            let mut omega = ContactBlock::zeros();
+            let mut joints = Vector6::zeros();
+            let bogie_rate = chain.bogie_index.map_or(0.0, |b| s.bogies[b].rate_radps);
+            let steer_rate = chain.steer_index.map_or(0.0, |k| s.steering[k].rate_radps);
+            let wheel_rate = s.wheels[i].rate_radps;
+            for r in 0..6 {
+                if r < 3 {
+                    omega[(r, r)] = 1.0;
+                } else if r == 5 {
+                    omega[(r, YAW)] = 1.0;
+                }
+                for k in 0..ROLLER {
+                    omega[(r, OWN + k)] = -j[(r, COL_CONTACT_ANGLE + k)];
+                }
+                // A mecanum contact also moves freely along the ground
+                // direction perpendicular to its roller axis,
+                // d = cos γ x_C − sin γ y_C: a column made of the slip ones.
+                if let Some(gamma) = chain.roller_angle_rad {
+                    omega[(r, OWN + ROLLER)] =
+                        gamma.cos() * omega[(r, OWN + 1)] - gamma.sin() * omega[(r, OWN + 2)];
+                }
+                joints[r] = j[(r, COL_BOGIE)] * bogie_rate
+                    + j[(r, COL_STEER)] * steer_rate
+                    + j[(r, COL_WHEEL)] * wheel_rate;
+            }
+            // A sensed angular rate moves to the right-hand side.
+            let mut b = joints;
+            if let Some(w) = gyro {
+                for r in 3..6 {
+                    b[r] -= w[r - 3];
+                }
+            }
+            let index = block_index(i, yaw_unknown);
+            let hb = omega.transpose() * omega * weights[i];
+            let gb = omega.transpose() * b * weights[i];
+            for (p, row) in index.iter().enumerate() {
+                let Some(row) = *row else { continue };
+                g[row] += gb[p];
+                for (q, col) in index.iter().enumerate() {
+                    if let Some(col) = *col {
+                        h[(row, col)] += hb[(p, q)];
+                    }
+                }
+            }
+            for slip_axis in [1, 2] {
+                h[(
+                    shared + LOCAL * i + slip_axis,
+                    shared + LOCAL * i + slip_axis,
+                )] += self.config.slip_prior * weights[i];
+            }
+            if chain.roller_angle_rad.is_none() {
+                // No roller: a unit prior holds the unused rate at zero.
+                h[(shared + LOCAL * i + ROLLER, shared + LOCAL * i + ROLLER)] += 1.0;
+            }
+            systems.push((omega, joints));
+        }
+
+        Ok(Assembly {
+            h,
+            g,
+            systems,
+            weights,
+            gyro,
+        })
     }
 
     /// Solves eq. (5) for one sample; `dt_secs` only matters for the
@@ -291,66 +434,17 @@ impl WeightedJacobianModel {
         s: &ProprioceptiveSample,
         dt_secs: f64,
     ) -> Result<WeightedJacobianSolution, Error> {
-        let contacts = self.contacts(s)?;
-        let weights = self.weights(s, &contacts)?;
-        let n_contacts = contacts.len();
-        let n_unknowns = 3 + LOCAL * n_contacts;
-
-        // Normal equations of eq. (5) plus the slip prior, assembled contact
-        // by contact: H = Σ_i w_i Ω_iᵀ Ω_i, g = Σ_i w_i Ω_iᵀ b_i. Contact i's
-        // rows touch only the body velocity and its own four unknowns, so
-        // Ω_i is kept as its 6 × 7 non-zero block.
-        let mut h = DMatrix::<f64>::zeros(n_unknowns, n_unknowns);
-        let mut g = DVector::<f64>::zeros(n_unknowns);
-        let mut systems = Vec::with_capacity(n_contacts);
-        for (i, (contact, chain)) in contacts.iter().zip(&self.chains).enumerate() {
-            let j = contact_jacobian(contact);
-            let mut omega = ContactBlock::zeros();
-            let mut b = Vector6::zeros();
-            let bogie_rate = chain.bogie_index.map_or(0.0, |b| s.bogies[b].rate_radps);
-            let steer_rate = chain.steer_index.map_or(0.0, |k| s.steering[k].rate_radps);
-            let wheel_rate = s.wheels[i].rate_radps;
-            for r in 0..6 {
-                if r < 3 {
-                    omega[(r, r)] = 1.0;
-                } else {
-                    b[r] = -s.imu.gyro_radps[r - 3];
-                }
-                for k in 0..ROLLER {
-                    omega[(r, 3 + k)] = -j[(r, COL_CONTACT_ANGLE + k)];
-                }
-                // A mecanum contact also moves freely along the ground
-                // direction perpendicular to its roller axis,
-                // d = cos γ x_C − sin γ y_C: a column made of the slip ones.
-                if let Some(gamma) = chain.roller_angle_rad {
-                    omega[(r, 3 + ROLLER)] =
-                        gamma.cos() * omega[(r, 3 + 1)] - gamma.sin() * omega[(r, 3 + 2)];
-                }
-                b[r] += j[(r, COL_BOGIE)] * bogie_rate
-                    + j[(r, COL_STEER)] * steer_rate
-                    + j[(r, COL_WHEEL)] * wheel_rate;
-            }
-            let index = block_index(i);
-            let hb = omega.transpose() * omega * weights[i];
-            let gb = omega.transpose() * b * weights[i];
-            for (p, &row) in index.iter().enumerate() {
-                g[row] += gb[p];
-                for (q, &col) in index.iter().enumerate() {
-                    h[(row, col)] += hb[(p, q)];
-                }
-            }
-            for slip_axis in [1, 2] {
-                h[(3 + LOCAL * i + slip_axis, 3 + LOCAL * i + slip_axis)] +=
-                    self.config.slip_prior * weights[i];
-            }
-            if chain.roller_angle_rad.is_none() {
-                // No roller: a unit prior holds the unused rate at zero.
-                h[(3 + LOCAL * i + ROLLER, 3 + LOCAL * i + ROLLER)] += 1.0;
-            }
-            systems.push((omega, b));
-        }
-
-        let bounds = self.bounds(s, dt_secs, n_contacts);
+        let Assembly {
+            h,
+            g,
+            systems,
+            weights,
+            gyro,
+        } = self.assemble(s)?;
+        let n_contacts = systems.len();
+        let yaw_unknown = gyro.is_none();
+        let shared = shared_unknowns(yaw_unknown);
+        let bounds = self.bounds(s, dt_secs, n_contacts, shared);
         let v = if bounds.is_empty() {
             h.cholesky()
                 .ok_or_else(|| KinematicsError::Solve("normal equations are singular".into()))?
@@ -358,35 +452,53 @@ impl WeightedJacobianModel {
         } else {
             solve_bounded_qp(&h, &g, &bounds)?
         };
+        let angular_radps = gyro.unwrap_or_else(|| Vector3::new(0.0, 0.0, v[YAW]));
 
         let weighted_residual = systems
             .iter()
             .zip(&weights)
             .enumerate()
-            .map(|(i, ((omega, b), w))| {
-                let local = SVector::<f64, 8>::from_iterator(block_index(i).iter().map(|&k| v[k]));
-                w * (b - omega * local).norm_squared()
+            .map(|(i, ((omega, joints), w))| {
+                // The whole block's values, the rates in the sensed
+                // columns included: `[v; ω] − J_c ċ − J_q q̇`.
+                let mut local = SVector::<f64, BLOCK>::zeros();
+                for (k, at) in block_index(i, yaw_unknown).iter().enumerate() {
+                    local[k] = at.map_or(angular_radps.z, |at| v[at]);
+                }
+                let mut sensed = Vector6::zeros();
+                sensed[3] = angular_radps.x;
+                sensed[4] = angular_radps.y;
+                w * (joints - omega * local - sensed).norm_squared()
             })
             .sum();
         Ok(WeightedJacobianSolution {
             linear_mps: Vector3::new(v[0], v[1], v[2]),
-            contact_angle_rates_radps: (0..n_contacts).map(|i| v[3 + LOCAL * i]).collect(),
+            angular_radps,
+            contact_angle_rates_radps: (0..n_contacts).map(|i| v[shared + LOCAL * i]).collect(),
             slips: (0..n_contacts)
                 .map(|i| {
-                    let o = 3 + LOCAL * i;
+                    let o = shared + LOCAL * i;
                     [v[o + 1], v[o + 2], v[o + 3]]
                 })
                 .collect(),
-            roller_speeds_mps: (0..n_contacts).map(|i| v[3 + LOCAL * i + ROLLER]).collect(),
+            roller_speeds_mps: (0..n_contacts)
+                .map(|i| v[shared + LOCAL * i + ROLLER])
+                .collect(),
             weights,
             weighted_residual,
         })
     }
 
-    fn bounds(&self, s: &ProprioceptiveSample, dt_secs: f64, n_contacts: usize) -> Vec<Bound> {
+    fn bounds(
+        &self,
+        s: &ProprioceptiveSample,
+        dt_secs: f64,
+        n_contacts: usize,
+        shared: usize,
+    ) -> Vec<Bound> {
         let mut bounds = Vec::new();
         for i in 0..n_contacts {
-            let o = 3 + LOCAL * i;
+            let o = shared + LOCAL * i;
             if let Some(max_deg) = self.config.bounds.contact_angle_max_deg
                 && dt_secs > 0.0
             {
@@ -422,7 +534,7 @@ impl MotionModel for WeightedJacobianModel {
         Ok(MotionEstimate {
             twist: BodyTwist {
                 linear_mps: solution.linear_mps,
-                angular_radps: s.imu.gyro_radps,
+                angular_radps: solution.angular_radps,
             },
             contact_slip_mps: solution.slips.iter().map(|d| [d[0], d[1]]).collect(),
             weighted_residual: solution.weighted_residual,

@@ -40,8 +40,8 @@ fn sample(rates: &[f64], yaw_rate: f64) -> ProprioceptiveSample {
             .collect(),
         ..Default::default()
     };
-    s.imu.gyro_radps = Vector3::new(0.0, 0.0, yaw_rate);
-    s.imu.accel_mps2 = Vector3::new(0.0, 0.0, 9.81);
+    s.imu.get_or_insert_default().gyro_radps = Vector3::new(0.0, 0.0, yaw_rate);
+    s.imu.get_or_insert_default().accel_mps2 = Vector3::new(0.0, 0.0, 9.81);
     s
 }
 

@@ -60,7 +60,7 @@ pub struct MotionEstimate {
 ///         })?;
 ///         let mut twist = BodyTwist::default();
 ///         twist.linear_mps.x = 0.1 * wheel.rate_radps;
-///         twist.angular_radps = s.imu.gyro_radps;
+///         twist.angular_radps = s.gyro_radps().unwrap_or_default();
 ///         Ok(MotionEstimate { twist, ..Default::default() })
 ///     }
 /// }

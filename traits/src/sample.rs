@@ -44,8 +44,15 @@ pub struct ProprioceptiveSample {
     pub steering: Vec<JointState>,
     /// Passive bogie joints.
     pub bogies: Vec<JointState>,
-    /// Inertial measurement.
-    pub imu: ImuSample,
+    /// Inertial measurement; `None` for a robot without an IMU.
+    #[serde(default)]
+    pub imu: Option<ImuSample>,
+    /// Roll and pitch (rad) from off board, for a robot without an IMU:
+    /// the ground truth's, when an experiment opts in. Motion models may
+    /// use them for the contact geometry; they are never a regressor
+    /// input, since the robot does not sense them.
+    #[serde(default)]
+    pub attitude_rad: Option<[f64; 2]>,
     /// Wheel–terrain contact angles (rad), one per wheel, when something
     /// measured or estimated them (a simulator does; a real rover usually
     /// does not, and models then assume 0).
@@ -56,4 +63,36 @@ pub struct ProprioceptiveSample {
     /// `None` when the log has none.
     #[serde(default)]
     pub odometry: Option<crate::BodyTwist>,
+}
+
+impl ProprioceptiveSample {
+    /// Roll and pitch (rad) for the contact geometry: the IMU's, else the
+    /// off-board [`Self::attitude_rad`], else level (0, 0).
+    pub fn roll_pitch_rad(&self) -> (f64, f64) {
+        match (&self.imu, self.attitude_rad) {
+            (Some(imu), _) => (imu.roll_rad, imu.pitch_rad),
+            (None, Some([roll, pitch])) => (roll, pitch),
+            (None, None) => (0.0, 0.0),
+        }
+    }
+
+    /// The body angular rate the gyros measured (rad/s), if the robot has
+    /// an IMU.
+    pub fn gyro_radps(&self) -> Option<Vector3<f64>> {
+        self.imu.as_ref().map(|imu| imu.gyro_radps)
+    }
+
+    /// The gyros' body angular rate, for a setting that needs it.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] naming the sample's time, the
+    /// `setting` and `instead`, the setting that does without.
+    pub fn gyro_for(&self, setting: &str, instead: &str) -> Result<Vector3<f64>, crate::Error> {
+        self.gyro_radps().ok_or_else(|| {
+            crate::Error::InvalidInput(format!(
+                "the sample at {} s has no IMU: `{setting}` needs its gyros; use `{instead}`",
+                self.time_secs
+            ))
+        })
+    }
 }

@@ -6,7 +6,7 @@
 //! | topic | type | content |
 //! | --- | --- | --- |
 //! | `/joint_states` | `sensor_msgs/msg/JointState` | every joint: `<wheel>_wheel`, `<joint>_steer`, `<bogie>_bogie` (rad, rad/s) |
-//! | `/imu/data` | `sensor_msgs/msg/Imu` | gyro, specific force; orientation from the log's roll and pitch and the ground truth's yaw |
+//! | `/imu/data` | `sensor_msgs/msg/Imu` | only when the log has an IMU: gyro, specific force; orientation from the log's roll and pitch and the ground truth's yaw |
 //! | `/ground_truth/pose` | `geometry_msgs/msg/PoseStamped` | `world_from_body` in frame `world` |
 //! | `/tf` | `tf2_msgs/msg/TFMessage` | the same pose as the transform `world` → `base_link` |
 //! | `/odom` | `nav_msgs/msg/Odometry` | only when the log has the robot's own odometry: its twist in `base_link` |
@@ -293,7 +293,11 @@ pub fn written_topic_map_in(log: &RoverLog, rate_hz: f64, units: WheelUnits) -> 
         !(log.wheel_names.is_empty() && log.steer_names.is_empty() && log.bogie_names.is_empty());
     let has_odometry = log.samples.first().is_some_and(|s| s.odometry.is_some());
     TopicMap {
-        imu: "/imu/data".into(),
+        imu: log
+            .samples
+            .first()
+            .is_some_and(|s| s.imu.is_some())
+            .then(|| "/imu/data".into()),
         imu_rotation_rpy_rad: [0.0; 3],
         ground_truth: GroundTruthSource::Topic("/ground_truth/pose".into()),
         gnss_heading: Default::default(),
@@ -400,7 +404,12 @@ pub fn write_mcap_with(
         joint_state_schema(),
         "/joint_states",
     )?;
-    let imu = channel("sensor_msgs/msg/Imu", imu_schema(), "/imu/data")?;
+    let has_imu = log.samples.first().is_some_and(|s| s.imu.is_some());
+    let imu = if has_imu {
+        Some(channel("sensor_msgs/msg/Imu", imu_schema(), "/imu/data")?)
+    } else {
+        None
+    };
     let pose = channel(
         "geometry_msgs/msg/PoseStamped",
         pose_stamped_schema(),
@@ -458,16 +467,19 @@ pub fn write_mcap_with(
         m.sequence(&all.iter().map(|j| j.1).collect::<Vec<_>>());
         m.sequence(&[]);
 
-        let yaw = p.rotation.euler_angles().2;
-        let q = UnitQuaternion::from_euler_angles(s.imu.roll_rad, s.imu.pitch_rad, yaw);
-        let mut i = Cdr::new();
-        i.header(t, "base_link");
-        i.f64s(&[q.i, q.j, q.k, q.w]);
-        i.f64s(&[0.0; 9]);
-        i.f64s(s.imu.gyro_radps.as_slice());
-        i.f64s(&[0.0; 9]);
-        i.f64s(s.imu.accel_mps2.as_slice());
-        i.f64s(&[0.0; 9]);
+        let imu_message = s.imu.map(|imu| {
+            let yaw = p.rotation.euler_angles().2;
+            let q = UnitQuaternion::from_euler_angles(imu.roll_rad, imu.pitch_rad, yaw);
+            let mut i = Cdr::new();
+            i.header(t, "base_link");
+            i.f64s(&[q.i, q.j, q.k, q.w]);
+            i.f64s(&[0.0; 9]);
+            i.f64s(imu.gyro_radps.as_slice());
+            i.f64s(&[0.0; 9]);
+            i.f64s(imu.accel_mps2.as_slice());
+            i.f64s(&[0.0; 9]);
+            i.0
+        });
 
         let r = p.rotation;
         let position = p.translation.vector;
@@ -488,7 +500,11 @@ pub fn write_mcap_with(
                 vo_next += 1;
             }
         }
-        out.extend([(joints, m.0, t), (imu, i.0, t), (pose, g, t), (tf, f.0, t)]);
+        out.push((joints, m.0, t));
+        if let (Some(channel), Some(message)) = (imu, imu_message) {
+            out.push((channel, message, t));
+        }
+        out.extend([(pose, g, t), (tf, f.0, t)]);
         if let (Some(channel), Some(twist)) = (odom, s.odometry) {
             let mut o = Cdr::new();
             o.header(t, "odom");

@@ -10,15 +10,13 @@ use super::RoverLog;
 use crate::DatasetError;
 
 /// The columns every log has, in canonical order.
-pub(super) const FIXED_COLUMNS: [&str; 16] = [
-    "time_s",
-    "gt_x_m",
-    "gt_y_m",
-    "gt_z_m",
-    "gt_qw",
-    "gt_qx",
-    "gt_qy",
-    "gt_qz",
+pub(super) const FIXED_COLUMNS: [&str; 8] = [
+    "time_s", "gt_x_m", "gt_y_m", "gt_z_m", "gt_qw", "gt_qx", "gt_qy", "gt_qz",
+];
+
+/// The IMU's columns, after the fixed ones: all eight, or none for a robot
+/// without an IMU.
+pub(super) const IMU_COLUMNS: [&str; 8] = [
     "roll_rad",
     "pitch_rad",
     "gyro_x_radps",
@@ -62,9 +60,11 @@ pub(super) fn check_joint_name(name: &str) -> Result<(), &'static str> {
 }
 
 /// The joints of a log (names per group, in order) and whether it has
-/// contact angles and the robot's own odometry.
+/// an IMU, contact angles and the robot's own odometry.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct LogLayout {
+    /// Whether the IMU's columns are present.
+    imu: bool,
     /// Wheel, steering and bogie names.
     joints: [Vec<String>; 3],
     /// Whether one `contact_<w>_rad` column per wheel is present.
@@ -77,6 +77,7 @@ impl LogLayout {
     /// The layout of an in-memory log (contact angles as in its first sample).
     pub fn of_log(log: &RoverLog) -> Self {
         Self {
+            imu: log.samples.first().is_some_and(|s| s.imu.is_some()),
             joints: [
                 log.wheel_names.clone(),
                 log.steer_names.clone(),
@@ -97,8 +98,13 @@ impl LogLayout {
         let mut joints: [Vec<String>; 3] = Default::default();
         let mut contacts = Vec::new();
         let mut odometry = false;
+        let mut imu = false;
         for column in header {
             if FIXED_COLUMNS.contains(&column.as_str()) || column.starts_with(EXTRA_PREFIX) {
+                continue;
+            }
+            if IMU_COLUMNS.contains(&column.as_str()) {
+                imu = true;
                 continue;
             }
             if ODOMETRY_COLUMNS.contains(&column.as_str()) {
@@ -123,6 +129,7 @@ impl LogLayout {
             return Err(unknown(path, column, "contact columns must name a wheel"));
         }
         Ok(Self {
+            imu,
             joints,
             contact: !contacts.is_empty(),
             odometry,
@@ -139,6 +146,11 @@ impl LogLayout {
         self.odometry
     }
 
+    /// Whether the log has an IMU.
+    pub fn has_imu(&self) -> bool {
+        self.imu
+    }
+
     /// Wheel, steering and bogie names.
     pub fn into_joint_names(self) -> [Vec<String>; 3] {
         self.joints
@@ -147,6 +159,9 @@ impl LogLayout {
     /// All column names in canonical order (the order of [`Self::encode`]).
     pub fn column_names(&self) -> Vec<String> {
         let mut names: Vec<String> = FIXED_COLUMNS.iter().map(|c| c.to_string()).collect();
+        if self.imu {
+            names.extend(IMU_COLUMNS.iter().map(|c| c.to_string()));
+        }
         for (prefix, joints) in JOINT_PREFIXES.iter().zip(&self.joints) {
             for joint in joints {
                 names.push(format!("{prefix}{joint}{POS_SUFFIX}"));
@@ -169,26 +184,12 @@ impl LogLayout {
     pub fn encode(&self, sample: &ProprioceptiveSample, pose: &Isometry3<f64>) -> Vec<f64> {
         let t = &pose.translation.vector;
         let q = pose.rotation.quaternion();
-        let imu = &sample.imu;
-        let (g, a) = (&imu.gyro_radps, &imu.accel_mps2);
-        let mut row = vec![
-            sample.time_secs,
-            t.x,
-            t.y,
-            t.z,
-            q.w,
-            q.i,
-            q.j,
-            q.k,
-            imu.roll_rad,
-            imu.pitch_rad,
-            g.x,
-            g.y,
-            g.z,
-            a.x,
-            a.y,
-            a.z,
-        ];
+        let mut row = vec![sample.time_secs, t.x, t.y, t.z, q.w, q.i, q.j, q.k];
+        if self.imu {
+            let imu = sample.imu.unwrap_or_default();
+            let (g, a) = (imu.gyro_radps, imu.accel_mps2);
+            row.extend([imu.roll_rad, imu.pitch_rad, g.x, g.y, g.z, a.x, a.y, a.z]);
+        }
         for joints in [&sample.wheels, &sample.steering, &sample.bogies] {
             row.extend(joints.iter().flat_map(|j| [j.position_rad, j.rate_radps]));
         }
@@ -210,12 +211,12 @@ impl LogLayout {
         let time_secs = next();
         let translation = Vector3::new(next(), next(), next());
         let (w, i, j, k) = (next(), next(), next(), next());
-        let imu = ImuSample {
+        let imu = self.imu.then(|| ImuSample {
             roll_rad: next(),
             pitch_rad: next(),
             gyro_radps: Vector3::new(next(), next(), next()),
             accel_mps2: Vector3::new(next(), next(), next()),
-        };
+        });
         let [wheels, steering, bogies] = self.joints.each_ref().map(|names| {
             names
                 .iter()
@@ -238,6 +239,7 @@ impl LogLayout {
             steering,
             bogies,
             imu,
+            attitude_rad: None,
             contact_angles_rad,
             odometry,
         };

@@ -28,12 +28,13 @@ fn awkward_log() -> RoverLog {
                 wheels: vec![joint(1e-300, -0.0), joint(k / 3.0, 5e-324)],
                 steering: vec![joint(-1.7347235e-18, f64::MIN_POSITIVE)],
                 bogies: vec![joint(12.7, 1e300 * (k - 1.0))],
-                imu: ImuSample {
+                imu: Some(ImuSample {
                     gyro_radps: Vector3::new(0.1 + 0.2, -0.0, 1e-7 * k),
                     accel_mps2: Vector3::new(0.0, 2.0_f64.sqrt(), 9.81),
                     roll_rad: std::f64::consts::PI / 7.0,
                     pitch_rad: -0.45 + k * 1e-17,
-                },
+                }),
+                attitude_rad: None,
                 contact_angles_rad: Some(vec![1.0 / 3.0, -0.0]),
                 odometry: None,
             }
@@ -174,7 +175,7 @@ fn failed_write_leaves_existing_files_untouched() {
     let (dir, path) = written(&log);
     let before = fs::read(&path).unwrap();
     let mut bad = log.clone();
-    bad.samples[1].imu.roll_rad = f64::NAN;
+    bad.samples[1].imu.get_or_insert_default().roll_rad = f64::NAN;
     assert!(write_log_csv(&bad, dir.path()).is_err());
     assert_eq!(fs::read(&path).unwrap(), before);
     assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
@@ -485,7 +486,7 @@ fn validate_rejects_contact_angles_in_some_samples_only() {
 #[test]
 fn validate_rejects_non_finite_value_naming_column() {
     let mut log = awkward_log();
-    log.samples[1].imu.gyro_radps.y = f64::INFINITY;
+    log.samples[1].imu.get_or_insert_default().gyro_radps.y = f64::INFINITY;
     let err = log.validate().unwrap_err();
     assert!(matches!(
         err,

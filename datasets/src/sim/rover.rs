@@ -418,12 +418,13 @@ impl World<'_> {
             wheels,
             steering: steering_joints,
             bogies,
-            imu: ImuSample {
+            imu: Some(ImuSample {
                 gyro_radps: errors.gyro(&w_true, rng),
                 accel_mps2: errors.accel(&specific_force, vibration, rng),
                 roll_rad: roll_meas,
                 pitch_rad: pitch_meas,
-            },
+            }),
+            attitude_rad: None,
             contact_angles_rad: Some(state.placement.contact_rad.clone()),
             odometry: None,
         };

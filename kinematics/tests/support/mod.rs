@@ -86,8 +86,8 @@ pub fn planar_sample(
         bogies: vec![JointState::default(); d.bogies.len()],
         ..Default::default()
     };
-    s.imu.gyro_radps = w;
-    s.imu.roll_rad = roll_pitch.0;
-    s.imu.pitch_rad = roll_pitch.1;
+    s.imu.get_or_insert_default().gyro_radps = w;
+    s.imu.get_or_insert_default().roll_rad = roll_pitch.0;
+    s.imu.get_or_insert_default().pitch_rad = roll_pitch.1;
     s
 }

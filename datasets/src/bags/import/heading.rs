@@ -129,8 +129,8 @@ pub(super) fn course_headings(
             }
             None => expected,
         };
-        let s = &samples[k].imu;
-        pose.rotation = UnitQuaternion::from_euler_angles(s.roll_rad, s.pitch_rad, heading);
+        let (roll, pitch) = samples[k].roll_pitch_rad();
+        pose.rotation = UnitQuaternion::from_euler_angles(roll, pitch, heading);
     }
     spread.sort_by(f64::total_cmp);
     let quantile = |q: f64| {
@@ -168,8 +168,8 @@ mod tests {
                 time_secs: t,
                 ..Default::default()
             };
-            s.imu.roll_rad = roll;
-            s.imu.pitch_rad = pitch;
+            s.imu.get_or_insert_default().roll_rad = roll;
+            s.imu.get_or_insert_default().pitch_rad = pitch;
             samples.push(s);
             let imu = UnitQuaternion::from_euler_angles(roll, pitch, 50f64.to_radians());
             ground_truth.push(Isometry3::from_parts(Translation3::new(0.0, y, 0.0), imu));

@@ -103,8 +103,11 @@ impl std::fmt::Display for GroundTruthSource {
 #[serde(deny_unknown_fields)]
 pub struct TopicMap {
     /// `sensor_msgs/Imu`: gyro, specific force, and roll and pitch from its
-    /// orientation.
-    pub imu: String,
+    /// orientation. Optional: without an IMU the motion model solves the
+    /// yaw rate from the wheels, takes the ground as level, and the
+    /// regressors get no IMU inputs.
+    #[serde(default)]
+    pub imu: Option<String>,
     /// How the IMU is mounted: `body_from_imu` as roll, pitch and yaw
     /// (rad, default 0), applied to its rates, forces and orientation
     /// (without a TF tree in the recording, this is the only place to say

@@ -208,13 +208,22 @@ pub fn import_bag(
             "`max_gap_secs` must be a positive number of seconds".into(),
         ));
     }
+    if map.imu.is_none() && map.gnss_heading == GnssHeading::Imu {
+        return Err(ImportError::Map(
+            "`gnss_heading: imu` needs an `imu` topic; without one, use `gnss_heading: course`"
+                .into(),
+        ));
+    }
     // Every role's topic, read in one pass over the bag.
-    let mut requests = vec![TopicRequest {
-        topic: &map.imu,
-        role: "imu",
-        expected: &["sensor_msgs/Imu"],
-        optional: false,
-    }];
+    let mut requests = Vec::new();
+    if let Some(topic) = &map.imu {
+        requests.push(TopicRequest {
+            topic,
+            role: "imu",
+            expected: &["sensor_msgs/Imu"],
+            optional: false,
+        });
+    }
     match &map.ground_truth {
         GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
             topic,
@@ -276,7 +285,7 @@ pub fn import_bag(
     };
     let (read, damage) = read_topics(path, &requests, on_damage)?;
     let mut read = read.into_iter();
-    let imu_messages = read.next().unwrap_or_default();
+    let imu_messages = map.imu.as_ref().map(|_| read.next().unwrap_or_default());
     let gt_topics = match &map.ground_truth {
         GroundTruthSource::Topic(_) => 1,
         GroundTruthSource::Tf { tf } => tf.topics.len(),
@@ -285,14 +294,19 @@ pub fn import_bag(
     let odometry_messages = map.odometry.as_ref().and_then(|_| read.next());
     let vo_messages = map.vo.as_ref().and_then(|_| read.next());
     let joint_messages = read.next();
+    // The clock's base: the first IMU message, else the first ground truth.
+    let first = match &imu_messages {
+        Some(messages) => messages.first(),
+        None => gt_by_topic.iter().flatten().next(),
+    };
     let clock = Clock::new(
         map.time,
-        imu_messages.first().and_then(|s| match &s.message {
-            RosMessage::Imu(m) => Some((s, m.header.stamp_ns)),
-            _ => None,
-        }),
+        first.and_then(|s| Some((s, header_ns(&s.message)?))),
     );
-    let mut imu = imu_stream(map, &imu_messages, &clock);
+    let mut imu = match (&map.imu, &imu_messages) {
+        (Some(topic), Some(messages)) => Some(imu_stream(map, topic, messages, &clock)),
+        _ => None,
+    };
     let GroundTruth {
         stream: mut gt,
         gnss,
@@ -302,7 +316,13 @@ pub fn import_bag(
     let groups = joint_groups(map);
     let mut joints = joint_stream(map, &groups, joint_messages, &clock);
     // The common clock, over the span every stream covers.
-    let mut streams: Vec<&mut Stream> = vec![&mut imu, &mut gt];
+    let mut streams: Vec<&mut Stream> = Vec::new();
+    let imu_at = imu.as_ref().map(|_| streams.len());
+    if let Some(i) = imu.as_mut() {
+        streams.push(i);
+    }
+    let gt_at = streams.len();
+    streams.push(&mut gt);
     let odometry_at = odometry.as_ref().map(|_| streams.len());
     if let Some(o) = odometry.as_mut() {
         streams.push(o);
@@ -340,17 +360,22 @@ pub fn import_bag(
             .iter_mut()
             .map(|s| s.at(t, map.max_gap_secs))
             .collect();
-        let (Some(Some(i)), Some(Some(g))) = (values.first(), values.get(1)) else {
+        let Some(Some(g)) = values.get(gt_at) else {
             dropped += 1;
             continue;
         };
+        let i = imu_at.and_then(|k| values[k].as_deref());
+        if imu_at.is_some() && i.is_none() {
+            dropped += 1;
+            continue;
+        }
         let ov = odometry_at.and_then(|k| values[k].clone());
         let jv = joints_at.and_then(|k| values[k].clone());
         if (joints_needed(&groups) && jv.is_none()) || (odometry_at.is_some() && ov.is_none()) {
             dropped += 1;
             continue;
         }
-        let (roll, pitch) = roll_pitch(&i[0..4]);
+
         let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
         let mut at = 0;
         for (g, (_, refs)) in groups.iter().enumerate() {
@@ -369,20 +394,26 @@ pub fn import_bag(
             wheels,
             steering,
             bogies,
-            imu: ImuSample {
-                gyro_radps: Vector3::new(i[4], i[5], i[6]),
-                accel_mps2: Vector3::new(i[7], i[8], i[9]),
-                roll_rad: roll,
-                pitch_rad: pitch,
-            },
+            imu: i.map(|i| {
+                let (roll, pitch) = roll_pitch(&i[0..4]);
+                ImuSample {
+                    gyro_radps: Vector3::new(i[4], i[5], i[6]),
+                    accel_mps2: Vector3::new(i[7], i[8], i[9]),
+                    roll_rad: roll,
+                    pitch_rad: pitch,
+                }
+            }),
+            attitude_rad: None,
             contact_angles_rad: None,
             odometry: ov.map(|o| BodyTwist {
                 linear_mps: Vector3::new(o[0], o[1], o[2]),
                 angular_radps: Vector3::new(o[3], o[4], o[5]),
             }),
         });
+        // GNSS gives no orientation: the IMU's (its yaw replaced by the
+        // heading below), or level without an IMU.
         let q = if gnss {
-            [i[0], i[1], i[2], i[3]]
+            i.map_or([0.0, 0.0, 0.0, 1.0], |i| [i[0], i[1], i[2], i[3]])
         } else {
             [g[3], g[4], g[5], g[6]]
         };
@@ -482,6 +513,21 @@ pub fn import_bag(
         vo_poses,
     };
     Ok((log, report))
+}
+
+/// The header stamp of a message (ns), the first transform's for TF.
+fn header_ns(message: &RosMessage) -> Option<i64> {
+    use RosMessage as M;
+    Some(match message {
+        M::Imu(m) => m.header.stamp_ns,
+        M::Odometry(m) => m.header.stamp_ns,
+        M::NavSatFix(m) => m.header.stamp_ns,
+        M::JointState(m) => m.header.stamp_ns,
+        M::PoseStamped(h, _) | M::PoseWithCovarianceStamped(h, _, _) | M::TwistStamped(h, _) => {
+            h.stamp_ns
+        }
+        M::Tf(transforms) => transforms.first()?.header.stamp_ns,
+    })
 }
 
 /// Medians of the horizontal and vertical standard deviations.

@@ -16,7 +16,12 @@ use crate::bags::topic::Stamped;
 
 /// The IMU role: orientation `[x, y, z, w]` (4), gyro (3) and specific
 /// force (3), all in the body frame.
-pub(super) fn imu_stream(map: &TopicMap, imu_messages: &[Stamped], clock: &Clock) -> Stream {
+pub(super) fn imu_stream(
+    map: &TopicMap,
+    topic: &str,
+    imu_messages: &[Stamped],
+    clock: &Clock,
+) -> Stream {
     let n_imu = imu_messages.len();
     let [r, p, y] = map.imu_rotation_rpy_rad;
     let body_from_imu = UnitQuaternion::from_euler_angles(r, p, y);
@@ -38,7 +43,7 @@ pub(super) fn imu_stream(map: &TopicMap, imu_messages: &[Stamped], clock: &Clock
             _ => None,
         })
         .collect();
-    Stream::new("imu", &map.imu, imu_samples, n_imu, 0, vec![0])
+    Stream::new("imu", topic, imu_samples, n_imu, 0, vec![0])
 }
 
 /// The ground-truth role, and what it was made of.
