@@ -160,6 +160,10 @@ enum Command {
         /// MCAP only: the unit of recorded wheel rates.
         #[arg(long, value_enum, default_value_t = WheelRateArg::RadPerS)]
         wheel_rate: WheelRateArg,
+        /// Leave the IMU out (a robot without one): no IMU topic in a bag,
+        /// no IMU columns in a log.
+        #[arg(long)]
+        no_imu: bool,
     },
 }
 
@@ -461,6 +465,7 @@ fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> a
     let spec = MotionModelSpec::WeightedJacobian {
         rover: Some(rover.to_path_buf()),
         config: Default::default(),
+        attitude_without_imu: Default::default(),
     };
     match gpodo_experiments::execute::data::speed_ratio(&spec, logs)? {
         None => println!("no unit check: the ground truth never moves"),
@@ -482,7 +487,7 @@ fn simulate(
     seed: u64,
     out: &Path,
     (training_runs, training_run_secs): (Option<usize>, Option<f64>),
-    units: gpodo_datasets::bags::write::WheelUnits,
+    (units, no_imu): (gpodo_datasets::bags::write::WheelUnits, bool),
 ) -> anyhow::Result<()> {
     let mut config = SimulatorConfig::preset(preset, seed);
     if let Some(n) = training_runs {
@@ -491,7 +496,14 @@ fn simulate(
     if let Some(s) = training_run_secs {
         config.training_run_secs = s;
     }
-    let testbed = config.simulate()?;
+    let mut testbed = config.simulate()?;
+    if no_imu {
+        for log in testbed.train.iter_mut().chain(testbed.test.iter_mut()) {
+            for sample in &mut log.samples {
+                sample.imu = None;
+            }
+        }
+    }
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     if format == SimulateFormat::Mcap {
         let logs: Vec<_> = testbed.train.iter().chain(&testbed.test).collect();
@@ -624,6 +636,7 @@ fn main() -> anyhow::Result<()> {
             wheel_ticks_per_turn,
             wheel_gear_ratio,
             wheel_rate,
+            no_imu,
         } => {
             use gpodo_datasets::bags::write::{WheelRate, WheelUnits};
             let rate = match wheel_rate {
@@ -638,7 +651,7 @@ fn main() -> anyhow::Result<()> {
                 );
             }
             let runs = (training_runs, training_run_secs);
-            simulate(format, preset, seed, &out, runs, units)
+            simulate(format, preset, seed, &out, runs, (units, no_imu))
         }
     }
 }

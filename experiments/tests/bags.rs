@@ -116,6 +116,30 @@ fn the_husky_example_runs_from_the_mcap_and_the_ros1_bag_alike() {
     }
 }
 
+#[test]
+fn the_unit_check_is_silent_on_the_husky_recording() {
+    use gpodo_datasets::bags::import::{TopicMap, import_bag};
+    use gpodo_experiments::config::MotionModelSpec;
+    // The topic map of experiments/husky-bags.yaml.
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("husky-bags.yaml");
+    let config: serde_json::Value =
+        serde_saphyr::from_str(&std::fs::read_to_string(&example).unwrap()).unwrap();
+    let map: TopicMap = serde_json::from_value(config["dataset"]["topics"].clone()).unwrap();
+    let bag = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/ros/husky_test1.mcap");
+    let (log, _) = import_bag(&bag, "husky", &map).unwrap();
+    let spec = MotionModelSpec::ReportedOdometry {
+        rover: None,
+        angular: Default::default(),
+    };
+    let ratio = gpodo_experiments::execute::data::speed_ratio(&spec, &[log])
+        .unwrap()
+        .unwrap();
+    assert!(
+        gpodo_datasets::speed_check::unit_warning(ratio).is_none() && (ratio - 1.0).abs() < 0.3,
+        "{ratio}"
+    );
+}
+
 mod synthetic {
     //! `gpodo simulate --format mcap` writes the simulated rover as ROS 2
     //! MCAP bags and the topic map that imports them; read back through
@@ -127,6 +151,10 @@ mod synthetic {
     use std::process::Command;
 
     fn simulate(format: &str, out: &Path) {
+        simulate_with(format, out, &[]);
+    }
+
+    fn simulate_with(format: &str, out: &Path, extra: &[&str]) {
         let result = Command::new(GPODO)
             .args([
                 "--quiet",
@@ -142,6 +170,7 @@ mod synthetic {
                 "--out",
             ])
             .arg(out)
+            .args(extra)
             .output()
             .unwrap();
         common::assert_succeeded(&result, "");
@@ -205,6 +234,87 @@ mod synthetic {
             }
             assert!(worst < 1e-9, "{set}: largest difference {worst:e}");
         }
+    }
+
+    #[test]
+    fn a_recording_without_an_imu_is_imported_and_learned_without_imu_inputs() {
+        let tmp = tempfile::tempdir().unwrap();
+        simulate_with("mcap", &tmp.path().join("mcap"), &["--no-imu"]);
+        let topics = std::fs::read_to_string(tmp.path().join("mcap/topics.yaml")).unwrap();
+        assert!(topics.starts_with("imu: null\n"), "{topics}");
+        let indented: String = topics.lines().map(|l| format!("    {l}\n")).collect();
+        let yaml = format!(
+            "name: bag\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - kind: zero\n  - kind: exact_gp\n    kernel: rbf\n"
+        );
+        let file = tmp.path().join("bag.yaml");
+        std::fs::write(&file, yaml).unwrap();
+        let out = common::gpodo_on("run", &file, &tmp.path().join("out"), &[]);
+        common::assert_succeeded(&out, "");
+        let metrics: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(tmp.path().join("out/metrics.json")).unwrap(),
+        )
+        .unwrap();
+        let inputs: Vec<&str> = metrics["dataset"]["input_names"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        // The simulated ExoTeR's 28 inputs less the IMU's 8.
+        assert_eq!(inputs.len(), 20, "{inputs:?}");
+        assert!(
+            !inputs.iter().any(|i| ["roll", "pitch"].contains(i)
+                || i.starts_with("acc_")
+                || i.starts_with("gyro_")),
+            "{inputs:?}"
+        );
+        assert_eq!(metrics["dataset"]["attitude"], "level");
+        let report = std::fs::read_to_string(tmp.path().join("out/report.md")).unwrap();
+        assert!(
+            report.contains("No IMU: the motion model solved the yaw rate from the wheels")
+                && report.contains("| exact GP: rbf |"),
+            "{report}"
+        );
+        // The GP learns something the wheels alone get wrong.
+        let rmse = |i: usize| {
+            metrics["regressors"][i]["evaluation"]["pooled"]["rmse"]
+                .as_f64()
+                .unwrap()
+        };
+        assert!(rmse(1) < rmse(0), "{} against {}", rmse(1), rmse(0));
+        // Roll and pitch from the ground truth, when asked, and said.
+        let gt_yaml = std::fs::read_to_string(&file).unwrap().replace(
+            "motion_model: {kind: weighted_jacobian}",
+            "motion_model: {kind: weighted_jacobian, attitude_without_imu: ground_truth}",
+        );
+        std::fs::write(&file, gt_yaml).unwrap();
+        let out = common::gpodo_on("run", &file, &tmp.path().join("out-gt"), &[]);
+        common::assert_succeeded(&out, "");
+        let report = std::fs::read_to_string(tmp.path().join("out-gt/report.md")).unwrap();
+        assert!(
+            report.contains("Roll and pitch for the contact geometry came from the ground truth"),
+            "{report}"
+        );
+        // `gpodo import` writes a log without IMU columns, which reads back.
+        let map = tmp.path().join("mcap/topics.yaml");
+        let out = Command::new(GPODO)
+            .args(["--quiet", "import"])
+            .arg(tmp.path().join("mcap/train_01.mcap"))
+            .arg("--topics")
+            .arg(&map)
+            .arg("--out")
+            .arg(tmp.path().join("logs"))
+            .output()
+            .unwrap();
+        common::assert_succeeded(&out, "");
+        let csv = std::fs::read_to_string(tmp.path().join("logs/train_01.csv")).unwrap();
+        let header = csv.lines().next().unwrap();
+        assert!(
+            header.starts_with("time_s,gt_x_m,gt_y_m,gt_z_m,gt_qw,gt_qx,gt_qy,gt_qz,wheel_"),
+            "{header}"
+        );
+        let log = gpodo_datasets::log::read_log_csv(&tmp.path().join("logs/train_01.csv")).unwrap();
+        assert!(log.samples.iter().all(|s| s.imu.is_none()));
     }
 
     #[test]

@@ -95,7 +95,7 @@ fn main() -> anyhow::Result<()> {
         params.hyperopt.lbfgs_memory = m;
     }
     if let Ok(expr) = std::env::var("GPODO_KERNEL") {
-        params.kernel = gpodo_regressors::kernels::KernelExpr::parse(&expr)?;
+        params.kernel = gpodo_regressors::kernels::KernelExpr::parse(&expr)?.into();
     }
     if let Some(r) = env("GPODO_RACE")? {
         params.hyperopt.start.race_iterations = r;

@@ -540,3 +540,60 @@ fn start_policy_is_deterministic_and_optimises_the_best_scored_candidates() {
     assert_eq!(report.starts.len(), 3);
     assert!(report.starts[0].label.starts_with("init"));
 }
+
+#[test]
+fn kernel_auto_keeps_the_highest_likelihood_candidate_and_saves_it() {
+    use gpodo_regressors::exact_gp::KernelChoice;
+    // A trend linear in the inputs plus a little noise: a linear part wins.
+    let mut rng = rng(35);
+    let x = inputs(&mut rng, 60, 2);
+    let noise = targets(&mut rng, &x, 0.05);
+    let y = Mat::from_fn(60, 1, |i, _| {
+        3.0 * x[(i, 0)] - 2.0 * x[(i, 1)] + 0.1 * noise[(i, 0)]
+    });
+    let data = dataset(&x, &y);
+    let mut auto = ExactGp::new(ExactGpParams {
+        kernel: KernelChoice::Auto,
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    let report = auto.fit(&data).unwrap();
+    let tried = &report.kernel_candidates;
+    assert_eq!(tried.len(), 4);
+    let (best, best_lml) = tried.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    assert!(best.contains("linear"), "{tried:?}");
+    assert_eq!(report.objective, Some(*best_lml));
+    // Each candidate's LML is what that kernel alone reaches.
+    for (kernel, lml) in tried {
+        let mut alone = ExactGp::new(ExactGpParams::with_kernel(
+            KernelExpr::parse(kernel).unwrap(),
+        ))
+        .unwrap();
+        assert_eq!(alone.fit(&data).unwrap().objective, Some(*lml), "{kernel}");
+    }
+    // The saved state records the kernel kept, and reloads.
+    let state = auto.state().unwrap().clone();
+    assert_eq!(state.params.kernel.to_string(), *best);
+    let reloaded = ExactGp::from_state(state).unwrap();
+    let q = sample_matrix(&x);
+    assert_eq!(
+        reloaded.predict(&q).unwrap().mean,
+        auto.predict(&q).unwrap().mean
+    );
+    // `auto` needs something to choose from, and learned kernels to compare.
+    for params in [
+        ExactGpParams {
+            kernel: KernelChoice::Auto,
+            kernel_candidates: vec![],
+            ..ExactGpParams::default()
+        },
+        ExactGpParams {
+            kernel: KernelChoice::Auto,
+            optimize: false,
+            ..ExactGpParams::default()
+        },
+    ] {
+        let e = ExactGp::new(params).unwrap_err().to_string();
+        assert!(e.contains("kernel"), "{e}");
+    }
+}

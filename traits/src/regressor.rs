@@ -124,6 +124,11 @@ pub struct FitReport {
     /// multimodal the problem was); empty for models without an optimiser.
     #[serde(default)]
     pub starts: Vec<StartRecord>,
+    /// The kernels a kernel search tried (an exact GP's `kernel: auto`),
+    /// each with its log marginal likelihood; the highest was kept. Empty
+    /// without a search.
+    #[serde(default)]
+    pub kernel_candidates: Vec<(String, f64)>,
 }
 
 /// One candidate start of a fit's optimiser.

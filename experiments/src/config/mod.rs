@@ -155,6 +155,19 @@ pub enum DatasetSpec {
     },
 }
 
+/// Where a robot without an IMU gets the roll and pitch its motion model
+/// uses (the weighted-Jacobian model's normal-force weighting).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AttitudeWithoutImu {
+    /// Level ground: roll and pitch 0.
+    #[default]
+    Level,
+    /// The ground truth's roll and pitch: off board, so opt-in, said in the
+    /// report, and never a regressor input.
+    GroundTruth,
+}
+
 /// The parametric motion model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -168,6 +181,10 @@ pub enum MotionModelSpec {
         /// Model settings.
         #[serde(default)]
         config: WeightedJacobianConfig,
+        /// For a robot without an IMU, where the roll and pitch of the
+        /// contact geometry come from (default: level ground).
+        #[serde(default)]
+        attitude_without_imu: AttitudeWithoutImu,
     },
     /// The ideal skid-steer model.
     SkidSteer {
@@ -197,6 +214,7 @@ impl Default for MotionModelSpec {
         Self::WeightedJacobian {
             rover: None,
             config: WeightedJacobianConfig::default(),
+            attitude_without_imu: AttitudeWithoutImu::Level,
         }
     }
 }

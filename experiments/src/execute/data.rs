@@ -20,11 +20,11 @@ use gpodo_kinematics::{
 use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualDataset};
 
-use crate::config::{DatasetSpec, ExperimentConfig, MotionModelSpec};
+use crate::config::{AttitudeWithoutImu, DatasetSpec, ExperimentConfig, MotionModelSpec};
 use crate::error::PipelineError;
 use crate::execute::calibration::{ResidualStatistics, residual_statistics};
 use crate::execute::odometry::{DeadReckoning, dead_reckoning};
-use crate::execute::results::{DatasetSummary, ModelRows, RunSummary};
+use crate::execute::results::{Attitude, DatasetSummary, ModelRows, RunSummary};
 
 /// Warns when the motion model's speed is far from the ground truth's over
 /// the moving parts of the training runs' `steps` (median ratio outside
@@ -108,7 +108,7 @@ fn motion_model(
         None => Ok(RoverDescription::exoter()),
     };
     Ok(match spec {
-        MotionModelSpec::WeightedJacobian { rover, config } => {
+        MotionModelSpec::WeightedJacobian { rover, config, .. } => {
             let d = load(rover)?;
             (
                 Box::new(WeightedJacobianModel::new(d.clone(), *config)?),
@@ -154,6 +154,44 @@ pub(crate) struct PreparedData {
     pub(crate) gyro_bias_radps: Option<f64>,
 }
 
+/// Where the motion model's roll and pitch come from for these logs: the
+/// IMU when every run has one, else as `spec` says for a robot without.
+///
+/// # Errors
+/// [`PipelineError`] when some runs have an IMU and others do not.
+fn attitude_source(
+    spec: &MotionModelSpec,
+    train: &[RoverLog],
+    test: &[RoverLog],
+) -> Result<Attitude, PipelineError> {
+    let has_imu = |l: &RoverLog| l.samples.first().is_some_and(|s| s.imu.is_some());
+    let logs: Vec<&RoverLog> = train.iter().chain(test).collect();
+    let with = logs.iter().find(|l| has_imu(l));
+    let without = logs.iter().find(|l| !has_imu(l));
+    match (with, without) {
+        (_, None) => Ok(Attitude::Imu),
+        (Some(a), Some(b)) => Err(PipelineError::Inconsistent(format!(
+            "run `{}` has an IMU and run `{}` has none: the regressors need the same inputs in every run",
+            a.name, b.name
+        ))),
+        (None, Some(_)) => Ok(match spec {
+            MotionModelSpec::WeightedJacobian {
+                attitude_without_imu: AttitudeWithoutImu::GroundTruth,
+                ..
+            } => Attitude::GroundTruth,
+            _ => Attitude::Level,
+        }),
+    }
+}
+
+/// Sets every sample's off-board roll and pitch to its ground truth's.
+fn with_ground_truth_attitude(log: &mut RoverLog) {
+    for (sample, pose) in log.samples.iter_mut().zip(&log.ground_truth) {
+        let (roll, pitch, _) = pose.rotation.euler_angles();
+        sample.attitude_rad = Some([roll, pitch]);
+    }
+}
+
 fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
     logs.iter().collect()
 }
@@ -166,10 +204,17 @@ fn from_logs(
     terrain_max_slope_deg: Option<f64>,
 ) -> Result<PreparedData, PipelineError> {
     let (model, rover) = motion_model(&config.motion_model)?;
-    let (train_logs, test_logs) = (
-        &in_rover_order(train_logs, rover.as_ref())?,
-        &in_rover_order(test_logs, rover.as_ref())?,
+    let (mut train_logs, mut test_logs) = (
+        in_rover_order(train_logs, rover.as_ref())?,
+        in_rover_order(test_logs, rover.as_ref())?,
     );
+    let attitude = attitude_source(&config.motion_model, &train_logs, &test_logs)?;
+    if attitude == Attitude::GroundTruth {
+        for log in train_logs.iter_mut().chain(test_logs.iter_mut()) {
+            with_ground_truth_attitude(log);
+        }
+    }
+    let (train_logs, test_logs) = (&train_logs, &test_logs);
     let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
     let train_steps = train_logs
         .iter()
@@ -193,6 +238,7 @@ fn from_logs(
             input_names: train.input_names.clone(),
             target_names: train.target_names.clone(),
             terrain_max_slope_deg,
+            attitude,
         },
         train,
         test,
@@ -338,6 +384,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                     input_names: train.input_names.clone(),
                     target_names: train.target_names.clone(),
                     terrain_max_slope_deg: None,
+                    attitude: Attitude::Imu,
                 },
                 train,
                 test,

@@ -44,6 +44,22 @@ pub struct DatasetSummary {
     pub target_names: Vec<String>,
     /// Steepest slope of a simulated terrain (deg).
     pub terrain_max_slope_deg: Option<f64>,
+    /// Where the motion model's roll and pitch came from.
+    #[serde(default)]
+    pub attitude: Attitude,
+}
+
+/// Where the motion model's roll and pitch came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Attitude {
+    /// The IMU (or the data have no runs: a residual table).
+    #[default]
+    Imu,
+    /// No IMU: level ground.
+    Level,
+    /// No IMU: the ground truth's, opted in.
+    GroundTruth,
 }
 
 /// One regressor's outcome.

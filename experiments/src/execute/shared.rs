@@ -119,7 +119,16 @@ fn fit_cost(spec: &gpodo_regressors::RegressorSpec, n: usize) -> f64 {
     use gpodo_regressors::RegressorSpec;
     let n = n as f64;
     match spec {
-        RegressorSpec::ExactGp(p) => n.powi(3) * p.kernel.to_string().split('+').count() as f64,
+        RegressorSpec::ExactGp(p) => {
+            let terms =
+                |k: &gpodo_regressors::kernels::KernelExpr| k.to_string().split('+').count();
+            let fits: usize = match p.kernel.expr() {
+                Some(k) => terms(k),
+                // `kernel: auto` fits every candidate.
+                None => p.kernel_candidates.iter().map(terms).sum(),
+            };
+            n.powi(3) * fits as f64
+        }
         RegressorSpec::SparseGp(p) => n * (p.inducing.count as f64).powi(2),
         // A plugin may be anything; start it early.
         RegressorSpec::External(_) => n.powi(3),

@@ -8,7 +8,7 @@ use gpodo_frontends::scheme::SchemeResult;
 
 use crate::config::DatasetSpec;
 use crate::execute::calibration::ResidualStatistics;
-use crate::execute::results::{ExperimentResults, RegressorResult};
+use crate::execute::results::{Attitude, ExperimentResults, RegressorResult};
 use crate::report::controls::controls_section;
 use crate::report::hindsight::hindsight_section;
 use crate::report::table::{Align, Table};
@@ -76,6 +76,22 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     if let Some(slope) = r.dataset.terrain_max_slope_deg {
         let _ = writeln!(s, "\nSteepest terrain slope: {slope:.1}°.");
     }
+    let no_imu = "No IMU: the motion model solved the yaw rate from the wheels, and the regressors got no IMU inputs";
+    match r.dataset.attitude {
+        Attitude::Imu => {}
+        Attitude::Level => {
+            let _ = writeln!(
+                s,
+                "\n{no_imu}. The ground was taken as level: roll, pitch and their rates 0."
+            );
+        }
+        Attitude::GroundTruth => {
+            let _ = writeln!(
+                s,
+                "\n{no_imu}. Roll and pitch for the contact geometry came from the ground truth (off board, `attitude_without_imu: ground_truth`); they are not regressor inputs."
+            );
+        }
+    }
     s.push('\n');
 }
 
@@ -101,15 +117,46 @@ fn clamped(reg: &RegressorResult) -> Option<(&'static str, &'static str, usize, 
 
 /// The regressor's label as a table shows it: with the count it used
 /// where that is below the one its label asks (`m=1869 of 1000000000
-/// asked`).
+/// asked`), and the kernel `kernel: auto` chose (`auto → rbf + linear`).
 fn shown_label(reg: &RegressorResult) -> String {
-    match clamped(reg) {
+    let label = match clamped(reg) {
         Some((key, _, asked, used)) => reg.label.replacen(
             &format!("{key}={asked}"),
             &format!("{key}={used} of {asked} asked"),
             1,
         ),
         None => reg.label.clone(),
+    };
+    match chosen_kernel(reg) {
+        Some((kernel, _)) => label.replacen(": auto", &format!(": auto → {kernel}"), 1),
+        None => label,
+    }
+}
+
+/// The kernel `kernel: auto` kept (the highest log marginal likelihood)
+/// and every candidate with its LML.
+fn chosen_kernel(reg: &RegressorResult) -> Option<(&str, &[(String, f64)])> {
+    let tried = &reg.fit.kernel_candidates;
+    let best = tried.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some((best.0.as_str(), tried.as_slice()))
+}
+
+/// A line for each `kernel: auto` fit: the kernel kept and every
+/// candidate's log marginal likelihood.
+fn kernel_choices(s: &mut String, regressors: &[RegressorResult]) {
+    for reg in regressors {
+        if let Some((kernel, tried)) = chosen_kernel(reg) {
+            let all: Vec<String> = tried
+                .iter()
+                .map(|(k, lml)| format!("{k} {lml:.2}"))
+                .collect();
+            let _ = writeln!(
+                s,
+                "`{}` kept {kernel}, the highest log marginal likelihood of {}.\n",
+                reg.label,
+                all.join(", ")
+            );
+        }
     }
 }
 
@@ -176,6 +223,7 @@ fn table_one(s: &mut String, r: &ExperimentResults) {
         detail.markdown()
     );
     clamped_counts(s, &r.regressors);
+    kernel_choices(s, &r.regressors);
     if !r.absolute_regressors.is_empty() {
         let mut absolute = Table::new(&["Regressor", "RMSE", "MAE", "fit wall [s]"]);
         for reg in &r.absolute_regressors {

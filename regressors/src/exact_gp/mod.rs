@@ -3,6 +3,7 @@
 //! ([`likelihood`]), hyperparameter learning with argmin ([`optimize`]), the
 //! posterior ([`posterior`]) and the regressor behind the trait ([`model`]).
 
+pub mod choice;
 pub mod cholesky;
 pub mod likelihood;
 pub mod model;
@@ -11,5 +12,6 @@ pub mod params;
 pub mod posterior;
 
 pub use crate::scaling::GpPredictions;
+pub use choice::KernelChoice;
 pub use model::{ExactGp, ExactGpState, GroupState};
 pub use params::{ExactGpParams, OutputSharing};

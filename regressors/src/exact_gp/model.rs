@@ -12,6 +12,7 @@ use gpodo_traits::Standardizer;
 use gpodo_traits::{Error, FitReport, ResidualDataset, ResidualRegressor, SampleMatrix};
 use serde::{Deserialize, Serialize};
 
+use super::choice::KernelChoice;
 use super::optimize::maximize_lml;
 use super::params::{ExactGpParams, OutputSharing};
 use super::posterior::Posterior;
@@ -139,7 +140,50 @@ impl ExactGp {
         })
     }
 
+    /// `kernel: auto`: every candidate fitted on the same data, the one of
+    /// highest log marginal likelihood kept (its settings record the
+    /// winner); the report lists every candidate's LML and counts the
+    /// evaluations and time of all of them.
+    fn fit_auto(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        let mut best: Option<(ExactGp, FitReport)> = None;
+        let mut tried = Vec::new();
+        let mut evaluations = 0;
+        for candidate in &self.params.kernel_candidates {
+            let mut params = self.params.clone();
+            params.kernel = KernelChoice::Expr(candidate.clone());
+            let mut gp = ExactGp::new(params)?;
+            gp.progress = self.progress.clone();
+            let report = gp.fit_impl(data)?;
+            let lml = report.objective.unwrap_or(f64::NEG_INFINITY);
+            tracing::debug!(kernel = %candidate, lml, "kernel: auto candidate fitted");
+            tried.push((candidate.to_string(), lml));
+            evaluations += report.evaluations.unwrap_or(0);
+            if best
+                .as_ref()
+                .is_none_or(|(_, b)| lml > b.objective.unwrap_or(f64::NEG_INFINITY))
+            {
+                best = Some((gp, report));
+            }
+        }
+        let Some((gp, mut report)) = best else {
+            return Err(RegressorError::InvalidSpec {
+                regressor: "exact_gp".into(),
+                field: "kernel_candidates".into(),
+                expected: "at least one kernel for `kernel: auto` to try".into(),
+            });
+        };
+        self.fitted = gp.fitted;
+        report.kernel_candidates = tried;
+        report.evaluations = Some(evaluations);
+        report.duration_secs = start.elapsed().as_secs_f64();
+        Ok(report)
+    }
+
     fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        if self.params.kernel == KernelChoice::Auto {
+            return self.fit_auto(data);
+        }
         let start = Instant::now();
         let (n, d, p) = (data.len(), data.inputs.ncols(), data.targets.ncols());
         let ScaledTraining {
@@ -163,7 +207,7 @@ impl ExactGp {
         let mut posteriors = Vec::new();
         for (g, outputs) in group_outputs.into_iter().enumerate() {
             let yg = columns(&y, &outputs);
-            let kernel0 = self.params.kernel.build(d, &self.params.init);
+            let kernel0 = self.params.kernel_expr().build(d, &self.params.init);
             let (kernel, noise) = if self.params.optimize {
                 let mut params = self.params.clone();
                 params.seed = params.seed.wrapping_add(g as u64);

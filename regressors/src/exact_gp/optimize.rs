@@ -70,7 +70,7 @@ pub fn maximize_lml(
     params: &ExactGpParams,
     progress: &ProgressSink,
 ) -> Result<Optimized, RegressorError> {
-    let template = params.kernel.build(x.ncols(), &params.init);
+    let template = params.kernel_expr().build(x.ncols(), &params.init);
     let objective = Lml {
         template: &template,
         x,
@@ -84,7 +84,12 @@ pub fn maximize_lml(
         objective: &objective,
         score: &score,
         space: SearchSpace::kernel(&template, &params.hyperopt.bounds),
-        bases: starts::kernel_bases(&params.kernel, &params.init, x, params.noise_variance),
+        bases: starts::kernel_bases(
+            &params.kernel_expr(),
+            &params.init,
+            x,
+            params.noise_variance,
+        ),
         value_scale: 1.0 / (y.nrows() * y.ncols()).max(1) as f64,
     };
     let hyperopt = HyperoptParams {

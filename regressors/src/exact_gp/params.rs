@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::choice::KernelChoice;
 use crate::RegressorError;
 use crate::hyperopt::HyperoptParams;
 use crate::kernels::{KernelExpr, KernelInit, LeafName};
@@ -23,8 +24,13 @@ pub enum OutputSharing {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExactGpParams {
-    /// Kernel expression (default `rbf`), e.g. `rbf + linear`.
-    pub kernel: KernelExpr,
+    /// Kernel expression (default `rbf`), e.g. `rbf + linear`; or `auto`,
+    /// which fits each of `kernel_candidates` and keeps the highest log
+    /// marginal likelihood.
+    pub kernel: KernelChoice,
+    /// The kernels `kernel: auto` tries (default: rbf, matern52, rbf +
+    /// linear, matern52 + linear).
+    pub kernel_candidates: Vec<KernelExpr>,
     /// Output sharing (default `shared`).
     pub outputs: OutputSharing,
     /// Z-score inputs and outputs with training statistics (default true);
@@ -47,7 +53,8 @@ pub struct ExactGpParams {
 impl Default for ExactGpParams {
     fn default() -> Self {
         Self {
-            kernel: KernelExpr::Leaf(LeafName::Rbf),
+            kernel: KernelChoice::default(),
+            kernel_candidates: KernelChoice::default_candidates(),
             outputs: OutputSharing::Shared,
             standardize: true,
             init: KernelInit::default(),
@@ -63,7 +70,7 @@ impl ExactGpParams {
     /// Parameters with the given kernel expression and defaults elsewhere.
     pub fn with_kernel(kernel: KernelExpr) -> Self {
         Self {
-            kernel,
+            kernel: KernelChoice::Expr(kernel),
             ..Self::default()
         }
     }
@@ -73,7 +80,36 @@ impl ExactGpParams {
     /// # Errors
     /// [`RegressorError::InvalidSpec`] naming the field and the expected form.
     pub fn check(&self) -> Result<(), RegressorError> {
+        if self.kernel == KernelChoice::Auto {
+            if self.kernel_candidates.is_empty() {
+                return Err(RegressorError::InvalidSpec {
+                    regressor: "exact_gp".into(),
+                    field: "kernel_candidates".into(),
+                    expected: "at least one kernel for `kernel: auto` to try".into(),
+                });
+            }
+            if !self.optimize {
+                return Err(RegressorError::InvalidSpec {
+                    regressor: "exact_gp".into(),
+                    field: "kernel".into(),
+                    expected: "a kernel expression when `optimize: false` (`auto` compares learned kernels)".into(),
+                });
+            }
+        }
         self.hyperopt
             .check("exact_gp", self.optimize, &self.init, self.noise_variance)
+    }
+
+    /// The kernel expression to fit: the one given, or for `auto` the
+    /// first candidate (each candidate's fit sets its own).
+    pub fn kernel_expr(&self) -> KernelExpr {
+        match &self.kernel {
+            KernelChoice::Expr(e) => e.clone(),
+            KernelChoice::Auto => self
+                .kernel_candidates
+                .first()
+                .cloned()
+                .unwrap_or(KernelExpr::Leaf(LeafName::Rbf)),
+        }
     }
 }

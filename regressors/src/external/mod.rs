@@ -416,7 +416,7 @@ impl ResidualRegressor for ExternalRegressor {
             jitter: None,
             parameters: reply.parameters,
             iterations: reply.iterations,
-            starts: Vec::new(),
+            ..FitReport::default()
         })
     }
 

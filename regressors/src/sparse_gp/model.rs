@@ -253,6 +253,7 @@ impl SparseGp {
             parameters: learned_parameters(&posterior, &data.input_names),
             iterations: learned.iterations,
             starts: learned.starts,
+            ..FitReport::default()
         };
         let state = SparseGpState {
             params: self.params.clone(),
