@@ -18,7 +18,12 @@
 
 use std::path::{Path, PathBuf};
 
-use gpodo_traits::{Predictions, ResidualDataset, ResidualRegressor, SampleMatrix, Standardizer};
+use std::sync::Arc;
+
+use gpodo_traits::{
+    FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+    Standardizer,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::exact_gp::{ExactGp, ExactGpState};
@@ -137,29 +142,62 @@ impl ModelFile {
         input_standardizer: Option<Standardizer>,
         provenance: Provenance,
     ) -> Result<(Self, Box<dyn ResidualRegressor>), ModelFileError> {
-        let (state, model): (Option<SavedState>, Box<dyn ResidualRegressor>) = match spec {
-            RegressorSpec::ExactGp(p) => {
-                let mut m = ExactGp::new(p.clone())?;
-                m.fit(train)?;
-                (m.state().cloned().map(SavedState::ExactGp), Box::new(m))
-            }
-            RegressorSpec::SparseGp(p) => {
-                let mut m = SparseGp::new(p.clone())?;
-                m.fit(train)?;
-                (m.state().cloned().map(SavedState::SparseGp), Box::new(m))
-            }
-            RegressorSpec::Ilgr(p) => {
-                let mut m = Ilgr::new(p.clone())?;
-                m.fit(train)?;
-                (m.state().cloned().map(SavedState::Ilgr), Box::new(m))
-            }
-            _ => {
-                return Err(ModelFileError::NotSavable {
-                    label: spec.label(),
-                    why: "only exact_gp, sparse_gp and ilgr models can be saved".into(),
-                });
-            }
-        };
+        let (file, model, _) =
+            Self::fit_with_progress(spec, train, input_standardizer, provenance, None)?;
+        Ok((file, model))
+    }
+
+    /// [`Self::fit`], reporting the optimiser's iterations to `progress`
+    /// (which may stop the fit), and returning the fit's report too.
+    ///
+    /// # Errors
+    /// As [`Self::fit`].
+    pub fn fit_with_progress(
+        spec: &RegressorSpec,
+        train: &ResidualDataset,
+        input_standardizer: Option<Standardizer>,
+        provenance: Provenance,
+        progress: Option<Arc<dyn FitProgress>>,
+    ) -> Result<(Self, Box<dyn ResidualRegressor>, FitReport), ModelFileError> {
+        let (state, model, report): (Option<SavedState>, Box<dyn ResidualRegressor>, FitReport) =
+            match spec {
+                RegressorSpec::ExactGp(p) => {
+                    let mut m = ExactGp::new(p.clone())?;
+                    m.set_progress(progress);
+                    let report = m.fit(train)?;
+                    (
+                        m.state().cloned().map(SavedState::ExactGp),
+                        Box::new(m),
+                        report,
+                    )
+                }
+                RegressorSpec::SparseGp(p) => {
+                    let mut m = SparseGp::new(p.clone())?;
+                    m.set_progress(progress);
+                    let report = m.fit(train)?;
+                    (
+                        m.state().cloned().map(SavedState::SparseGp),
+                        Box::new(m),
+                        report,
+                    )
+                }
+                RegressorSpec::Ilgr(p) => {
+                    let mut m = Ilgr::new(p.clone())?;
+                    m.set_progress(progress);
+                    let report = m.fit(train)?;
+                    (
+                        m.state().cloned().map(SavedState::Ilgr),
+                        Box::new(m),
+                        report,
+                    )
+                }
+                _ => {
+                    return Err(ModelFileError::NotSavable {
+                        label: spec.label(),
+                        why: "only exact_gp, sparse_gp and ilgr models can be saved".into(),
+                    });
+                }
+            };
         let state = state.ok_or_else(|| ModelFileError::NotSavable {
             label: spec.label(),
             why: "the fit left no state".into(),
@@ -174,7 +212,7 @@ impl ModelFile {
             provenance,
             state,
         };
-        Ok((file, model))
+        Ok((file, model, report))
     }
 
     /// Writes the file (to a temporary name, then renamed, so that an
@@ -260,10 +298,12 @@ impl ModelFile {
     /// # Errors
     /// [`ModelFileError::Regressor`] when the saved state is inconsistent.
     pub fn predictor(&self) -> Result<Predictor, ModelFileError> {
-        let model: Box<dyn ResidualRegressor> = match &self.state {
-            SavedState::ExactGp(s) => Box::new(ExactGp::from_state(s.clone())?),
-            SavedState::SparseGp(s) => Box::new(SparseGp::from_state(s.clone())?),
-            SavedState::Ilgr(s) => Box::new(Ilgr::from_state(s.clone())?),
+        let model = match &self.state {
+            SavedState::ExactGp(s) => Rebuilt::ExactGp(Box::new(ExactGp::from_state(s.clone())?)),
+            SavedState::SparseGp(s) => {
+                Rebuilt::SparseGp(Box::new(SparseGp::from_state(s.clone())?))
+            }
+            SavedState::Ilgr(s) => Rebuilt::Ilgr(Box::new(Ilgr::from_state(s.clone())?)),
         };
         Ok(Predictor {
             model,
@@ -273,9 +313,16 @@ impl ModelFile {
     }
 }
 
+/// A model rebuilt from its saved state (boxed: the kinds differ in size).
+enum Rebuilt {
+    ExactGp(Box<ExactGp>),
+    SparseGp(Box<SparseGp>),
+    Ilgr(Box<Ilgr>),
+}
+
 /// A loaded model that predicts from raw input rows.
 pub struct Predictor {
-    model: Box<dyn ResidualRegressor>,
+    model: Rebuilt,
     input_names: Vec<String>,
     input_standardizer: Option<Standardizer>,
 }
@@ -292,6 +339,70 @@ impl Predictor {
         columns: &[String],
         rows: &SampleMatrix,
     ) -> Result<Predictions, ModelFileError> {
+        let inputs = self.model_inputs(columns, rows)?;
+        Ok(self.model_ref().predict(&inputs)?)
+    }
+
+    /// [`Self::predict`], with the latent function's variance beside the
+    /// noisy target's (`None` for a model without one: ILGR).
+    ///
+    /// # Errors
+    /// As [`Self::predict`].
+    pub fn predict_with_latent(
+        &self,
+        columns: &[String],
+        rows: &SampleMatrix,
+    ) -> Result<(Predictions, Option<SampleMatrix>), ModelFileError> {
+        let inputs = self.model_inputs(columns, rows)?;
+        let full = match &self.model {
+            Rebuilt::ExactGp(m) => m.predict_full(&inputs)?,
+            Rebuilt::SparseGp(m) => m.predict_full(&inputs)?,
+            Rebuilt::Ilgr(m) => return Ok((m.predict(&inputs)?, None)),
+        };
+        let predictions = Predictions {
+            mean: full.mean,
+            variance: full.variance,
+        };
+        Ok((predictions, Some(full.latent_variance)))
+    }
+
+    /// The model's learned state now (after online updates, for ILGR), to
+    /// save it again.
+    pub fn saved_state(&self) -> Option<SavedState> {
+        match &self.model {
+            Rebuilt::ExactGp(m) => m.state().cloned().map(SavedState::ExactGp),
+            Rebuilt::SparseGp(m) => m.state().cloned().map(SavedState::SparseGp),
+            Rebuilt::Ilgr(m) => m.state().cloned().map(SavedState::Ilgr),
+        }
+    }
+
+    /// The log marginal likelihood of each output group of an exact GP
+    /// (standardised units); `None` for other kinds.
+    pub fn log_marginal_likelihoods(&self) -> Option<Vec<f64>> {
+        match &self.model {
+            Rebuilt::ExactGp(m) => Some(m.log_marginal_likelihoods()),
+            _ => None,
+        }
+    }
+
+    fn model_ref(&self) -> &dyn ResidualRegressor {
+        match &self.model {
+            Rebuilt::ExactGp(m) => m.as_ref(),
+            Rebuilt::SparseGp(m) => m.as_ref(),
+            Rebuilt::Ilgr(m) => m.as_ref(),
+        }
+    }
+
+    /// The model's inputs for `rows` whose columns are named `columns`:
+    /// its columns picked by name, z-scored as the file says.
+    ///
+    /// # Errors
+    /// [`ModelFileError::MissingColumn`].
+    pub fn model_inputs(
+        &self,
+        columns: &[String],
+        rows: &SampleMatrix,
+    ) -> Result<SampleMatrix, ModelFileError> {
         let index: Vec<usize> = self
             .input_names
             .iter()
@@ -312,13 +423,17 @@ impl Predictor {
         if let Some(s) = &self.input_standardizer {
             inputs = s.transform(&inputs)?;
         }
-        Ok(self.model.predict(&inputs)?)
+        Ok(inputs)
     }
 
     /// The rebuilt model (e.g. to continue learning online with `update`,
     /// on inputs z-scored as the file says).
     pub fn model_mut(&mut self) -> &mut dyn ResidualRegressor {
-        self.model.as_mut()
+        match &mut self.model {
+            Rebuilt::ExactGp(m) => m.as_mut(),
+            Rebuilt::SparseGp(m) => m.as_mut(),
+            Rebuilt::Ilgr(m) => m.as_mut(),
+        }
     }
 }
 

@@ -1,0 +1,55 @@
+"""gpodo: Gaussian-process models of robot odometry errors, in Python.
+
+scikit-learn estimators over gpodo's Rust regressors, which share saved
+models with the ``gpodo`` command line::
+
+    from gpodo import ExactGP
+    gp = ExactGP(kernel="rbf").fit(X, y)
+    mean, std = gp.predict(X_new, return_std=True)
+    gp.save("model.gpodo")                 # what `gpodo predict --model` reads
+    again = gpodo.load_model("model.gpodo")
+
+See ``help(gpodo.ExactGP)``, ``help(gpodo.SparseGP)``, ``help(gpodo.ILGR)``.
+"""
+
+import json
+
+import numpy as np
+
+from . import _native
+from ._estimators import ILGR, ExactGP, SparseGP
+
+__all__ = ["ExactGP", "SparseGP", "ILGR", "load_model", "kernel_names"]
+
+_KINDS = {"exact_gp": ExactGP, "sparse_gp": SparseGP, "ilgr": ILGR}
+
+
+def kernel_names():
+    """The kernel names a kernel expression may combine with ``+`` and ``*``."""
+    return _native.kernel_names()
+
+
+def load_model(path):
+    """Reads a model file (what ``gpodo fit --save`` or ``Estimator.save``
+    writes) as a fitted estimator of its kind, ready to predict."""
+    model = _native.load_model(str(path))
+    state = json.loads(model.to_json())["state"]
+    kind = state["kind"]
+    params = dict(state["params"])
+    estimator = _KINDS[kind]()
+    if kind == "exact_gp":
+        estimator.set_params(kernel=params["kernel"])
+    elif kind == "sparse_gp":
+        estimator.set_params(
+            kernel=params["kernel"],
+            approximation=params["approximation"],
+            n_inducing=params["inducing"]["count"],
+        )
+    estimator.model_ = model
+    estimator.n_features_in_ = len(model.input_names)
+    names = model.input_names
+    if names != [f"x{i}" for i in range(len(names))]:
+        estimator.feature_names_in_ = np.asarray(names, dtype=object)
+    estimator._y_was_1d = len(model.target_names) == 1
+    estimator._set_fitted_attributes({"parameters": [], "objective": None, "evaluations": None})
+    return estimator
