@@ -213,7 +213,49 @@ def fit_sklearn(X, Y, max_iters, time_limit):
     }
 
 
-PEERS = {"gpy": fit_gpy, "sklearn": fit_sklearn}
+def fit_gpodo(X, Y, max_iters, time_limit, own_start=False):
+    """gpodo's exact GP from Python (`pip install ./python`), on the same
+    z-scored rows (its own z-scoring off) with L-BFGS capped at
+    `max_iters` iterations: from the peers' start alone, or (`own_start`)
+    from gpodo's default start policy. `time_limit` is not supported."""
+    import gpodo
+
+    d = X.shape[1]
+    settings = {"standardize": False, "hyperopt": {"max_iters": max_iters}}
+    if not own_start:
+        settings.update(
+            init={"variance": START_VARIANCE, "lengthscale": math.sqrt(d)},
+            noise_variance=START_NOISE,
+            hyperopt={"max_iters": max_iters, "start": {"perturbations": 0}},
+        )
+    gp = gpodo.ExactGP(kernel="rbf", **settings)
+    t0 = time.perf_counter()
+    gp.fit(X, Y)
+    seconds = time.perf_counter() - t0
+    h = gp.hyperparameters_
+    return {
+        "impl": "gpodo (Python)" + (", its own start" if own_start else ""),
+        "status": "ok",
+        "seconds": seconds,
+        "lml_peer": float(gp.log_marginal_likelihood_value_),
+        "evaluations": gp.n_evaluations_,
+        "variance": h["rbf.variance"],
+        "noise_variance": h["noise_variance"],
+        "lengthscales": [h[f"rbf.lengthscale[x{j}]"] for j in range(d)],
+    }
+
+
+def fit_gpodo_own_start(X, Y, max_iters, time_limit):
+    """`fit_gpodo` from gpodo's own start policy."""
+    return fit_gpodo(X, Y, max_iters, time_limit, own_start=True)
+
+
+PEERS = {
+    "gpy": fit_gpy,
+    "sklearn": fit_sklearn,
+    "gpodo": fit_gpodo,
+    "gpodo-own-start": fit_gpodo_own_start,
+}
 
 
 def main():
@@ -221,7 +263,9 @@ def main():
     add_table_arguments(ap)
     ap.add_argument("--n", type=int, default=None, help="use the first N rows (default: all)")
     ap.add_argument("--d", type=int, default=N_INPUTS, help="use the first D input columns")
-    ap.add_argument("--peers", default="gpy,sklearn", help="comma list of: gpy, sklearn")
+    ap.add_argument("--peers", default="gpy,sklearn",
+                    help="comma list of: gpy, sklearn, gpodo (from Python, the peers' start), "
+                         "gpodo-own-start")
     ap.add_argument("--max-iters", type=int, default=1000,
                     help="L-BFGS-B iteration and evaluation cap (both peers)")
     ap.add_argument("--time-limit", type=float, default=None,
