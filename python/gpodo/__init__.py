@@ -35,6 +35,11 @@ def load_model(path):
     model = _native.load_model(str(path))
     state = json.loads(model.to_json())["state"]
     kind = state["kind"]
+    if kind not in _KINDS:
+        raise ValueError(
+            f"{path}: a `{kind}` model, which has no Python estimator yet; "
+            f"these load: {', '.join(sorted(_KINDS))}"
+        )
     params = dict(state["params"])
     estimator = _KINDS[kind]()
     if kind == "exact_gp":

@@ -1,4 +1,5 @@
-//! ILGR's per-sample cost (§VI: the on-board budget at 12.5 Hz is 80 ms):
+//! ILGR's and the sparse-spectrum GP's per-sample cost (§VI: the on-board
+//! budget at 12.5 Hz is 80 ms). ILGR:
 //! one online `update` followed by one `predict_row` at d = 28 with three
 //! outputs, after warming the model up to its default number of broad
 //! local models and, with narrower models, to the 200-model limit; beside
@@ -13,7 +14,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_regressors::{Ilgr, IlgrParams};
+use gpodo_regressors::{Ilgr, IlgrParams, SparseSpectrumGp, SparseSpectrumParams};
 use gpodo_traits::{ResidualRegressor, SampleMatrix};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -77,6 +78,20 @@ fn per_sample(c: &mut Criterion) {
             })
         });
     }
+    // The sparse-spectrum GP (I-SSGP): one exact rank-one update of its
+    // D = 200 features, after a warm-up fit on 200 rows.
+    let mut ssgp = SparseSpectrumGp::new(SparseSpectrumParams::default()).unwrap();
+    let (wx, wy) = data(200, D);
+    ssgp.fit(&dataset(&wx, &wy)).unwrap();
+    let stream = samples(4096, 3);
+    let mut i = 0;
+    group.bench_function("sparse_spectrum_update/d28_p3_D200", |b| {
+        b.iter(|| {
+            let (xs, ys) = &stream[i % stream.len()];
+            i += 1;
+            ssgp.update(black_box(xs), black_box(ys)).unwrap();
+        })
+    });
     group.finish();
 }
 

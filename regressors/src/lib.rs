@@ -38,6 +38,7 @@ pub mod metrics;
 pub mod model_file;
 pub mod scaling;
 pub mod sparse_gp;
+pub mod sparse_spectrum;
 pub mod spec;
 pub mod zero;
 
@@ -48,5 +49,6 @@ pub use ilgr::{Ilgr, IlgrParams};
 pub use kernels::{Kernel, KernelExpr};
 pub use knn::{Knn, KnnParams};
 pub use sparse_gp::{SparseGp, SparseGpParams};
+pub use sparse_spectrum::{SparseSpectrumGp, SparseSpectrumParams};
 pub use spec::RegressorSpec;
 pub use zero::ZeroResidual;

@@ -29,6 +29,7 @@ use serde::{Deserialize, Serialize};
 use crate::exact_gp::{ExactGp, ExactGpState};
 use crate::ilgr::{Ilgr, IlgrState};
 use crate::sparse_gp::{SparseGp, SparseGpState};
+use crate::sparse_spectrum::{SparseSpectrumGp, SparseSpectrumState};
 use crate::{RegressorError, RegressorSpec};
 
 /// What the first field of every model file says.
@@ -48,6 +49,8 @@ pub enum SavedState {
     SparseGp(SparseGpState),
     /// An ILGR (which can go on learning online after loading).
     Ilgr(IlgrState),
+    /// A sparse-spectrum GP (which can go on learning online after loading).
+    SparseSpectrum(Box<SparseSpectrumState>),
 }
 
 /// Where a saved model came from.
@@ -191,10 +194,22 @@ impl ModelFile {
                         report,
                     )
                 }
+                RegressorSpec::SparseSpectrum(p) => {
+                    let mut m = SparseSpectrumGp::new(p.clone())?;
+                    m.set_progress(progress);
+                    let report = m.fit(train)?;
+                    let state = m
+                        .state()
+                        .cloned()
+                        .map(|s| SavedState::SparseSpectrum(Box::new(s)));
+                    (state, Box::new(m), report)
+                }
                 _ => {
                     return Err(ModelFileError::NotSavable {
                         label: spec.label(),
-                        why: "only exact_gp, sparse_gp and ilgr models can be saved".into(),
+                        why:
+                            "only exact_gp, sparse_gp, ilgr and sparse_spectrum models can be saved"
+                                .into(),
                     });
                 }
             };
@@ -304,6 +319,9 @@ impl ModelFile {
                 Rebuilt::SparseGp(Box::new(SparseGp::from_state(s.clone())?))
             }
             SavedState::Ilgr(s) => Rebuilt::Ilgr(Box::new(Ilgr::from_state(s.clone())?)),
+            SavedState::SparseSpectrum(s) => {
+                Rebuilt::SparseSpectrum(Box::new(SparseSpectrumGp::from_state(s.as_ref().clone())?))
+            }
         };
         Ok(Predictor {
             model,
@@ -318,6 +336,7 @@ enum Rebuilt {
     ExactGp(Box<ExactGp>),
     SparseGp(Box<SparseGp>),
     Ilgr(Box<Ilgr>),
+    SparseSpectrum(Box<SparseSpectrumGp>),
 }
 
 /// A loaded model that predicts from raw input rows.
@@ -358,6 +377,7 @@ impl Predictor {
             Rebuilt::ExactGp(m) => m.predict_full(&inputs)?,
             Rebuilt::SparseGp(m) => m.predict_full(&inputs)?,
             Rebuilt::Ilgr(m) => return Ok((m.predict(&inputs)?, None)),
+            Rebuilt::SparseSpectrum(m) => return Ok((m.predict(&inputs)?, None)),
         };
         let predictions = Predictions {
             mean: full.mean,
@@ -373,6 +393,10 @@ impl Predictor {
             Rebuilt::ExactGp(m) => m.state().cloned().map(SavedState::ExactGp),
             Rebuilt::SparseGp(m) => m.state().cloned().map(SavedState::SparseGp),
             Rebuilt::Ilgr(m) => m.state().cloned().map(SavedState::Ilgr),
+            Rebuilt::SparseSpectrum(m) => m
+                .state()
+                .cloned()
+                .map(|s| SavedState::SparseSpectrum(Box::new(s))),
         }
     }
 
@@ -390,6 +414,7 @@ impl Predictor {
             Rebuilt::ExactGp(m) => m.as_ref(),
             Rebuilt::SparseGp(m) => m.as_ref(),
             Rebuilt::Ilgr(m) => m.as_ref(),
+            Rebuilt::SparseSpectrum(m) => m.as_ref(),
         }
     }
 
@@ -433,6 +458,7 @@ impl Predictor {
             Rebuilt::ExactGp(m) => m.as_mut(),
             Rebuilt::SparseGp(m) => m.as_mut(),
             Rebuilt::Ilgr(m) => m.as_mut(),
+            Rebuilt::SparseSpectrum(m) => m.as_mut(),
         }
     }
 }

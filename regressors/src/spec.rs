@@ -10,6 +10,7 @@ use crate::external::{ExternalParams, ExternalRegressor};
 use crate::ilgr::{Ilgr, IlgrParams};
 use crate::knn::{Knn, KnnParams};
 use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
+use crate::sparse_spectrum::{SparseSpectrumGp, SparseSpectrumParams};
 use crate::{RegressorError, ZeroResidual};
 
 /// A regressor as written in an experiment file.
@@ -29,6 +30,9 @@ pub enum RegressorSpec {
     SparseGp(SparseGpParams),
     /// Incremental local Gaussian regression (§VI), learning online.
     Ilgr(IlgrParams),
+    /// The sparse-spectrum GP learned online (I-SSGP): random Fourier
+    /// features of a stationary kernel, exact rank-one updates.
+    SparseSpectrum(SparseSpectrumParams),
     /// k-nearest-neighbour regression (the worked example of adding a
     /// regressor).
     Knn(KnnParams),
@@ -73,6 +77,12 @@ impl RegressorSpec {
                 let shown = &["kernel", "approximation", "inducing.count"][..];
                 (base, shown, to_json(p), to_json(&SparseGpParams::default()))
             }
+            Self::SparseSpectrum(p) => (
+                format!("sparse spectrum (D={}): {}", p.features, p.kernel),
+                &["kernel", "features"][..],
+                to_json(p),
+                to_json(&SparseSpectrumParams::default()),
+            ),
             Self::Ilgr(p) => (
                 "ILGR".to_string(),
                 &[][..],
@@ -123,6 +133,7 @@ impl RegressorSpec {
             Self::ExactGp(p) => p.check(),
             Self::SparseGp(p) => p.check(),
             Self::Ilgr(p) => p.check(),
+            Self::SparseSpectrum(p) => p.check(),
             Self::Knn(p) => p.check(),
             Self::External(p) => p.check(),
         }
@@ -133,7 +144,8 @@ impl RegressorSpec {
     /// data (`None` for the others): an exact GP holds about five `n × n`
     /// matrices (the Gram matrix, its Cholesky factor, its inverse and the
     /// gradient's scratch), a sparse GP about eight `m × n` ones and its
-    /// `m × m` factors, with `m` the inducing points it will use.
+    /// `m × m` factors, with `m` the inducing points it will use; a
+    /// sparse-spectrum GP its warm-up GP's and its `D × D` factor.
     pub fn fit_memory_bytes(&self, n: usize, d: usize, p: usize) -> Option<u64> {
         let f64s = |count: u128| u64::try_from(count.saturating_mul(8)).unwrap_or(u64::MAX);
         let (n, d, p) = (n as u128, d as u128, p as u128);
@@ -142,6 +154,14 @@ impl RegressorSpec {
             Self::SparseGp(s) => {
                 let m = (s.inducing.count as u128).min(n);
                 Some(f64s(8 * m * n + 6 * m * m + 4 * n * (d + p)))
+            }
+            // The warm-up GP's five w × w matrices and the D × D factor.
+            Self::SparseSpectrum(s) => {
+                let w = (s.warmup_rows as u128).min(n);
+                let features = s.features as u128;
+                Some(f64s(
+                    5 * w * w + features * (features + p) + 4 * n * (d + p),
+                ))
             }
             Self::Zero { .. } | Self::Ilgr(_) | Self::Knn(_) | Self::External(_) => None,
         }
@@ -158,6 +178,7 @@ impl RegressorSpec {
             Self::ExactGp(p) => Box::new(ExactGp::new(p.clone())?),
             Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
             Self::Ilgr(p) => Box::new(Ilgr::new(p.clone())?),
+            Self::SparseSpectrum(p) => Box::new(SparseSpectrumGp::new(p.clone())?),
             Self::Knn(p) => Box::new(Knn::new(p.clone())?),
             Self::External(p) => Box::new(ExternalRegressor::new(p.clone())?),
         })

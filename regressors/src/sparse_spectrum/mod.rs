@@ -1,0 +1,481 @@
+//! The sparse-spectrum GP learned online (I-SSGP; Gijsberts & Metta,
+//! *Neural Networks* 2013): Bayesian linear regression on `D` random
+//! Fourier features of a stationary ARD kernel, whose posterior is kept as
+//! the Cholesky factor of its precision and updated by one exact rank-one
+//! update per sample, `O(D²)`.
+//!
+//! With `m = D/2` frequencies `ω_i` drawn from the kernel's spectral density
+//! (for RBF `ω = z / ℓ`, `z ~ N(0, I)`; for Matérn ν a Student-t with `2ν`
+//! degrees of freedom, `ω = z / ℓ · √(2ν / u)`, `u ~ χ²(2ν)`), the features
+//! `φ(x) = √(σ_f² / m) [cos(ωᵢᵀx), sin(ωᵢᵀx)]` satisfy
+//! `E[φ(x)ᵀφ(x')] = k(x − x')`. With weights `w ~ N(0, I)` and noise `σ_n²`:
+//!
+//! * `A = σ_n² I + Σ_t λ^{T−t} φ_t φ_tᵀ`, `b = Σ_t λ^{T−t} φ_t y_t` (the
+//!   forgetting `λ` scales both before each update);
+//! * mean `φ*ᵀ A⁻¹ b`; latent variance `σ_n² φ*ᵀ A⁻¹ φ*`; noisy variance
+//!   `σ_n² (1 + φ*ᵀ A⁻¹ φ*)`.
+//!
+//! As `D → ∞` the mean tends to the exact GP's at the same hyperparameters.
+//! The hyperparameters (`σ_f²`, the lengthscales, `σ_n²`) and the input
+//! and target scaling come from a batch exact-GP fit on the stream's first
+//! `warmup_rows` rows, and never from later rows.
+
+pub mod params;
+
+use std::time::Instant;
+
+use nalgebra::{DMatrix, DVector};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{ChiSquared, Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use gpodo_traits::{
+    Error, FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+    Standardizer,
+};
+
+use crate::RegressorError;
+use crate::exact_gp::{ExactGp, ExactGpParams};
+use crate::kernels::LeafName;
+pub use params::SparseSpectrumParams;
+
+/// Everything needed to predict and go on learning, serialisable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SparseSpectrumState {
+    /// The settings.
+    pub params: SparseSpectrumParams,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Output column names.
+    pub target_names: Vec<String>,
+    /// The warm-up rows' input scaling (None: inputs used as given).
+    pub input_scaler: Option<Standardizer>,
+    /// The warm-up rows' target scaling.
+    pub output_scaler: Option<Standardizer>,
+    /// The frequencies `ωᵢ`, one per row (`D/2 × d`, scaled inputs).
+    pub frequencies: SampleMatrix,
+    /// Signal variance `σ_f²` (scaled units).
+    pub signal_variance: f64,
+    /// Noise variance `σ_n²` (scaled units).
+    pub noise_variance: f64,
+    /// Lower Cholesky factor of `A` (`D × D`).
+    pub factor: DMatrix<f64>,
+    /// `b` (`D × outputs`).
+    pub rhs: DMatrix<f64>,
+    /// Rows learned so far.
+    pub rows_seen: usize,
+}
+
+/// `L Lᵀ + x xᵀ`, in place: the rank-one update of a lower Cholesky factor
+/// by Givens-like rotations, column by column, `O(D²)`. Hand-written
+/// because forgetting scales the factor itself, which nalgebra's
+/// `Cholesky` (with its own `rank_one_update`) does not expose.
+fn rank_one_update(l: &mut DMatrix<f64>, mut x: DVector<f64>) {
+    let n = x.len();
+    for k in 0..n {
+        let lkk = l[(k, k)];
+        let r = lkk.hypot(x[k]);
+        let (c, s) = (r / lkk, x[k] / lkk);
+        l[(k, k)] = r;
+        for i in k + 1..n {
+            let lik = (l[(i, k)] + s * x[i]) / c;
+            l[(i, k)] = lik;
+            x[i] = c * x[i] - s * lik;
+        }
+    }
+}
+
+/// The sparse-spectrum GP regressor (`kind: sparse_spectrum`).
+///
+/// Learning from a stream without a `fit` first, it keeps the first
+/// `warmup_rows` rows, predicting their running mean and variance, and then
+/// warms up on them and learns on from there.
+#[derive(Debug, Clone)]
+pub struct SparseSpectrumGp {
+    params: SparseSpectrumParams,
+    learned: Option<SparseSpectrumState>,
+    /// Rows of a stream kept until the warm-up.
+    buffer: Vec<(Vec<f64>, Vec<f64>)>,
+    progress: crate::hyperopt::ProgressSink,
+}
+
+/// The features `φ(x)` of one scaled input row.
+fn features(state: &SparseSpectrumState, x: &[f64]) -> DVector<f64> {
+    let m = state.frequencies.nrows();
+    let scale = (state.signal_variance / m as f64).sqrt();
+    let mut phi = DVector::zeros(2 * m);
+    for (i, omega) in state.frequencies.rows().enumerate() {
+        let angle: f64 = omega.iter().zip(x).map(|(w, v)| w * v).sum();
+        let (s, c) = angle.sin_cos();
+        phi[i] = scale * c;
+        phi[m + i] = scale * s;
+    }
+    phi
+}
+
+/// `count` frequencies drawn from the spectral density of the kernel `leaf`
+/// (rbf, matern52, matern32) with ARD `lengthscales`, from `seed`; one per
+/// row.
+///
+/// # Errors
+/// [`RegressorError::InvalidData`] if the density cannot be sampled.
+pub fn draw_frequencies(
+    leaf: LeafName,
+    lengthscales: &[f64],
+    count: usize,
+    seed: u64,
+) -> Result<SampleMatrix, RegressorError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let nu: Option<f64> = match leaf {
+        LeafName::Matern52 => Some(2.5),
+        LeafName::Matern32 => Some(1.5),
+        _ => None,
+    };
+    let chi = nu
+        .map(|nu| ChiSquared::new(2.0 * nu))
+        .transpose()
+        .map_err(|e| RegressorError::InvalidData {
+            detail: format!("sparse_spectrum frequencies: {e}"),
+        })?;
+    let mut data = Vec::with_capacity(count * lengthscales.len());
+    for _ in 0..count {
+        let t = match (nu, &chi) {
+            (Some(nu), Some(chi)) => {
+                let u: f64 = chi.sample(&mut rng);
+                (2.0 * nu / u).sqrt()
+            }
+            _ => 1.0,
+        };
+        for l in lengthscales {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            data.push(z * t / l);
+        }
+    }
+    SampleMatrix::from_row_major(count, lengthscales.len(), data).map_err(RegressorError::from)
+}
+
+impl SparseSpectrumGp {
+    /// A model with checked settings.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the bad field.
+    pub fn new(params: SparseSpectrumParams) -> Result<Self, RegressorError> {
+        params.check()?;
+        Ok(Self {
+            params,
+            learned: None,
+            buffer: Vec::new(),
+            progress: Default::default(),
+        })
+    }
+
+    /// The learned state (None before `fit`).
+    pub fn state(&self) -> Option<&SparseSpectrumState> {
+        self.learned.as_ref()
+    }
+
+    /// Rebuilds a model from its saved state.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidData`] when the state is inconsistent.
+    pub fn from_state(state: SparseSpectrumState) -> Result<Self, RegressorError> {
+        state.params.check()?;
+        let dim = 2 * state.frequencies.nrows();
+        let bad = |detail: &str| RegressorError::InvalidData {
+            detail: format!("saved sparse_spectrum state: {detail}"),
+        };
+        if state.factor.shape() != (dim, dim) || state.rhs.nrows() != dim {
+            return Err(bad(
+                "its factor or right-hand side does not match its features",
+            ));
+        }
+        if (0..dim).any(|k| state.factor[(k, k)].is_nan() || state.factor[(k, k)] <= 0.0) {
+            return Err(bad("its factor is not positive definite"));
+        }
+        Ok(Self {
+            params: state.params.clone(),
+            learned: Some(state),
+            buffer: Vec::new(),
+            progress: Default::default(),
+        })
+    }
+
+    /// The batch warm-up: an exact GP with the kernel on the first rows.
+    fn warm_up(&self, data: &ResidualDataset) -> Result<(ExactGp, FitReport), RegressorError> {
+        let rows: Vec<usize> = (0..data.len().min(self.params.warmup_rows)).collect();
+        let head = ResidualDataset::new(
+            data.inputs.select_rows(&rows),
+            data.targets.select_rows(&rows),
+            data.input_names.clone(),
+            data.target_names.clone(),
+        )?
+        .with_standardized_inputs(data.inputs_standardized);
+        let mut gp = ExactGp::new(ExactGpParams {
+            hyperopt: self.params.hyperopt,
+            seed: self.params.seed,
+            ..ExactGpParams::with_kernel(self.params.kernel.clone())
+        })?;
+        gp.set_progress(self.progress.0.clone());
+        let report = gp.fit(&head)?;
+        Ok((gp, report))
+    }
+
+    fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        if data.len() < 2 {
+            return Err(RegressorError::InvalidData {
+                detail: "sparse_spectrum needs at least 2 rows to warm up on".into(),
+            });
+        }
+        let (gp, mut report) = self.warm_up(data)?;
+        let Some(gp_state) = gp.state() else {
+            return Err(RegressorError::InvalidData {
+                detail: "the warm-up GP left no state".into(),
+            });
+        };
+        let group = &gp_state.groups[0];
+        let names = group.kernel.param_names(&data.input_names);
+        let values: Vec<f64> = group
+            .kernel
+            .log_params()
+            .into_iter()
+            .map(f64::exp)
+            .collect();
+        let mut signal_variance = 1.0;
+        let mut lengthscales = Vec::new();
+        for (name, value) in names.iter().zip(&values) {
+            if name.ends_with(".variance") {
+                signal_variance = *value;
+            } else if name.contains(".lengthscale[") {
+                lengthscales.push(*value);
+            }
+        }
+        let leaf = self.params.leaf().unwrap_or(LeafName::Rbf);
+        let frequencies = draw_frequencies(
+            leaf,
+            &lengthscales,
+            self.params.features / 2,
+            self.params.seed,
+        )?;
+        let dim = self.params.features;
+        let noise_variance = group.noise_variance;
+        if noise_variance.is_nan() || noise_variance <= 0.0 {
+            return Err(RegressorError::InvalidData {
+                detail: format!("sparse_spectrum: noise variance {noise_variance} is not positive"),
+            });
+        }
+        let mut state = SparseSpectrumState {
+            params: self.params.clone(),
+            input_names: data.input_names.clone(),
+            target_names: data.target_names.clone(),
+            input_scaler: gp_state.input_scaler.clone(),
+            output_scaler: gp_state.output_scaler.clone(),
+            frequencies,
+            signal_variance,
+            noise_variance,
+            // A = σ_n² I before any row.
+            factor: DMatrix::identity(dim, dim) * noise_variance.sqrt(),
+            rhs: DMatrix::zeros(dim, data.targets.ncols()),
+            rows_seen: 0,
+        };
+        for (x, y) in data.inputs.rows().zip(data.targets.rows()) {
+            state.learn(x, y)?;
+        }
+        self.learned = Some(state);
+        report.n_samples = data.len();
+        report.parameters.push(("features".into(), dim as f64));
+        report.duration_secs = start.elapsed().as_secs_f64();
+        Ok(report)
+    }
+}
+
+impl SparseSpectrumState {
+    /// The scaled input and target rows of a raw pair.
+    fn scaled(&self, x: &[f64], y: &[f64]) -> Result<(Vec<f64>, Vec<f64>), Error> {
+        let scale = |s: &Option<Standardizer>, v: &[f64]| -> Vec<f64> {
+            match s {
+                Some(s) => v
+                    .iter()
+                    .zip(s.mean.iter().zip(&s.std))
+                    .map(|(v, (m, sd))| (v - m) / sd)
+                    .collect(),
+                None => v.to_vec(),
+            }
+        };
+        Ok((scale(&self.input_scaler, x), scale(&self.output_scaler, y)))
+    }
+
+    /// One exact rank-one update with the pair `(x, y)` (raw units).
+    fn learn(&mut self, x: &[f64], y: &[f64]) -> Result<(), Error> {
+        let (d, p) = (self.frequencies.ncols(), self.rhs.ncols());
+        if x.len() != d || y.len() != p {
+            return Err(Error::DimensionMismatch {
+                what: "sparse_spectrum inputs and targets".into(),
+                expected: d + p,
+                found: x.len() + y.len(),
+            });
+        }
+        if x.iter().chain(y).any(|v| !v.is_finite()) {
+            return Err(Error::InvalidInput(
+                "sparse_spectrum: a non-finite input or target".into(),
+            ));
+        }
+        let (xs, ys) = self.scaled(x, y)?;
+        let phi = features(self, &xs);
+        let lambda = self.params.forgetting;
+        if lambda < 1.0 {
+            // A ← λA and b ← λb: the factor scales by √λ.
+            self.factor *= lambda.sqrt();
+            self.rhs *= lambda;
+        }
+        for (j, t) in ys.iter().enumerate() {
+            self.rhs.column_mut(j).axpy(*t, &phi, 1.0);
+        }
+        rank_one_update(&mut self.factor, phi);
+        self.rows_seen += 1;
+        Ok(())
+    }
+}
+
+impl SparseSpectrumGp {
+    /// A stream's row before the warm-up: kept, and once there are
+    /// `warmup_rows` of them, warmed up on and learned.
+    fn keep_for_warm_up(&mut self, x: &[f64], y: &[f64]) -> Result<(), Error> {
+        if let Some((x0, y0)) = self.buffer.first()
+            && (x0.len() != x.len() || y0.len() != y.len())
+        {
+            return Err(Error::DimensionMismatch {
+                what: "sparse_spectrum inputs and targets".into(),
+                expected: x0.len() + y0.len(),
+                found: x.len() + y.len(),
+            });
+        }
+        self.buffer.push((x.to_vec(), y.to_vec()));
+        if self.buffer.len() < self.params.warmup_rows {
+            return Ok(());
+        }
+        let rows = std::mem::take(&mut self.buffer);
+        let (d, p) = (rows[0].0.len(), rows[0].1.len());
+        let inputs: Vec<&[f64]> = rows.iter().map(|r| r.0.as_slice()).collect();
+        let targets: Vec<&[f64]> = rows.iter().map(|r| r.1.as_slice()).collect();
+        let data = ResidualDataset::new(
+            SampleMatrix::from_rows(d, &inputs)?,
+            SampleMatrix::from_rows(p, &targets)?,
+            (0..d).map(|j| format!("x{j}")).collect(),
+            (0..p).map(|j| format!("y{j}")).collect(),
+        )?;
+        self.fit_impl(&data).map(|_| ()).map_err(Error::from)
+    }
+
+    /// Before the warm-up: the kept rows' mean and variance per output (an
+    /// error before any row).
+    fn predict_before_warm_up(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let Some((_, y0)) = self.buffer.first() else {
+            return Err(Error::NotFitted {
+                model: self.name().into(),
+            });
+        };
+        let (n, p) = (self.buffer.len() as f64, y0.len());
+        let mean: Vec<f64> = (0..p)
+            .map(|j| self.buffer.iter().map(|r| r.1[j]).sum::<f64>() / n)
+            .collect();
+        let variance: Vec<f64> = (0..p)
+            .map(|j| {
+                let spread = self
+                    .buffer
+                    .iter()
+                    .map(|r| (r.1[j] - mean[j]).powi(2))
+                    .sum::<f64>();
+                if n > 1.0 {
+                    spread / (n - 1.0)
+                } else {
+                    mean[j] * mean[j]
+                }
+            })
+            .collect();
+        let q = inputs.nrows();
+        Ok(Predictions {
+            mean: SampleMatrix::from_row_major(q, p, mean.repeat(q))?,
+            variance: SampleMatrix::from_row_major(q, p, variance.repeat(q))?,
+        })
+    }
+}
+
+impl ResidualRegressor for SparseSpectrumGp {
+    fn name(&self) -> &str {
+        "sparse_spectrum"
+    }
+
+    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
+        self.fit_impl(data).map_err(Error::from)
+    }
+
+    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let Some(state) = &self.learned else {
+            return self.predict_before_warm_up(inputs);
+        };
+        let d = state.frequencies.ncols();
+        if inputs.ncols() != d {
+            return Err(Error::DimensionMismatch {
+                what: "sparse_spectrum input columns".into(),
+                expected: d,
+                found: inputs.ncols(),
+            });
+        }
+        let p = state.rhs.ncols();
+        let singular = || Error::Numerical {
+            context: "sparse_spectrum prediction".into(),
+            detail: "its Cholesky factor is singular".into(),
+        };
+        // w = A⁻¹ b = L⁻ᵀ (L⁻¹ b).
+        let half = state
+            .factor
+            .solve_lower_triangular(&state.rhs)
+            .ok_or_else(singular)?;
+        let weights = state
+            .factor
+            .tr_solve_lower_triangular(&half)
+            .ok_or_else(singular)?;
+        let mut mean = Vec::with_capacity(inputs.nrows() * p);
+        let mut variance = Vec::with_capacity(inputs.nrows() * p);
+        let zeros = vec![0.0; p];
+        for x in inputs.rows() {
+            let (xs, _) = state.scaled(x, &zeros)?;
+            let phi = features(state, &xs);
+            let v = state
+                .factor
+                .solve_lower_triangular(&phi)
+                .ok_or_else(singular)?;
+            let noisy = state.noise_variance * (1.0 + v.norm_squared());
+            for j in 0..p {
+                let m = phi.dot(&weights.column(j));
+                let (mu, sd) = state
+                    .output_scaler
+                    .as_ref()
+                    .map_or((0.0, 1.0), |s| (s.mean[j], s.std[j]));
+                mean.push(m * sd + mu);
+                variance.push(noisy * sd * sd);
+            }
+        }
+        Ok(Predictions {
+            mean: SampleMatrix::from_row_major(inputs.nrows(), p, mean)?,
+            variance: SampleMatrix::from_row_major(inputs.nrows(), p, variance)?,
+        })
+    }
+
+    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn FitProgress>>) {
+        self.progress = crate::hyperopt::ProgressSink(progress);
+    }
+
+    fn supports_online_update(&self) -> bool {
+        true
+    }
+
+    fn update(&mut self, inputs: &[f64], targets: &[f64]) -> Result<(), Error> {
+        let Some(state) = &mut self.learned else {
+            return self.keep_for_warm_up(inputs, targets);
+        };
+        state.learn(inputs, targets)
+    }
+}
