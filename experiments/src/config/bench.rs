@@ -15,6 +15,26 @@ pub struct BenchSettings {
     /// Index (in `regressors`) of the baseline row; omitted, the first
     /// `exact_gp`.
     pub baseline: Option<usize>,
+    /// The prequential protocol (omitted: not run): the training stream
+    /// cut into `blocks` in time order, the baseline refitted on blocks
+    /// 1…k−1 to predict block k, each online learner predicting every
+    /// sample before learning it.
+    pub prequential: Option<PrequentialSettings>,
+}
+
+/// Settings of the prequential protocol.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PrequentialSettings {
+    /// Blocks the training stream is cut into, in time order (default 10;
+    /// blocks 2…K are scored).
+    pub blocks: usize,
+}
+
+impl Default for PrequentialSettings {
+    fn default() -> Self {
+        Self { blocks: 10 }
+    }
 }
 
 impl Default for BenchSettings {
@@ -23,6 +43,7 @@ impl Default for BenchSettings {
             predict_queries: 300,
             learning_curve_every: 100,
             baseline: None,
+            prequential: None,
         }
     }
 }
@@ -45,6 +66,14 @@ impl BenchSettings {
             return Err((
                 "baseline".into(),
                 format!("an index into `regressors` (0..{regressors}), found {b}"),
+            ));
+        }
+        if let Some(p) = self.prequential
+            && p.blocks < 2
+        {
+            return Err((
+                "prequential.blocks".into(),
+                "at least 2 blocks (block 1 is only learned from)".into(),
             ));
         }
         Ok(())

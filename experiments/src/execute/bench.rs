@@ -28,6 +28,9 @@ pub struct Latency {
     pub median_us: f64,
     /// 95th percentile (µs).
     pub p95_us: f64,
+    /// 99th percentile (µs).
+    #[serde(default)]
+    pub p99_us: f64,
     /// Mean (µs).
     pub mean_us: f64,
 }
@@ -48,6 +51,7 @@ impl Latency {
             count: n,
             median_us: at(0.5),
             p95_us: at(0.95),
+            p99_us: at(0.99),
             mean_us: samples_us.iter().sum::<f64>() / n.max(1) as f64,
         }
     }
@@ -115,6 +119,9 @@ pub struct BenchResults {
     /// The regressors that failed (label and reason); the others ran.
     #[serde(default)]
     pub failures: Vec<(String, String)>,
+    /// The prequential protocol, when `bench.prequential` asks for it.
+    #[serde(default)]
+    pub prequential: Option<crate::execute::prequential::Prequential>,
     /// Wall-clock duration (s).
     pub duration_secs: f64,
 }
@@ -235,6 +242,23 @@ pub fn run_bench(config: &ExperimentConfig) -> Result<BenchResults, PipelineErro
         let label = config.regressors[i].label();
         out.iter().position(|r| r.label == label)
     });
+    let prequential = match settings.prequential {
+        Some(p) => {
+            let Some(i) = baseline_index(config) else {
+                return Err(PipelineError::Inconsistent(
+                    "`bench.prequential` refits a baseline: add an exact_gp (or set `bench.baseline`)"
+                        .into(),
+                ));
+            };
+            Some(crate::execute::prequential::prequential(
+                &rows.train,
+                p.blocks,
+                &config.regressors[i],
+                &config.regressors,
+            )?)
+        }
+        None => None,
+    };
     Ok(BenchResults {
         config: config.clone(),
         code_version: code_version(),
@@ -242,6 +266,7 @@ pub fn run_bench(config: &ExperimentConfig) -> Result<BenchResults, PipelineErro
         baseline,
         rows: out,
         failures,
+        prequential,
         duration_secs: start.elapsed().as_secs_f64(),
     })
 }

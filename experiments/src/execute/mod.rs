@@ -16,6 +16,7 @@ pub mod feature_supply;
 pub mod fit;
 pub mod models;
 pub mod odometry;
+pub mod prequential;
 pub mod records;
 pub mod results;
 pub mod schemes;

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::execute::bench::{BenchResults, BenchRow};
+use crate::execute::bench::{BenchResults, BenchRow, Latency};
 use crate::output::write_file;
 use crate::report::table::{Align, Table};
 
@@ -173,5 +173,53 @@ pub fn bench_markdown(r: &BenchResults) -> String {
         curve.push(std::iter::once(samples.to_string()).chain(cells).collect());
     }
     s.push_str(&curve.markdown());
+    if let Some(p) = &r.prequential {
+        prequential_section(&mut s, p);
+    }
     s
+}
+
+/// The prequential protocol's table: each contender's pooled RMSE and NLPD
+/// beside the refitted baseline's.
+fn prequential_section(s: &mut String, p: &crate::execute::prequential::Prequential) {
+    let mut table = Table::new(&[
+        "contender",
+        "RMSE",
+        "RMSE / refitted",
+        "NLPD",
+        "update p50 [µs]",
+        "p95",
+        "p99",
+    ]);
+    let reference = p.refitted.rmse;
+    for score in std::iter::once(&p.refitted)
+        .chain(&p.baselines)
+        .chain(&p.learners)
+    {
+        let latency = |f: fn(&Latency) -> f64| {
+            score
+                .update_latency
+                .as_ref()
+                .map_or("–".into(), |l| format!("{:.1}", f(l)))
+        };
+        table.push(vec![
+            score.label.clone(),
+            format!("{:.6}", score.rmse),
+            format!("{:.3}", score.rmse / reference),
+            format!("{:.3}", score.nlpd),
+            latency(|l| l.median_us),
+            latency(|l| l.p95_us),
+            latency(|l| l.p99_us),
+        ]);
+    }
+    let _ = writeln!(
+        s,
+        "\n## Prequential\n\nThe training rows in time order, cut into {} blocks of {} rows; the {} samples of blocks 2…{} are scored. The baseline is refitted on blocks 1…k−1 to predict block k (refits took {:.1} s in all); each online learner predicts every sample before learning it, from an empty model. Pooled over the outputs.\n\n{}",
+        p.blocks,
+        p.block_rows,
+        p.scored,
+        p.blocks,
+        p.refit_secs.iter().sum::<f64>(),
+        table.markdown()
+    );
 }

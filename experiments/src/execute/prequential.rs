@@ -1,0 +1,248 @@
+//! The prequential protocol of `gpodo bench` (`bench: {prequential:
+//! {blocks: K}}`): the training stream is cut, in time order, into `K`
+//! blocks. For each block `k ≥ 2` the baseline (the exact GP) is fitted on
+//! blocks `1…k−1` and predicts block `k`: the best a batch learner could do
+//! with what the robot has seen. Each online learner predicts every sample
+//! of blocks `2…K` before learning it (test-then-train), from an empty
+//! model. Beside them, two baselines that need no model: predicting no
+//! residual (with the past targets' mean square as its variance) and the
+//! running mean of the past targets (with their variance). Scores are
+//! pooled over every output of every scored sample: RMSE, and the mean
+//! Gaussian NLPD `½ ln 2πσ² + (y − μ)²/2σ²`.
+
+use std::time::Instant;
+
+use gpodo_regressors::RegressorSpec;
+use gpodo_traits::{ResidualDataset, ResidualRegressor};
+use serde::{Deserialize, Serialize};
+
+use crate::error::PipelineError;
+use crate::execute::bench::Latency;
+
+/// One contender's prequential scores.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PrequentialScore {
+    /// Its label.
+    pub label: String,
+    /// RMSE pooled over the scored samples and outputs.
+    pub rmse: f64,
+    /// Mean NLPD over the same.
+    pub nlpd: f64,
+    /// An online learner's update latency.
+    pub update_latency: Option<Latency>,
+}
+
+/// What the prequential protocol measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Prequential {
+    /// Blocks `K`.
+    pub blocks: usize,
+    /// Training rows in a block (the last may hold fewer).
+    pub block_rows: usize,
+    /// Samples scored (blocks 2…K).
+    pub scored: usize,
+    /// The baseline refitted on each prefix (the yardstick).
+    pub refitted: PrequentialScore,
+    /// Seconds of each refit, block 2 first.
+    pub refit_secs: Vec<f64>,
+    /// Predicting no residual, and the running mean.
+    pub baselines: Vec<PrequentialScore>,
+    /// Each online learner of the experiment.
+    pub learners: Vec<PrequentialScore>,
+}
+
+/// Pooled squared error and NLPD.
+#[derive(Debug, Default, Clone, Copy)]
+struct Tally {
+    squared: f64,
+    nlpd: f64,
+    count: usize,
+}
+
+impl Tally {
+    fn add(&mut self, mean: f64, variance: f64, y: f64) {
+        let var = variance.max(1e-300);
+        self.squared += (y - mean).powi(2);
+        self.nlpd += 0.5 * (std::f64::consts::TAU * var).ln() + (y - mean).powi(2) / (2.0 * var);
+        self.count += 1;
+    }
+
+    fn score(&self, label: String, update_latency: Option<Latency>) -> PrequentialScore {
+        let n = self.count.max(1) as f64;
+        PrequentialScore {
+            label,
+            rmse: (self.squared / n).sqrt(),
+            nlpd: self.nlpd / n,
+            update_latency,
+        }
+    }
+}
+
+/// Rows `range` of `data`.
+fn rows(
+    data: &ResidualDataset,
+    range: std::ops::Range<usize>,
+) -> Result<ResidualDataset, PipelineError> {
+    let index: Vec<usize> = range.collect();
+    Ok(ResidualDataset::new(
+        data.inputs.select_rows(&index),
+        data.targets.select_rows(&index),
+        data.input_names.clone(),
+        data.target_names.clone(),
+    )?
+    .with_standardized_inputs(data.inputs_standardized))
+}
+
+/// Runs the protocol on `train` (time order) with `blocks` blocks, the
+/// `baseline` spec as the refitted yardstick and every online learner of
+/// `specs`.
+///
+/// # Errors
+/// [`PipelineError`] naming the regressor that failed.
+pub fn prequential(
+    train: &ResidualDataset,
+    blocks: usize,
+    baseline: &RegressorSpec,
+    specs: &[RegressorSpec],
+) -> Result<Prequential, PipelineError> {
+    let n = train.len();
+    let block_rows = n.div_ceil(blocks.max(1)).max(1);
+    let first = block_rows.min(n);
+    let p = train.targets.ncols();
+    let wrap = |label: String| move |source| PipelineError::Regressor { label, source };
+
+    // The yardstick: refitted on each prefix, predicting the next block.
+    let mut refitted = Tally::default();
+    let mut refit_secs = Vec::new();
+    let mut start = first;
+    while start < n {
+        let end = (start + block_rows).min(n);
+        let t = Instant::now();
+        let mut model = baseline.build()?;
+        model
+            .fit(&rows(train, 0..start)?)
+            .map_err(wrap(baseline.label()))?;
+        refit_secs.push(t.elapsed().as_secs_f64());
+        let block = rows(train, start..end)?;
+        let predicted = model
+            .predict(&block.inputs)
+            .map_err(wrap(baseline.label()))?;
+        for i in 0..block.len() {
+            for j in 0..p {
+                refitted.add(
+                    predicted.mean.get(i, j),
+                    predicted.variance.get(i, j),
+                    block.targets.get(i, j),
+                );
+            }
+        }
+        tracing::info!(rows = start, "prequential refit");
+        start = end;
+    }
+
+    // The baselines, from the past targets' running moments.
+    let (mut zero, mut mean) = (Tally::default(), Tally::default());
+    let (mut sum, mut sum_sq) = (vec![0.0; p], vec![0.0; p]);
+    for i in 0..n {
+        let y = train.targets.row(i);
+        if i >= first {
+            let k = i as f64;
+            for j in 0..p {
+                let m = sum[j] / k;
+                let mean_square = sum_sq[j] / k;
+                let variance = if i > 1 {
+                    (sum_sq[j] - k * m * m) / (k - 1.0)
+                } else {
+                    mean_square
+                };
+                zero.add(0.0, mean_square, y[j]);
+                mean.add(m, variance, y[j]);
+            }
+        }
+        for j in 0..p {
+            sum[j] += y[j];
+            sum_sq[j] += y[j] * y[j];
+        }
+    }
+
+    // Each online learner: test, then train, from an empty model.
+    let mut learners = Vec::new();
+    for spec in specs {
+        let mut model: Box<dyn ResidualRegressor> = spec.build()?;
+        if !model.supports_online_update() {
+            continue;
+        }
+        let mut tally = Tally::default();
+        let mut updates = Vec::with_capacity(n);
+        for i in 0..n {
+            if i >= first {
+                let predicted = model
+                    .predict(&train.inputs.select_rows(&[i]))
+                    .map_err(wrap(spec.label()))?;
+                for j in 0..p {
+                    tally.add(
+                        predicted.mean.get(0, j),
+                        predicted.variance.get(0, j),
+                        train.targets.get(i, j),
+                    );
+                }
+            }
+            let t = Instant::now();
+            model
+                .update(train.inputs.row(i), train.targets.row(i))
+                .map_err(wrap(spec.label()))?;
+            updates.push(t.elapsed().as_secs_f64() * 1e6);
+        }
+        learners.push(tally.score(spec.label(), Some(Latency::of(updates))));
+    }
+
+    Ok(Prequential {
+        blocks,
+        block_rows,
+        scored: n.saturating_sub(first),
+        refitted: refitted.score(format!("{} refitted on the prefix", baseline.label()), None),
+        refit_secs,
+        baselines: vec![
+            zero.score("predicting no residual".into(), None),
+            mean.score("running mean".into(), None),
+        ],
+        learners,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gpodo_traits::SampleMatrix;
+
+    #[test]
+    fn the_baselines_score_the_past_targets_moments_by_hand() {
+        // One output, four rows, two blocks of two: rows 2 and 3 are scored.
+        let y = [1.0, 3.0, 2.0, 6.0];
+        let data = ResidualDataset::new(
+            SampleMatrix::from_row_major(4, 1, vec![0.0, 1.0, 2.0, 3.0]).unwrap(),
+            SampleMatrix::from_row_major(4, 1, y.to_vec()).unwrap(),
+            vec!["x".into()],
+            vec!["y".into()],
+        )
+        .unwrap();
+        let spec = RegressorSpec::Zero {
+            variance: Some(1.0),
+        };
+        let r = prequential(&data, 2, &spec, &[]).unwrap();
+        assert_eq!((r.block_rows, r.scored), (2, 2));
+        // Running mean: 2 (from 1, 3), then 2 (from 1, 3, 2).
+        let rmse = ((0.0f64.powi(2) + 4.0f64.powi(2)) / 2.0).sqrt();
+        assert!((r.baselines[1].rmse - rmse).abs() < 1e-12);
+        // No residual: errors 2 and 6.
+        assert!((r.baselines[0].rmse - ((4.0 + 36.0) / 2.0f64).sqrt()).abs() < 1e-12);
+        // Its NLPD uses the mean squares 5 and 14/3.
+        let nlpd = |v: f64, e: f64| 0.5 * (std::f64::consts::TAU * v).ln() + e * e / (2.0 * v);
+        let expected = (nlpd(5.0, 2.0) + nlpd(14.0 / 3.0, 6.0)) / 2.0;
+        assert!((r.baselines[0].nlpd - expected).abs() < 1e-12);
+        // The zero model refitted on the prefix predicts 0 with variance 1.
+        let expected = (nlpd(1.0, 2.0) + nlpd(1.0, 6.0)) / 2.0;
+        assert!((r.refitted.nlpd - expected).abs() < 1e-12);
+        assert_eq!(r.refit_secs.len(), 1);
+    }
+}
