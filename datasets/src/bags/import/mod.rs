@@ -375,7 +375,6 @@ pub fn import_bag(
             dropped += 1;
             continue;
         }
-
         let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
         let mut at = 0;
         for (g, (_, refs)) in groups.iter().enumerate() {

@@ -50,7 +50,8 @@ pub(super) fn imu_stream(
 pub(super) struct GroundTruth {
     /// Position (3) and, except from GNSS, orientation `[x, y, z, w]` (4).
     pub(super) stream: Stream,
-    /// Whether the positions are GNSS fixes (orientation from the IMU).
+    /// Whether the positions are GNSS fixes (orientation from the IMU, or
+    /// level without one; the heading from the course or the IMU).
     pub(super) gnss: bool,
     /// The receiver's horizontal and vertical σ per fix that has one (m).
     pub(super) sigmas: Vec<[f64; 2]>,
