@@ -30,6 +30,9 @@ pub struct PrequentialScore {
     pub nlpd: f64,
     /// An online learner's update latency.
     pub update_latency: Option<Latency>,
+    /// The RMSE pooled over blocks 2…k, for k = 2…K (the figure's curve).
+    #[serde(default)]
+    pub cumulative_rmse: Vec<f64>,
 }
 
 /// What the prequential protocol measured.
@@ -51,20 +54,28 @@ pub struct Prequential {
     pub learners: Vec<PrequentialScore>,
 }
 
-/// Pooled squared error and NLPD.
-#[derive(Debug, Default, Clone, Copy)]
+/// Pooled squared error and NLPD, and the RMSE pooled up to each block.
+#[derive(Debug, Default, Clone)]
 struct Tally {
     squared: f64,
     nlpd: f64,
     count: usize,
+    /// `(block, cumulative RMSE)` at the end of each block seen.
+    cumulative: Vec<(usize, f64)>,
 }
 
 impl Tally {
-    fn add(&mut self, mean: f64, variance: f64, y: f64) {
+    /// One scored value of block `block`.
+    fn add(&mut self, block: usize, mean: f64, variance: f64, y: f64) {
         let var = variance.max(1e-300);
         self.squared += (y - mean).powi(2);
         self.nlpd += 0.5 * (std::f64::consts::TAU * var).ln() + (y - mean).powi(2) / (2.0 * var);
         self.count += 1;
+        let rmse = (self.squared / self.count as f64).sqrt();
+        match self.cumulative.last_mut() {
+            Some((b, r)) if *b == block => *r = rmse,
+            _ => self.cumulative.push((block, rmse)),
+        }
     }
 
     fn score(&self, label: String, update_latency: Option<Latency>) -> PrequentialScore {
@@ -74,6 +85,7 @@ impl Tally {
             rmse: (self.squared / n).sqrt(),
             nlpd: self.nlpd / n,
             update_latency,
+            cumulative_rmse: self.cumulative.iter().map(|c| c.1).collect(),
         }
     }
 }
@@ -127,9 +139,11 @@ pub fn prequential(
         let predicted = model
             .predict(&block.inputs)
             .map_err(wrap(baseline.label()))?;
+        let k = start / block_rows;
         for i in 0..block.len() {
             for j in 0..p {
                 refitted.add(
+                    k,
                     predicted.mean.get(i, j),
                     predicted.variance.get(i, j),
                     block.targets.get(i, j),
@@ -155,8 +169,8 @@ pub fn prequential(
                 } else {
                     mean_square
                 };
-                zero.add(0.0, mean_square, y[j]);
-                mean.add(m, variance, y[j]);
+                zero.add(i / block_rows, 0.0, mean_square, y[j]);
+                mean.add(i / block_rows, m, variance, y[j]);
             }
         }
         for j in 0..p {
@@ -181,6 +195,7 @@ pub fn prequential(
                     .map_err(wrap(spec.label()))?;
                 for j in 0..p {
                     tally.add(
+                        i / block_rows,
                         predicted.mean.get(0, j),
                         predicted.variance.get(0, j),
                         train.targets.get(i, j),
@@ -244,5 +259,7 @@ mod tests {
         let expected = (nlpd(1.0, 2.0) + nlpd(1.0, 6.0)) / 2.0;
         assert!((r.refitted.nlpd - expected).abs() < 1e-12);
         assert_eq!(r.refit_secs.len(), 1);
+        // One scored block: its cumulative RMSE is the pooled one.
+        assert_eq!(r.baselines[1].cumulative_rmse, vec![r.baselines[1].rmse]);
     }
 }

@@ -17,6 +17,12 @@ pub fn write_bench_report(r: &BenchResults, dir: &Path) -> anyhow::Result<(PathB
     let md = dir.join("bench.md");
     let json = dir.join("bench.json");
     write_file(&json, serde_json::to_string_pretty(r)?.as_bytes())?;
+    if let Some(p) = &r.prequential {
+        let plots = dir.join("plots");
+        std::fs::create_dir_all(&plots)?;
+        let svg = crate::report::prequential_plot::prequential_svg(p)?;
+        write_file(&plots.join("prequential.svg"), svg.as_bytes())?;
+    }
     write_file(&md, bench_markdown(r).as_bytes())?;
     Ok((md, json))
 }
@@ -214,7 +220,7 @@ fn prequential_section(s: &mut String, p: &crate::execute::prequential::Prequent
     }
     let _ = writeln!(
         s,
-        "\n## Prequential\n\nThe training rows in time order, cut into {} blocks of {} rows; the {} samples of blocks 2…{} are scored. The baseline is refitted on blocks 1…k−1 to predict block k (refits took {:.1} s in all); each online learner predicts every sample before learning it, from an empty model. Pooled over the outputs.\n\n{}",
+        "\n## Prequential\n\nThe training rows in time order, cut into {} blocks of {} rows; the {} samples of blocks 2…{} are scored. The baseline is refitted on blocks 1…k−1 to predict block k (refits took {:.1} s in all); each online learner predicts every sample before learning it, from an empty model. Pooled over the outputs; `plots/prequential.svg` draws the RMSE pooled up to each block.\n\n{}",
         p.blocks,
         p.block_rows,
         p.scored,

@@ -15,6 +15,7 @@ pub mod curves_section;
 pub mod files;
 pub mod hindsight;
 pub mod plots;
+pub mod prequential_plot;
 pub mod run;
 pub mod sensitivity;
 pub mod sensitivity_plot;
