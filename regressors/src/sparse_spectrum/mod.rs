@@ -290,22 +290,19 @@ impl SparseSpectrumGp {
     }
 }
 
-impl SparseSpectrumState {
-    /// The scaled input and target rows of a raw pair.
-    fn scaled(&self, x: &[f64], y: &[f64]) -> Result<(Vec<f64>, Vec<f64>), Error> {
-        let scale = |s: &Option<Standardizer>, v: &[f64]| -> Vec<f64> {
-            match s {
-                Some(s) => v
-                    .iter()
-                    .zip(s.mean.iter().zip(&s.std))
-                    .map(|(v, (m, sd))| (v - m) / sd)
-                    .collect(),
-                None => v.to_vec(),
-            }
-        };
-        Ok((scale(&self.input_scaler, x), scale(&self.output_scaler, y)))
+/// A raw row z-scored by `scaler` (as given without one).
+fn scale_row(scaler: &Option<Standardizer>, v: &[f64]) -> Vec<f64> {
+    match scaler {
+        Some(s) => v
+            .iter()
+            .zip(s.mean.iter().zip(&s.std))
+            .map(|(v, (m, sd))| (v - m) / sd)
+            .collect(),
+        None => v.to_vec(),
     }
+}
 
+impl SparseSpectrumState {
     /// One exact rank-one update with the pair `(x, y)` (raw units).
     fn learn(&mut self, x: &[f64], y: &[f64]) -> Result<(), Error> {
         let (d, p) = (self.frequencies.ncols(), self.rhs.ncols());
@@ -321,8 +318,8 @@ impl SparseSpectrumState {
                 "sparse_spectrum: a non-finite input or target".into(),
             ));
         }
-        let (xs, ys) = self.scaled(x, y)?;
-        let phi = features(self, &xs);
+        let phi = features(self, &scale_row(&self.input_scaler, x));
+        let ys = scale_row(&self.output_scaler, y);
         let lambda = self.params.forgetting;
         if lambda < 1.0 {
             // A ← λA and b ← λb: the factor scales by √λ.
@@ -439,10 +436,8 @@ impl ResidualRegressor for SparseSpectrumGp {
             .ok_or_else(singular)?;
         let mut mean = Vec::with_capacity(inputs.nrows() * p);
         let mut variance = Vec::with_capacity(inputs.nrows() * p);
-        let zeros = vec![0.0; p];
         for x in inputs.rows() {
-            let (xs, _) = state.scaled(x, &zeros)?;
-            let phi = features(state, &xs);
+            let phi = features(state, &scale_row(&state.input_scaler, x));
             let v = state
                 .factor
                 .solve_lower_triangular(&phi)
