@@ -292,6 +292,14 @@ fn kernel_names() -> Vec<String> {
         .collect()
 }
 
+/// Panics inside Rust with `message`, through the same boundary as a fit,
+/// so that the tests can check a panic reaches Python as a
+/// `RuntimeError` (not exported by the `gpodo` package).
+#[pyfunction]
+fn _panic_for_tests(py: Python<'_>, message: String) -> PyResult<()> {
+    detached::<()>(py, move || panic!("{message}"))
+}
+
 /// The native module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -300,5 +308,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_model, m)?)?;
     m.add_function(wrap_pyfunction!(model_from_json, m)?)?;
     m.add_function(wrap_pyfunction!(kernel_names, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
 }

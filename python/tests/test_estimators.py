@@ -248,6 +248,17 @@ def test_predicting_with_the_wrong_width_or_before_fitting_is_an_error():
         gp.predict(X[:, :2])
 
 
+def test_a_rust_panic_is_a_runtime_error_and_python_goes_on():
+    # pyo3's own PanicException derives from BaseException, so this
+    # catches only the conversion to RuntimeError.
+    from gpodo import _native
+
+    with pytest.raises(RuntimeError, match="a bug; please report it.*deliberate panic"):
+        _native._panic_for_tests("deliberate panic")
+    X, Y = data()
+    assert ExactGP().fit(X, Y).predict(X).shape == Y.shape
+
+
 # --- Python keeps running during a fit ---
 
 
