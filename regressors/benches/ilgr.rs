@@ -53,7 +53,7 @@ fn per_sample(c: &mut Criterion) {
     group.bench_function("exact_gp_predict_one/n1000", |b| {
         b.iter(|| gp.predict(black_box(&query)).unwrap())
     });
-    for (name, init_lengthscale) in [("default", 1.0), ("narrow", 0.5)] {
+    for (name, init_lengthscale) in [("default", 2.0), ("unit", 1.0), ("narrow", 0.5)] {
         let mut model = Ilgr::new(IlgrParams {
             init_lengthscale,
             target_scale: 1.0,
@@ -89,6 +89,18 @@ fn per_sample(c: &mut Criterion) {
         b.iter(|| {
             let (xs, ys) = &stream[i % stream.len()];
             i += 1;
+            ssgp.update(black_box(xs), black_box(ys)).unwrap();
+        })
+    });
+    // Test, then train, as in the prequential protocol: one prediction
+    // (the weights solved from the factor, O(D² p)) and one update.
+    let mut i = 0;
+    group.bench_function("sparse_spectrum_predict_and_update/d28_p3_D200", |b| {
+        b.iter(|| {
+            let (xs, ys) = &stream[i % stream.len()];
+            i += 1;
+            let query = SampleMatrix::from_row_major(1, D, xs.clone()).unwrap();
+            black_box(ssgp.predict(&query).unwrap());
             ssgp.update(black_box(xs), black_box(ys)).unwrap();
         })
     });

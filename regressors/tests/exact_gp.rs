@@ -597,3 +597,56 @@ fn kernel_auto_keeps_the_highest_likelihood_candidate_and_saves_it() {
         assert!(e.contains("kernel"), "{e}");
     }
 }
+
+#[test]
+fn a_warm_start_runs_from_the_previous_optimum_alone() {
+    use gpodo_regressors::exact_gp::KernelChoice;
+    let (x, y) = sine_data(80, 36);
+    let prefix = dataset(
+        &Mat::from_fn(60, 1, |i, _| x[(i, 0)]),
+        &Mat::from_fn(60, 1, |i, _| y[(i, 0)]),
+    );
+    let full = dataset(&x, &y);
+    let mut first = ExactGp::new(ExactGpParams::default()).unwrap();
+    first.fit(&prefix).unwrap();
+    let mut cold = ExactGp::new(ExactGpParams::default()).unwrap();
+    let cold_report = cold.fit(&full).unwrap();
+    let mut warm = ExactGp::new(ExactGpParams::default()).unwrap();
+    warm.warm_start_from(first.state().unwrap()).unwrap();
+    let warm_report = warm.fit(&full).unwrap();
+    // One start, named; fewer evaluations than the cold race; the same
+    // optimum of this unimodal problem.
+    assert_eq!(warm_report.starts.len(), 1, "{:?}", warm_report.starts);
+    assert_eq!(warm_report.starts[0].label, "previous optimum");
+    assert!(warm_report.evaluations < cold_report.evaluations);
+    let (w, c) = (
+        warm_report.objective.unwrap(),
+        cold_report.objective.unwrap(),
+    );
+    assert!((w - c).abs() < 1e-3, "warm {w} cold {c}");
+    // Its start is the previous optimum: the start's LML on the full data
+    // is the likelihood there, recomputed independently.
+    let g = &first.state().unwrap().groups[0];
+    let state = warm.state().unwrap();
+    let at_previous = log_marginal_likelihood(
+        &g.kernel,
+        g.noise_variance,
+        gpodo_regressors::dense::to_faer(&state.x_train).as_ref(),
+        gpodo_regressors::dense::to_faer(&state.y_train).as_ref(),
+        false,
+    )
+    .unwrap()
+    .lml;
+    let started = warm_report.starts[0].start_objective.unwrap();
+    assert!((started - at_previous).abs() < 1e-9 * at_previous.abs().max(1.0));
+    // Another kernel, or `auto`, cannot warm-start from it.
+    let mut other = ExactGp::new(fixed("matern52")).unwrap();
+    let e = other.warm_start_from(first.state().unwrap()).unwrap_err();
+    assert!(e.to_string().contains("same kernel"), "{e}");
+    let mut auto = ExactGp::new(ExactGpParams {
+        kernel: KernelChoice::Auto,
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    assert!(auto.warm_start_from(first.state().unwrap()).is_err());
+}

@@ -146,7 +146,9 @@ fn forgetting_tracks_a_drifting_function() {
 
 #[test]
 fn a_model_is_created_only_where_no_activation_reaches_w_gen() {
+    // Models narrow enough that the square needs several of them.
     let params = IlgrParams {
+        init_lengthscale: 1.0,
         prune_precision: None,
         lengthscale_learning_rate: 0.0,
         ..IlgrParams::default()

@@ -27,17 +27,25 @@ fn params(features: usize, warmup_rows: usize) -> SparseSpectrumParams {
 }
 
 /// The features of a scaled row, computed here from the state's
-/// frequencies (independently of the model's own code).
-fn phi(freq: &SampleMatrix, signal: f64, x: &[f64]) -> DVector<f64> {
+/// frequencies (independently of the model's own code), with the constant
+/// `√bias` last when `bias > 0`.
+fn phi_with_bias(freq: &SampleMatrix, signal: f64, bias: f64, x: &[f64]) -> DVector<f64> {
     let m = freq.nrows();
     let scale = (signal / m as f64).sqrt();
-    let mut out = DVector::zeros(2 * m);
+    let mut out = DVector::zeros(2 * m + usize::from(bias > 0.0));
     for i in 0..m {
         let a: f64 = freq.row(i).iter().zip(x).map(|(w, v)| w * v).sum();
         out[i] = scale * a.cos();
         out[m + i] = scale * a.sin();
     }
+    if bias > 0.0 {
+        out[2 * m] = bias.sqrt();
+    }
     out
+}
+
+fn phi(freq: &SampleMatrix, signal: f64, x: &[f64]) -> DVector<f64> {
+    phi_with_bias(freq, signal, 0.0, x)
 }
 
 fn scaled(s: &Option<gpodo_traits::Standardizer>, v: &[f64]) -> Vec<f64> {
@@ -51,24 +59,28 @@ fn scaled(s: &Option<gpodo_traits::Standardizer>, v: &[f64]) -> Vec<f64> {
     }
 }
 
-/// A and b accumulated in one batch, with forgetting `lambda`.
+/// A and b accumulated in one batch, with forgetting `lambda`; then the
+/// discounted row count and each output's discounted `Σ y²`.
 fn batch(
     model: &SparseSpectrumGp,
     x: &Mat<f64>,
     y: &Mat<f64>,
     lambda: f64,
-) -> (DMatrix<f64>, DMatrix<f64>) {
+) -> (DMatrix<f64>, DMatrix<f64>, f64, Vec<f64>) {
     let s = model.state().unwrap();
-    let dim = 2 * s.frequencies.nrows();
+    let bias = s.params.bias_variance;
+    let dim = 2 * s.frequencies.nrows() + usize::from(bias > 0.0);
     let n = x.nrows();
     let mut a = DMatrix::identity(dim, dim) * s.noise_variance * lambda.powi(n as i32);
     let mut b = DMatrix::zeros(dim, y.ncols());
+    let (mut rows, mut energy) = (0.0, vec![0.0; y.ncols()]);
     for i in 0..n {
         let xi: Vec<f64> = (0..x.ncols()).map(|j| x[(i, j)]).collect();
         let yi: Vec<f64> = (0..y.ncols()).map(|j| y[(i, j)]).collect();
-        let f = phi(
+        let f = phi_with_bias(
             &s.frequencies,
             s.signal_variance,
+            bias,
             &scaled(&s.input_scaler, &xi),
         );
         let t = scaled(&s.output_scaler, &yi);
@@ -77,9 +89,11 @@ fn batch(
         for (j, tj) in t.iter().enumerate() {
             let mut col = b.column_mut(j);
             col.axpy(weight * tj, &f, 1.0);
+            energy[j] += weight * tj * tj;
         }
+        rows += weight;
     }
-    (a, b)
+    (a, b, rows, energy)
 }
 
 #[test]
@@ -88,15 +102,23 @@ fn rank_one_updates_equal_a_batch_solve_on_the_same_features() {
     let x = inputs(&mut r, 150, 4);
     let y = targets(&mut r, &x, 0.1);
     let data = dataset(&x, &y);
-    for lambda in [1.0, 0.98] {
+    for (lambda, bias, learn_noise) in [
+        (1.0, 0.0, true),
+        (0.98, 0.0, true),
+        (1.0, 0.7, true),
+        (0.98, 0.7, false),
+        (1.0, 0.0, false),
+    ] {
         let mut model = SparseSpectrumGp::new(SparseSpectrumParams {
             forgetting: lambda,
+            bias_variance: bias,
+            learn_noise,
             ..params(60, 50)
         })
         .unwrap();
         model.fit(&data).unwrap();
         let s = model.state().unwrap();
-        let (a, b) = batch(&model, &x, &y, lambda);
+        let (a, b, rows, energy) = batch(&model, &x, &y, lambda);
         let llt = &s.factor * s.factor.transpose();
         let err = (&llt - &a).abs().max() / a.abs().max();
         assert!(err < 1e-10, "λ = {lambda}: factor off by {err:e}");
@@ -111,16 +133,34 @@ fn rank_one_updates_equal_a_batch_solve_on_the_same_features() {
         let out = s.output_scaler.as_ref().unwrap();
         for i in 0..q.nrows() {
             let qi: Vec<f64> = (0..q.ncols()).map(|j| q[(i, j)]).collect();
-            let f = phi(
+            let f = phi_with_bias(
                 &s.frequencies,
                 s.signal_variance,
+                bias,
                 &scaled(&s.input_scaler, &qi),
             );
-            for j in 0..y.ncols() {
+            let leverage = f.dot(&a.clone().cholesky().unwrap().solve(&f));
+            for (j, energy) in energy.iter().enumerate() {
                 let expected = f.dot(&w.column(j)) * out.std[j] + out.mean[j];
                 assert!(
                     rel_err(got.mean.get(i, j), expected, 1e-12) < 1e-10,
                     "λ = {lambda}"
+                );
+                // The Normal-inverse-Gamma posterior of σ² (prior a₀ = 2,
+                // b₀ = σ_n²), its Student-t variance.
+                let shape = 2.0 + rows / 2.0;
+                let scale =
+                    (s.noise_variance + 0.5 * (energy - b.column(j).dot(&w.column(j)))) / shape;
+                let variance = if learn_noise {
+                    scale * (1.0 + leverage) * shape / (shape - 1.0)
+                } else {
+                    s.noise_variance * (1.0 + leverage)
+                };
+                assert!(
+                    rel_err(got.variance.get(i, j), variance * out.std[j].powi(2), 1e-12) < 1e-9,
+                    "λ = {lambda}: variance {} against {}",
+                    got.variance.get(i, j),
+                    variance * out.std[j].powi(2)
                 );
             }
         }
@@ -256,6 +296,13 @@ fn settings_outside_their_range_are_named() {
                 ..Default::default()
             },
             "forgetting",
+        ),
+        (
+            SparseSpectrumParams {
+                bias_variance: -1.0,
+                ..Default::default()
+            },
+            "bias_variance",
         ),
         (
             SparseSpectrumParams {

@@ -22,6 +22,20 @@ pub struct BenchSettings {
     pub prequential: Option<PrequentialSettings>,
 }
 
+/// Where the prequential protocol's refits of an exact GP start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RefitStart {
+    /// The start policy alone, as a first fit (a cold start).
+    Cold,
+    /// The previous refit's optimum alone (a warm start); `cold_checks`
+    /// refits are also fitted cold, for the record.
+    Warm,
+    /// Both on every refit, the higher log marginal likelihood kept
+    /// (default): the warm start alone keeps to its optimum's basin.
+    Best,
+}
+
 /// Settings of the prequential protocol.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -29,11 +43,21 @@ pub struct PrequentialSettings {
     /// Blocks the training stream is cut into, in time order (default 10;
     /// blocks 2…K are scored).
     pub blocks: usize,
+    /// Where an exact-GP baseline's refits start (default `best`).
+    pub refit_start: RefitStart,
+    /// With `refit_start: warm`, the refits (evenly spaced, the last
+    /// included) beside which a cold fit on the same prefix records whether
+    /// the start policy finds a higher log marginal likelihood (default 2).
+    pub cold_checks: usize,
 }
 
 impl Default for PrequentialSettings {
     fn default() -> Self {
-        Self { blocks: 10 }
+        Self {
+            blocks: 10,
+            refit_start: RefitStart::Best,
+            cold_checks: 2,
+        }
     }
 }
 

@@ -30,7 +30,7 @@ use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
 use gpodo_regressors::RegressorSpec;
 use serde::{Deserialize, Serialize};
 
-pub use bench::BenchSettings;
+pub use bench::{BenchSettings, PrequentialSettings, RefitStart};
 pub use schemes::SchemeSpec;
 pub use validate::Issue;
 

@@ -252,7 +252,7 @@ pub fn run_bench(config: &ExperimentConfig) -> Result<BenchResults, PipelineErro
             };
             Some(crate::execute::prequential::prequential(
                 &rows.train,
-                p.blocks,
+                &p,
                 &config.regressors[i],
                 &config.regressors,
             )?)

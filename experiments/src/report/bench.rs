@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::execute::bench::{BenchResults, BenchRow, Latency};
+use crate::execute::prequential::FitRecord;
 use crate::output::write_file;
 use crate::report::table::{Align, Table};
 
@@ -225,7 +226,68 @@ fn prequential_section(s: &mut String, p: &crate::execute::prequential::Prequent
         p.block_rows,
         p.scored,
         p.blocks,
-        p.refit_secs.iter().sum::<f64>(),
+        p.refits.iter().map(|r| r.seconds()).sum::<f64>(),
+        table.markdown()
+    );
+    refits_section(s, p);
+}
+
+/// Each refit's cold and warm fit: their log marginal likelihoods,
+/// evaluations and seconds, and which one predicted.
+fn refits_section(s: &mut String, p: &crate::execute::prequential::Prequential) {
+    let records = p.refits.iter().flat_map(|r| r.cold.iter().chain(&r.warm));
+    if records.clone().all(|f| f.lml.is_none()) {
+        return;
+    }
+    let mut table = Table::new(&[
+        "prefix rows",
+        "LML cold",
+        "LML warm",
+        "cold − warm",
+        "kept",
+        "evaluations cold / warm",
+        "seconds cold / warm",
+    ]);
+    let show = |f: &Option<FitRecord>, what: fn(&FitRecord) -> String| {
+        f.as_ref().map_or("–".to_string(), what)
+    };
+    for r in &p.refits {
+        let difference = match (
+            r.cold.as_ref().and_then(|f| f.lml),
+            r.warm.as_ref().and_then(|f| f.lml),
+        ) {
+            (Some(c), Some(w)) => format!("{:+.2}", c - w),
+            _ => "–".into(),
+        };
+        table.push(vec![
+            r.rows.to_string(),
+            show(&r.cold, |f| {
+                f.lml.map_or("–".into(), |l| format!("{l:.2}"))
+            }),
+            show(&r.warm, |f| {
+                f.lml.map_or("–".into(), |l| format!("{l:.2}"))
+            }),
+            difference,
+            if r.kept_warm { "warm" } else { "cold" }.into(),
+            format!(
+                "{} / {}",
+                show(&r.cold, |f| f
+                    .evaluations
+                    .map_or("–".into(), |e| e.to_string())),
+                show(&r.warm, |f| f
+                    .evaluations
+                    .map_or("–".into(), |e| e.to_string()))
+            ),
+            format!(
+                "{} / {}",
+                show(&r.cold, |f| format!("{:.2}", f.seconds)),
+                show(&r.warm, |f| format!("{:.2}", f.seconds))
+            ),
+        ]);
+    }
+    let _ = writeln!(
+        s,
+        "\nEach refit of the baseline: the cold fit starts from the start policy, the warm one from the previous refit's optimum alone (log marginal likelihood in standardised units; a positive difference means the warm start kept to a lower optimum).\n\n{}",
         table.markdown()
     );
 }

@@ -131,7 +131,7 @@ mod tests {
             block_rows: 10,
             scored: 20,
             refitted: score("refitted", vec![0.5, 0.4]),
-            refit_secs: vec![0.1, 0.1],
+            refits: Vec::new(),
             baselines: vec![score("running mean", vec![0.6, 0.45])],
             learners: vec![score("ILGR", vec![0.7, 0.5])],
         };

@@ -68,6 +68,9 @@ pub struct ExactGp {
     params: ExactGpParams,
     fitted: Option<Fitted>,
     progress: ProgressSink,
+    /// Per output group, the coordinates `(log θ, log σ_n²)` the next fit
+    /// starts from alone ([`ExactGp::warm_start_from`]).
+    warm: Option<Vec<Vec<f64>>>,
 }
 
 fn columns(m: &Mat<f64>, cols: &[usize]) -> Mat<f64> {
@@ -85,6 +88,7 @@ impl ExactGp {
             params,
             fitted: None,
             progress: ProgressSink::default(),
+            warm: None,
         })
     }
 
@@ -137,7 +141,50 @@ impl ExactGp {
             params: state.params.clone(),
             fitted: Some(Fitted { state, posteriors }),
             progress: ProgressSink::default(),
+            warm: None,
         })
+    }
+
+    /// Makes the next fit start from `previous`'s learned hyperparameters
+    /// alone (a warm start, as when refitting on a longer prefix of a
+    /// stream), instead of racing the start policy's candidates. It is
+    /// cheap, but it keeps to that optimum's basin: on the ExoTeR table's
+    /// prefixes a cold fit found optima 80–345 nats higher
+    /// (`bench/README.md`, "Prequential").
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] when `previous` was fitted with
+    /// another kernel expression or output sharing, or when this GP's
+    /// kernel is `auto` (each candidate would need its own start).
+    pub fn warm_start_from(&mut self, previous: &ExactGpState) -> Result<(), RegressorError> {
+        let mismatch = |expected: &str| RegressorError::InvalidSpec {
+            regressor: "exact_gp".into(),
+            field: "kernel".into(),
+            expected: expected.into(),
+        };
+        if self.params.kernel == KernelChoice::Auto {
+            return Err(mismatch(
+                "a kernel expression to warm-start (`auto` fits several kernels)",
+            ));
+        }
+        if previous.params.kernel != self.params.kernel
+            || previous.params.outputs != self.params.outputs
+        {
+            return Err(mismatch(
+                "the same kernel and output sharing as the model it warm-starts from",
+            ));
+        }
+        let coords = previous
+            .groups
+            .iter()
+            .map(|g| {
+                let mut coords = g.kernel.log_params();
+                coords.push(g.noise_variance.ln());
+                coords
+            })
+            .collect();
+        self.warm = Some(coords);
+        Ok(())
     }
 
     /// `kernel: auto`: every candidate fitted on the same data, the one of
@@ -211,7 +258,8 @@ impl ExactGp {
             let (kernel, noise) = if self.params.optimize {
                 let mut params = self.params.clone();
                 params.seed = params.seed.wrapping_add(g as u64);
-                let opt = maximize_lml(x.as_ref(), yg.as_ref(), &params, &self.progress)?;
+                let warm = self.warm.as_ref().and_then(|w| w.get(g)).map(Vec::as_slice);
+                let opt = maximize_lml(x.as_ref(), yg.as_ref(), &params, &self.progress, warm)?;
                 evaluations += opt.evaluations;
                 iterations += opt.iterations;
                 let group_prefix = match self.params.outputs {

@@ -58,7 +58,10 @@ impl Objective for Lml<'_> {
 /// `params.kernel` on `(x, y)` by maximising the log marginal likelihood
 /// from the candidate starts of [`starts::kernel_bases`], as
 /// `params.hyperopt` says (the start race halved after
-/// [`EXACT_GP_HALVE_AFTER`] iterations unless it says otherwise).
+/// [`EXACT_GP_HALVE_AFTER`] iterations unless it says otherwise). With
+/// `warm`, coordinates `(log θ, log σ_n²)` of an earlier optimum (a warm
+/// start), the optimiser runs from there alone: no other base and no
+/// perturbation.
 ///
 /// # Errors
 /// [`RegressorError::Stopped`] when `progress` asked to stop;
@@ -69,6 +72,7 @@ pub fn maximize_lml(
     y: MatRef<'_, f64>,
     params: &ExactGpParams,
     progress: &ProgressSink,
+    warm: Option<&[f64]>,
 ) -> Result<Optimized, RegressorError> {
     let template = params.kernel_expr().build(x.ncols(), &params.init);
     let objective = Lml {
@@ -84,19 +88,26 @@ pub fn maximize_lml(
         objective: &objective,
         score: &score,
         space: SearchSpace::kernel(&template, &params.hyperopt.bounds),
-        bases: starts::kernel_bases(
-            &params.kernel_expr(),
-            &params.init,
-            x,
-            params.noise_variance,
-        ),
+        bases: match warm {
+            Some(coords) => vec![("previous optimum".to_string(), coords.to_vec())],
+            None => starts::kernel_bases(
+                &params.kernel_expr(),
+                &params.init,
+                x,
+                params.noise_variance,
+            ),
+        },
         value_scale: 1.0 / (y.nrows() * y.ncols()).max(1) as f64,
     };
+    let mut start = params
+        .hyperopt
+        .start
+        .with_default_halve_after(EXACT_GP_HALVE_AFTER);
+    if warm.is_some() {
+        start.perturbations = 0;
+    }
     let hyperopt = HyperoptParams {
-        start: params
-            .hyperopt
-            .start
-            .with_default_halve_after(EXACT_GP_HALVE_AFTER),
+        start,
         ..params.hyperopt
     };
     let result = crate::hyperopt::learn(&problem, &hyperopt, params.seed, progress);

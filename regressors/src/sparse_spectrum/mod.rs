@@ -10,10 +10,23 @@
 //! `φ(x) = √(σ_f² / m) [cos(ωᵢᵀx), sin(ωᵢᵀx)]` satisfy
 //! `E[φ(x)ᵀφ(x')] = k(x − x')`. With weights `w ~ N(0, I)` and noise `σ_n²`:
 //!
+//! With `bias_variance` `σ_b² > 0` a constant feature `σ_b` follows the
+//! random ones (the kernel `k + σ_b²`, a constant mean with a Gaussian
+//! prior integrated out).
+//!
 //! * `A = σ_n² I + Σ_t λ^{T−t} φ_t φ_tᵀ`, `b = Σ_t λ^{T−t} φ_t y_t` (the
 //!   forgetting `λ` scales both before each update);
 //! * mean `φ*ᵀ A⁻¹ b`; latent variance `σ_n² φ*ᵀ A⁻¹ φ*`; noisy variance
 //!   `σ_n² (1 + φ*ᵀ A⁻¹ φ*)`.
+//!
+//! With `learn_noise` the noise variance is learned too, conjugately: the
+//! prior is `w | σ² ~ N(0, (σ²/σ_n²) I)` and `σ² ~ IG(a₀, b₀)` with
+//! `a₀ = 2`, `b₀ = σ_n²` (prior mean `σ_n²`), so that at `σ² = σ_n²` it is the
+//! model above. The posterior keeps `A` and `b`, and adds, per output,
+//! `a = a₀ + n/2` and `b_σ = b₀ + ½ (Σ_t λ^{T−t} y_t² − bᵀA⁻¹b)` (`n` the
+//! discounted count of rows). A new target is then Student-t with `2a`
+//! degrees of freedom, location `φ*ᵀA⁻¹b` and scale² `(b_σ/a)(1 + φ*ᵀA⁻¹φ*)`;
+//! its variance, scale² · `2a/(2a − 2)`, is what `predict` reports.
 //!
 //! As `D → ∞` the mean tends to the exact GP's at the same hyperparameters.
 //! The hyperparameters (`σ_f²`, the lengthscales, `σ_n²`) and the input
@@ -65,6 +78,40 @@ pub struct SparseSpectrumState {
     pub rhs: DMatrix<f64>,
     /// Rows learned so far.
     pub rows_seen: usize,
+    /// The noise variance's posterior, when it is learned.
+    #[serde(default)]
+    pub noise_posterior: Option<NoisePosterior>,
+}
+
+/// The inverse-Gamma posterior of the noise variance `σ²` (scaled units)
+/// of a sparse-spectrum GP that learns it: the prior and the discounted
+/// statistics of the rows learned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoisePosterior {
+    /// Prior shape `a₀`.
+    pub prior_shape: f64,
+    /// Prior scale `b₀`.
+    pub prior_scale: f64,
+    /// Rows learned, each discounted by the forgetting factor since.
+    pub rows: f64,
+    /// Per output, `Σ_t λ^{T−t} y_t²` of the scaled targets.
+    pub target_energy: Vec<f64>,
+}
+
+/// The noise prior's shape `a₀`: the weakest proper prior whose mean
+/// `b₀ / (a₀ − 1)` exists.
+const NOISE_PRIOR_SHAPE: f64 = 2.0;
+
+impl NoisePosterior {
+    /// The variance of a new scaled target of output `j` whose features
+    /// give `φ*ᵀA⁻¹φ* = leverage`, where `b_j ᵀ A⁻¹ b_j = explained`.
+    fn predictive_variance(&self, j: usize, explained: f64, leverage: f64) -> f64 {
+        let shape = self.prior_shape + 0.5 * self.rows;
+        let residual = (self.target_energy[j] - explained).max(0.0);
+        let scale = (self.prior_scale + 0.5 * residual) / shape;
+        let dof = 2.0 * shape;
+        scale * (1.0 + leverage) * dof / (dof - 2.0)
+    }
 }
 
 /// `L Lᵀ + x xᵀ`, in place: the rank-one update of a lower Cholesky factor
@@ -100,16 +147,25 @@ pub struct SparseSpectrumGp {
     progress: crate::hyperopt::ProgressSink,
 }
 
+/// How many features a state has: `2m` random ones, and the constant.
+fn feature_count(frequencies: usize, bias_variance: f64) -> usize {
+    2 * frequencies + usize::from(bias_variance > 0.0)
+}
+
 /// The features `φ(x)` of one scaled input row.
 fn features(state: &SparseSpectrumState, x: &[f64]) -> DVector<f64> {
     let m = state.frequencies.nrows();
     let scale = (state.signal_variance / m as f64).sqrt();
-    let mut phi = DVector::zeros(2 * m);
+    let bias = state.params.bias_variance;
+    let mut phi = DVector::zeros(feature_count(m, bias));
     for (i, omega) in state.frequencies.rows().enumerate() {
         let angle: f64 = omega.iter().zip(x).map(|(w, v)| w * v).sum();
         let (s, c) = angle.sin_cos();
         phi[i] = scale * c;
         phi[m + i] = scale * s;
+    }
+    if bias > 0.0 {
+        phi[2 * m] = bias.sqrt();
     }
     phi
 }
@@ -181,7 +237,7 @@ impl SparseSpectrumGp {
     /// [`RegressorError::InvalidData`] when the state is inconsistent.
     pub fn from_state(state: SparseSpectrumState) -> Result<Self, RegressorError> {
         state.params.check()?;
-        let dim = 2 * state.frequencies.nrows();
+        let dim = feature_count(state.frequencies.nrows(), state.params.bias_variance);
         let bad = |detail: &str| RegressorError::InvalidData {
             detail: format!("saved sparse_spectrum state: {detail}"),
         };
@@ -192,6 +248,14 @@ impl SparseSpectrumGp {
         }
         if (0..dim).any(|k| state.factor[(k, k)].is_nan() || state.factor[(k, k)] <= 0.0) {
             return Err(bad("its factor is not positive definite"));
+        }
+        if let Some(noise) = &state.noise_posterior
+            && (noise.target_energy.len() != state.rhs.ncols()
+                || !(noise.prior_shape > 1.0 && noise.prior_scale > 0.0 && noise.rows >= 0.0))
+        {
+            return Err(bad(
+                "its noise posterior does not match its outputs or is not a proper prior",
+            ));
         }
         Ok(Self {
             params: state.params.clone(),
@@ -258,7 +322,7 @@ impl SparseSpectrumGp {
             self.params.features / 2,
             self.params.seed,
         )?;
-        let dim = self.params.features;
+        let dim = feature_count(self.params.features / 2, self.params.bias_variance);
         let noise_variance = group.noise_variance;
         if noise_variance.is_nan() || noise_variance <= 0.0 {
             return Err(RegressorError::InvalidData {
@@ -278,13 +342,21 @@ impl SparseSpectrumGp {
             factor: DMatrix::identity(dim, dim) * noise_variance.sqrt(),
             rhs: DMatrix::zeros(dim, data.targets.ncols()),
             rows_seen: 0,
+            noise_posterior: self.params.learn_noise.then(|| NoisePosterior {
+                prior_shape: NOISE_PRIOR_SHAPE,
+                prior_scale: (NOISE_PRIOR_SHAPE - 1.0) * noise_variance,
+                rows: 0.0,
+                target_energy: vec![0.0; data.targets.ncols()],
+            }),
         };
         for (x, y) in data.inputs.rows().zip(data.targets.rows()) {
             state.learn(x, y)?;
         }
         self.learned = Some(state);
         report.n_samples = data.len();
-        report.parameters.push(("features".into(), dim as f64));
+        report
+            .parameters
+            .push(("features".into(), self.params.features as f64));
         report.duration_secs = start.elapsed().as_secs_f64();
         Ok(report)
     }
@@ -328,6 +400,12 @@ impl SparseSpectrumState {
         }
         for (j, t) in ys.iter().enumerate() {
             self.rhs.column_mut(j).axpy(*t, &phi, 1.0);
+        }
+        if let Some(noise) = &mut self.noise_posterior {
+            noise.rows = lambda * noise.rows + 1.0;
+            for (e, t) in noise.target_energy.iter_mut().zip(&ys) {
+                *e = lambda * *e + t * t;
+            }
         }
         rank_one_update(&mut self.factor, phi);
         self.rows_seen += 1;
@@ -434,6 +512,10 @@ impl ResidualRegressor for SparseSpectrumGp {
             .factor
             .tr_solve_lower_triangular(&half)
             .ok_or_else(singular)?;
+        // bᵀA⁻¹b per output, the fit's explained energy.
+        let explained: Vec<f64> = (0..p)
+            .map(|j| state.rhs.column(j).dot(&weights.column(j)))
+            .collect();
         let mut mean = Vec::with_capacity(inputs.nrows() * p);
         let mut variance = Vec::with_capacity(inputs.nrows() * p);
         for x in inputs.rows() {
@@ -442,13 +524,17 @@ impl ResidualRegressor for SparseSpectrumGp {
                 .factor
                 .solve_lower_triangular(&phi)
                 .ok_or_else(singular)?;
-            let noisy = state.noise_variance * (1.0 + v.norm_squared());
-            for j in 0..p {
+            let leverage = v.norm_squared();
+            for (j, explained) in explained.iter().enumerate() {
                 let m = phi.dot(&weights.column(j));
                 let (mu, sd) = state
                     .output_scaler
                     .as_ref()
                     .map_or((0.0, 1.0), |s| (s.mean[j], s.std[j]));
+                let noisy = match &state.noise_posterior {
+                    Some(noise) => noise.predictive_variance(j, *explained, leverage),
+                    None => state.noise_variance * (1.0 + leverage),
+                };
                 mean.push(m * sd + mu);
                 variance.push(noisy * sd * sd);
             }

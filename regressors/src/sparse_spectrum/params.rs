@@ -24,6 +24,17 @@ pub struct SparseSpectrumParams {
     /// Forgetting factor `λ ∈ (0, 1]` applied to the accumulated statistics
     /// before each update (default 1: never forget).
     pub forgetting: f64,
+    /// Prior variance `σ_b²` (scaled target units) of a constant feature
+    /// beside the random ones, i.e. the kernel `k + σ_b²`: an offset the
+    /// stream's targets drift to is learned as a weight, where the random
+    /// features alone revert to the warm-up rows' mean (default 0: none).
+    pub bias_variance: f64,
+    /// Learn the noise variance from the stream (default true): a
+    /// Normal-inverse-Gamma posterior over the weights and `σ²`, conjugate,
+    /// with the warm-up's `σ_n²` as its prior mean; predictions are then
+    /// Student-t and reported by their variance. False keeps the warm-up's
+    /// `σ_n²` for good.
+    pub learn_noise: bool,
     /// Seed of the random frequencies (default 0).
     pub seed: u64,
     /// How the warm-up GP learns its hyperparameters.
@@ -37,6 +48,8 @@ impl Default for SparseSpectrumParams {
             features: 200,
             warmup_rows: 200,
             forgetting: 1.0,
+            bias_variance: 0.0,
+            learn_noise: true,
             seed: 0,
             hyperopt: HyperoptParams::default(),
         }
@@ -77,6 +90,12 @@ impl SparseSpectrumParams {
         }
         if !(self.forgetting > 0.0 && self.forgetting <= 1.0) {
             return bad("forgetting", "a factor in (0, 1]");
+        }
+        if !(self.bias_variance >= 0.0 && self.bias_variance.is_finite()) {
+            return bad(
+                "bias_variance",
+                "a finite variance ≥ 0 (0: no constant feature)",
+            );
         }
         let init = crate::kernels::KernelInit::default();
         self.hyperopt.check("sparse_spectrum", true, &init, 0.01)
