@@ -5,6 +5,7 @@
 
 pub mod choice;
 pub mod cholesky;
+pub mod iterative;
 pub mod likelihood;
 pub mod model;
 pub mod optimize;

@@ -1,0 +1,231 @@
+//! The exact GP's log marginal likelihood and gradient by iterative solves
+//! (BBMM: Gardner, Pleiss, Bindel, Weinberger & Wilson, NeurIPS 2018), for
+//! training sets where the dense path's `n³` factorisation is too slow:
+//! `O(n²)` per conjugate-gradient iteration, and no `n × n` inverse.
+//!
+//! With `K_y = K + σ_n² I`, `p` outputs `Y` and `t` probe vectors
+//! `zᵢ ~ N(0, P)` (fixed per fit), one batched preconditioned CG solve
+//! ([`mbcg::batched_cg`]) gives `A = K_y⁻¹ Y` and `uᵢ = K_y⁻¹ zᵢ`, and
+//!
+//! * `log|K_y| ≈ log|P| + (1/t) Σᵢ (zᵢᵀ P⁻¹ zᵢ) e₁ᵀ log(Tᵢ) e₁`, stochastic
+//!   Lanczos quadrature on `P^{-1/2} K_y P^{-1/2}` from `P^{-1/2} zᵢ ~ N(0, I)`
+//!   (`Tᵢ` from the CG coefficients of probe `i`);
+//! * `tr(K_y⁻¹ ∂K) ≈ (1/t) Σᵢ uᵢᵀ ∂K (P⁻¹ zᵢ)`, Hutchinson's estimator with
+//!   `E[zzᵀ] = P`;
+//!
+//! so the gradient is the dense path's `½ Σ_ij W_ij ∂K_ij/∂θ` with
+//! `W = A Aᵀ − (p/t) sym(U (P⁻¹Z)ᵀ)`, formed by one GEMM of inner size
+//! `p + t` and fed to the same kernel gradients (the ARD lengthscales in
+//! one pass over the kernel entries). `P = L Lᵀ + σ_n² I` with `L` the
+//! pivoted Cholesky factor of `K` of rank `k`
+//! ([`pivoted_cholesky::pivoted_cholesky`]).
+
+pub mod mbcg;
+pub mod pivoted_cholesky;
+pub mod preconditioner;
+
+use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+use faer::{Accum, Mat, MatRef};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::RegressorError;
+use crate::dense::{par, symmetric_times, trace};
+use crate::kernels::Kernel;
+use mbcg::{batched_cg, lanczos_log_quadrature};
+use preconditioner::Preconditioner;
+
+/// `log 2π`.
+const LN_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// Settings of the iterative solves.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IterativeSettings {
+    /// Probe vectors `t` of the log-determinant and trace estimates
+    /// (default 16).
+    pub probes: usize,
+    /// Rank `k` of the pivoted-Cholesky preconditioner (default 100; 0: none).
+    pub preconditioner_rank: usize,
+    /// Relative residual at which a column's CG stops (default 1e-6).
+    pub tolerance: f64,
+    /// CG iterations at most (default 1000).
+    pub max_iterations: usize,
+    /// Seed of the probe vectors (default 0).
+    pub seed: u64,
+}
+
+impl Default for IterativeSettings {
+    fn default() -> Self {
+        Self {
+            probes: 16,
+            preconditioner_rank: 100,
+            tolerance: 1e-6,
+            max_iterations: 1000,
+            seed: 0,
+        }
+    }
+}
+
+/// The iterative solver of one fit: its settings and its probes' standard
+/// normal draws, `(k + n) × t`, drawn once from `settings.seed` and reused by
+/// every evaluation, so that the objective is a deterministic, smooth
+/// function of the hyperparameters.
+#[derive(Debug, Clone)]
+pub struct IterativeSolver {
+    settings: IterativeSettings,
+    draws: Mat<f64>,
+}
+
+impl IterativeSolver {
+    /// The solver for `n` training rows.
+    pub fn new(n: usize, settings: IterativeSettings) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+        let rows = n + settings.preconditioner_rank.min(n);
+        let mut draws = Mat::<f64>::zeros(rows, settings.probes);
+        for c in 0..settings.probes {
+            for i in 0..rows {
+                draws[(i, c)] = StandardNormal.sample(&mut rng);
+            }
+        }
+        Self { settings, draws }
+    }
+
+    /// Its settings.
+    pub fn settings(&self) -> &IterativeSettings {
+        &self.settings
+    }
+}
+
+/// One iterative evaluation of the objective.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IterativeEvaluation {
+    /// The estimate of `log p(Y | X, θ)`, summed over the outputs.
+    pub lml: f64,
+    /// `∂ log p/∂ log θ` (kernel hyperparameters, then the noise variance).
+    pub gradient: Option<Vec<f64>>,
+    /// CG iterations of the batched solve.
+    pub iterations: usize,
+    /// The largest relative residual at its end.
+    pub relative_residual: f64,
+    /// The preconditioner's rank (fewer than asked when `K` has lower rank).
+    pub preconditioner_rank: usize,
+}
+
+/// The log marginal likelihood of the exact GP with `kernel` and noise
+/// `noise_variance` on `(x, y)` by `solver`'s iterative solves, and its
+/// gradient when asked. `stop` is asked before every CG iteration.
+///
+/// # Errors
+/// [`RegressorError::Stopped`] when `stop` said so;
+/// [`RegressorError::NotPositiveDefinite`] when the iteration breaks down;
+/// [`RegressorError::InvalidData`] when `solver` was made for another `n`.
+pub fn log_marginal_likelihood_iterative(
+    kernel: &Kernel,
+    noise_variance: f64,
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    with_gradient: bool,
+    solver: &IterativeSolver,
+    stop: impl Fn() -> bool,
+) -> Result<IterativeEvaluation, RegressorError> {
+    let (n, p) = (y.nrows(), y.ncols());
+    let settings = &solver.settings;
+    if solver.draws.nrows() != n + settings.preconditioner_rank.min(n) {
+        return Err(RegressorError::InvalidData {
+            detail: format!(
+                "the iterative solver's probes were drawn for another number of rows than {n}"
+            ),
+        });
+    }
+    let t = settings.probes;
+    let cache = kernel.gram_lower_with_cache(x);
+    let l =
+        pivoted_cholesky::pivoted_cholesky(cache.k.as_ref(), settings.preconditioner_rank, 1e-10);
+    let rank = l.ncols();
+    let pre = Preconditioner::new(l, noise_variance)?;
+    // Probes from N(0, P): the first `rank` rows of the draws feed L ε₁.
+    let draws = solver
+        .draws
+        .as_ref()
+        .subrows(settings.preconditioner_rank.min(n) - rank, n + rank);
+    let z = pre.sample(draws);
+    let mut b = Mat::<f64>::zeros(n, p + t);
+    b.as_mut().subcols_mut(0, p).copy_from(y);
+    b.as_mut().subcols_mut(p, t).copy_from(z.as_ref());
+    let k = cache.k.as_ref();
+    let solved = batched_cg(
+        |v| {
+            let mut out = symmetric_times(k, v);
+            out += v * faer::Scale(noise_variance);
+            out
+        },
+        |r| pre.solve(r),
+        b.as_ref(),
+        settings.tolerance,
+        settings.max_iterations,
+        &stop,
+    )?;
+    let alpha = solved.solution.as_ref().subcols(0, p);
+    let u = solved.solution.as_ref().subcols(p, t);
+    let pz = pre.solve(z.as_ref());
+    let data_fit: f64 = (0..p)
+        .map(|c| (0..n).map(|i| y[(i, c)] * alpha[(i, c)]).sum::<f64>())
+        .sum();
+    let mut quadrature = 0.0;
+    for i in 0..t {
+        let weight: f64 = (0..n).map(|r| z[(r, i)] * pz[(r, i)]).sum();
+        let c = p + i;
+        quadrature += weight * lanczos_log_quadrature(&solved.alphas[c], &solved.betas[c])?;
+    }
+    let log_det = pre.log_det() + quadrature / t.max(1) as f64;
+    let lml = -0.5 * data_fit - 0.5 * p as f64 * log_det - 0.5 * (n * p) as f64 * LN_2PI;
+    if !lml.is_finite() {
+        return Err(RegressorError::NotPositiveDefinite {
+            n,
+            jitter_tried: 0.0,
+        });
+    }
+    let gradient = with_gradient.then(|| {
+        // W = A Aᵀ − (p/2t)(U (P⁻¹Z)ᵀ + (P⁻¹Z) Uᵀ), lower triangle only.
+        let mut w = Mat::<f64>::zeros(n, n);
+        let lower =
+            |w: &mut Mat<f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, scale: f64, accum| {
+                matmul(
+                    w.as_mut(),
+                    BlockStructure::TriangularLower,
+                    accum,
+                    a,
+                    BlockStructure::Rectangular,
+                    b.transpose(),
+                    BlockStructure::Rectangular,
+                    scale,
+                    par(),
+                );
+            };
+        lower(&mut w, alpha, alpha, 1.0, Accum::Replace);
+        if t > 0 {
+            let s = -(p as f64) / (2.0 * t as f64);
+            lower(&mut w, u, pz.as_ref(), s, Accum::Add);
+            lower(&mut w, pz.as_ref(), u, s, Accum::Add);
+        }
+        let m = kernel.n_params();
+        let mut g = vec![0.0; m + 1];
+        kernel.accumulate_gradient(x, &cache, w.as_ref(), &mut g[..m]);
+        g[m] = noise_variance * trace(w.as_ref());
+        for v in &mut g {
+            *v *= 0.5;
+        }
+        g
+    });
+    cache.recycle();
+    Ok(IterativeEvaluation {
+        lml,
+        gradient,
+        iterations: solved.iterations,
+        relative_residual: solved.relative_residual,
+        preconditioner_rank: rank,
+    })
+}

@@ -1,0 +1,306 @@
+//! The iterative exact GP (BBMM): the pivoted Cholesky factor, the
+//! preconditioner and the batched CG against dense linear algebra, the
+//! Lanczos log-determinant on a matrix of known spectrum, and the
+//! likelihood and its gradient against the dense path's.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod support;
+
+use faer::{Mat, MatRef};
+use gpodo_regressors::exact_gp::cholesky::Cholesky;
+use gpodo_regressors::exact_gp::iterative::mbcg::{batched_cg, lanczos_log_quadrature};
+use gpodo_regressors::exact_gp::iterative::pivoted_cholesky::pivoted_cholesky;
+use gpodo_regressors::exact_gp::iterative::preconditioner::Preconditioner;
+use gpodo_regressors::exact_gp::iterative::{
+    IterativeSettings, IterativeSolver, log_marginal_likelihood_iterative,
+};
+use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
+use gpodo_regressors::kernels::Kernel;
+use rand_distr::{Distribution, StandardNormal};
+use support::*;
+
+fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    a * b
+}
+
+fn max_abs(m: &Mat<f64>) -> f64 {
+    (0..m.nrows())
+        .flat_map(|i| (0..m.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| m[(i, j)].abs())
+        .fold(0.0, f64::max)
+}
+
+/// A smooth RBF problem: 28-dimensional inputs of low intrinsic
+/// dimension, as the residual inputs are.
+fn problem(n: usize, seed: u64) -> (Kernel, Mat<f64>, Mat<f64>) {
+    let mut r = rng(seed);
+    let latent = inputs(&mut r, n, 3);
+    let mix = inputs(&mut r, 3, 8);
+    let x = product(latent.as_ref(), mix.as_ref()) * faer::Scale(0.5);
+    let y = targets(&mut r, &x, 0.1);
+    let kernel = random_kernel(&mut r, "rbf", 8);
+    (kernel, x, y)
+}
+
+#[test]
+fn the_pivoted_cholesky_factor_reproduces_k_at_full_rank_and_improves_with_rank() {
+    let (kernel, x, _) = problem(60, 1);
+    let k = kernel.gram(x.as_ref());
+    let full = pivoted_cholesky(k.as_ref(), 60, 0.0);
+    let err = max_abs(&(product(full.as_ref(), full.as_ref().transpose()) - &k));
+    assert!(err < 1e-10, "full rank: {err:e}");
+    let total: f64 = (0..60).map(|i| k[(i, i)]).sum();
+    let mut previous = f64::INFINITY;
+    let mut left_at = Vec::new();
+    for rank in [2, 5, 10, 20] {
+        let l = pivoted_cholesky(k.as_ref(), rank, 0.0);
+        let left = k.clone() - product(l.as_ref(), l.as_ref().transpose());
+        let trace: f64 = (0..60).map(|i| left[(i, i)]).sum();
+        assert!(trace >= -1e-10 && trace < previous, "rank {rank}: {trace}");
+        previous = trace;
+        left_at.push(trace / total);
+    }
+    // It stops once what is left is below the tolerance: just above what
+    // rank 10 leaves, at rank 10.
+    let stopped = pivoted_cholesky(k.as_ref(), 60, left_at[2] * (1.0 + 1e-9));
+    assert_eq!(stopped.ncols(), 10, "{left_at:?}");
+}
+
+#[test]
+fn the_preconditioner_solves_and_draws_as_dense_algebra_says() {
+    let (kernel, x, _) = problem(50, 2);
+    let k = kernel.gram(x.as_ref());
+    let l = pivoted_cholesky(k.as_ref(), 8, 0.0);
+    let noise = 0.07;
+    let mut p = product(l.as_ref(), l.as_ref().transpose());
+    for i in 0..50 {
+        p[(i, i)] += noise;
+    }
+    let pre = Preconditioner::new(l, noise).unwrap();
+    let dense = Cholesky::factor(p.clone()).unwrap();
+    let v = inputs(&mut rng(3), 50, 4);
+    let err = max_abs(&(pre.solve(v.as_ref()) - dense.solve(v.as_ref())));
+    assert!(err < 1e-8 * max_abs(&dense.solve(v.as_ref())), "{err:e}");
+    assert!((pre.log_det() - dense.log_det()).abs() < 1e-9);
+    // Draws have covariance P: the sample covariance of 20 000 of them.
+    let mut r = rng(4);
+    let eps = Mat::from_fn(58, 20_000, |_, _| -> f64 { StandardNormal.sample(&mut r) });
+    let z = pre.sample(eps.as_ref());
+    let cov = product(z.as_ref(), z.as_ref().transpose()) * faer::Scale(1.0 / 20_000.0);
+    let err = max_abs(&(cov - &p)) / max_abs(&p);
+    assert!(err < 0.05, "sample covariance off by {err}");
+}
+
+#[test]
+fn batched_cg_solves_every_column_to_its_tolerance() {
+    let (kernel, x, y) = problem(120, 5);
+    let mut k = kernel.gram(x.as_ref());
+    for i in 0..120 {
+        k[(i, i)] += 0.01;
+    }
+    let dense = Cholesky::factor(k.clone()).unwrap();
+    let b = Mat::from_fn(120, 5, |i, c| {
+        if c < 3 {
+            y[(i, c)]
+        } else {
+            (i * c) as f64 % 3.0
+        }
+    });
+    let out = batched_cg(
+        |v| product(k.as_ref(), v),
+        |r| r.to_owned(),
+        b.as_ref(),
+        1e-10,
+        2000,
+        || false,
+    )
+    .unwrap();
+    let exact = dense.solve(b.as_ref());
+    let err = max_abs(&(out.solution.clone() - &exact)) / max_abs(&exact);
+    assert!(err < 1e-6, "{err:e} after {} iterations", out.iterations);
+    assert!(out.relative_residual < 1e-10);
+    // A stop request ends it.
+    let stopped = batched_cg(
+        |v| product(k.as_ref(), v),
+        |r| r.to_owned(),
+        b.as_ref(),
+        1e-10,
+        10,
+        || true,
+    );
+    assert!(matches!(
+        stopped,
+        Err(gpodo_regressors::RegressorError::Stopped)
+    ));
+}
+
+#[test]
+fn the_lanczos_log_determinant_is_unbiased_on_a_known_spectrum() {
+    // K = Q diag(λ) Qᵀ with a random orthogonal Q and eigenvalues spread
+    // over three decades: a diagonal K would be exact for any probe.
+    let n = 150;
+    let mut r = rng(6);
+    let g = inputs(&mut r, n, n);
+    let q = g.qr().compute_Q();
+    let lambda: Vec<f64> = (0..n)
+        .map(|i| 10f64.powf(-1.0 + 3.0 * i as f64 / (n - 1) as f64))
+        .collect();
+    let scaled = Mat::from_fn(n, n, |i, j| q[(i, j)] * lambda[j]);
+    let k = product(scaled.as_ref(), q.as_ref().transpose());
+    let exact: f64 = lambda.iter().map(|l| l.ln()).sum();
+    let probes = 400;
+    let w = Mat::from_fn(n, probes, |_, _| -> f64 { StandardNormal.sample(&mut r) });
+    let out = batched_cg(
+        |v| product(k.as_ref(), v),
+        |r| r.to_owned(),
+        w.as_ref(),
+        1e-10,
+        1000,
+        || false,
+    )
+    .unwrap();
+    let estimates: Vec<f64> = (0..probes)
+        .map(|c| {
+            let norm2: f64 = (0..n).map(|i| w[(i, c)] * w[(i, c)]).sum();
+            norm2 * lanczos_log_quadrature(&out.alphas[c], &out.betas[c]).unwrap()
+        })
+        .collect();
+    let mean = estimates.iter().sum::<f64>() / probes as f64;
+    let sd =
+        (estimates.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (probes - 1) as f64).sqrt();
+    let se = sd / (probes as f64).sqrt();
+    println!("log|K| = {exact:.3}; SLQ mean {mean:.3} ± {se:.3} (one probe's sd {sd:.3})");
+    assert!(
+        (mean - exact).abs() < 3.0 * se,
+        "bias: {mean} against {exact} (se {se})"
+    );
+    // One probe's spread is that of Hutchinson's estimator, √2 ‖log K‖_F.
+    let frobenius = lambda.iter().map(|l| l.ln().powi(2)).sum::<f64>().sqrt();
+    assert!(
+        sd < 1.5 * 2f64.sqrt() * frobenius && sd > 0.5 * 2f64.sqrt() * frobenius,
+        "{sd} vs {frobenius}"
+    );
+}
+
+fn dense_and_iterative(
+    kernel: &Kernel,
+    noise: f64,
+    x: &Mat<f64>,
+    y: &Mat<f64>,
+    settings: &IterativeSettings,
+) -> (f64, Vec<f64>, f64, Vec<f64>, usize) {
+    let dense = log_marginal_likelihood(kernel, noise, x.as_ref(), y.as_ref(), true).unwrap();
+    let solver = IterativeSolver::new(x.nrows(), *settings);
+    let it = log_marginal_likelihood_iterative(
+        kernel,
+        noise,
+        x.as_ref(),
+        y.as_ref(),
+        true,
+        &solver,
+        || false,
+    )
+    .unwrap();
+    (
+        dense.lml,
+        dense.gradient.unwrap(),
+        it.lml,
+        it.gradient.unwrap(),
+        it.iterations,
+    )
+}
+
+fn cosine(a: &[f64], b: &[f64]) -> f64 {
+    let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let na: f64 = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let nb: f64 = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    dot / (na * nb)
+}
+
+#[test]
+fn the_iterative_likelihood_and_gradient_agree_with_the_dense_ones() {
+    let (kernel, x, y) = problem(400, 7);
+    let noise = 0.05;
+    let settings = IterativeSettings {
+        preconditioner_rank: 30,
+        ..IterativeSettings::default()
+    };
+    let (lml, grad, it_lml, it_grad, iterations) =
+        dense_and_iterative(&kernel, noise, &x, &y, &settings);
+    let c = cosine(&grad, &it_grad);
+    println!(
+        "n = 400: dense {lml:.3}, iterative {it_lml:.3} after {iterations} CG iterations; gradient cosine {c:.5}"
+    );
+    // Over 50 probe seeds the mean estimate is within 3 standard errors.
+    let estimates: Vec<f64> = (0..50)
+        .map(|seed| {
+            let s = IterativeSettings {
+                seed,
+                probes: 4,
+                ..settings
+            };
+            let solver = IterativeSolver::new(400, s);
+            log_marginal_likelihood_iterative(
+                &kernel,
+                noise,
+                x.as_ref(),
+                y.as_ref(),
+                false,
+                &solver,
+                || false,
+            )
+            .unwrap()
+            .lml
+        })
+        .collect();
+    let mean = estimates.iter().sum::<f64>() / 50.0;
+    let se =
+        (estimates.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / 49.0).sqrt() / 50f64.sqrt();
+    println!("50 seeds of 4 probes: mean {mean:.3} ± {se:.3} against {lml:.3}");
+    assert!((mean - lml).abs() < 3.0 * se, "{mean} ± {se} against {lml}");
+    // One estimate of 16 probes is within 4 of its standard deviations
+    // (that of 4 probes, halved), and its gradient points the dense one's
+    // way (this is not an optimum: the gradient is far from zero).
+    let sd16 = se * 50f64.sqrt() / 2.0;
+    assert!(
+        (lml - it_lml).abs() < 4.0 * sd16,
+        "{lml} vs {it_lml} (sd {sd16})"
+    );
+    assert!(c > 0.99, "cosine {c}");
+}
+
+#[test]
+fn the_preconditioner_cuts_the_iterations_and_threads_do_not_change_a_bit() {
+    let (kernel, x, y) = problem(300, 8);
+    let run = |rank| {
+        let s = IterativeSettings {
+            preconditioner_rank: rank,
+            ..IterativeSettings::default()
+        };
+        let solver = IterativeSolver::new(300, s);
+        log_marginal_likelihood_iterative(
+            &kernel,
+            0.01,
+            x.as_ref(),
+            y.as_ref(),
+            true,
+            &solver,
+            || false,
+        )
+        .unwrap()
+    };
+    let (none, some) = (run(0), run(40));
+    println!(
+        "CG iterations: {} without a preconditioner, {} with rank 40",
+        none.iterations, some.iterations
+    );
+    assert!(some.iterations * 2 < none.iterations);
+    let one = faer::get_global_parallelism();
+    faer::set_global_parallelism(faer::Par::Seq);
+    let seq = run(40);
+    faer::set_global_parallelism(faer::Par::rayon(2));
+    let two = run(40);
+    faer::set_global_parallelism(one);
+    assert_eq!(seq, two);
+}
