@@ -39,6 +39,7 @@ import csv
 import json
 import math
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -228,9 +229,26 @@ def fit_gpodo(X, Y, max_iters, time_limit, own_start=False):
             noise_variance=START_NOISE,
             hyperopt={"max_iters": max_iters, "start": {"perturbations": 0}},
         )
-    gp = gpodo.ExactGP(kernel="rbf", **settings)
+    gp = gpodo.ExactGP(kernel="rbf", verbose=True, **settings)
+    # Each optimiser iteration's best LML so far, with the seconds since
+    # the fit began: gpodo prints it to sys.stderr (verbose), read here.
+    trace = []
     t0 = time.perf_counter()
-    gp.fit(X, Y)
+
+    class Recorder:
+        def write(self, line):
+            m = re.search(r"iteration (\d+): objective (\S+)", line)
+            if m:
+                trace.append([time.perf_counter() - t0, float(m.group(2))])
+
+        def flush(self):
+            pass
+
+    stderr, sys.stderr = sys.stderr, Recorder()
+    try:
+        gp.fit(X, Y)
+    finally:
+        sys.stderr = stderr
     seconds = time.perf_counter() - t0
     h = gp.hyperparameters_
     return {
@@ -242,6 +260,7 @@ def fit_gpodo(X, Y, max_iters, time_limit, own_start=False):
         "variance": h["rbf.variance"],
         "noise_variance": h["noise_variance"],
         "lengthscales": [h[f"rbf.lengthscale[x{j}]"] for j in range(d)],
+        "trace": trace,
     }
 
 
