@@ -1,18 +1,19 @@
-//! The iterative exact GP beside the dense one on a table: fits the dense
-//! exact GP (RBF-ARD, outputs sharing kernel and noise) on the first `N`
-//! rows of a CSV whose last three columns are the targets, then evaluates
-//! the log marginal likelihood and its gradient at the optimum both ways,
-//! for each preconditioner rank and probe count asked, and prints one line
-//! each: the LML difference, the gradient's cosine with the dense one, the
-//! CG iterations and the seconds of each evaluation.
+//! The iterative exact GP beside the dense one on a table: z-scores the
+//! first `N` rows of a CSV whose last three columns are the targets, fits
+//! the dense exact GP (RBF-ARD, outputs sharing kernel and noise) on the
+//! first `FIT_ROWS` of them (default `N`), then evaluates the log marginal
+//! likelihood and its gradient on all `N` at those hyperparameters, densely
+//! and by iterative solves for each preconditioner rank, probe count and
+//! seed asked, and prints one line each: the LML difference, the gradient's
+//! cosine with the dense one, the CG iterations and the seconds of each
+//! evaluation (`DENSE=0` skips the dense evaluation).
 //!
 //! `cargo run --release -p gpodo-regressors --example iterative_check --
-//! FILE.csv N RANK:PROBES[,RANK:PROBES…]`
+//! FILE.csv N RANK:PROBES[:SEED][,…] [FIT_ROWS]`
 
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use gpodo_regressors::dense::to_faer;
 use gpodo_regressors::exact_gp::iterative::{
     IterativeSettings, IterativeSolver, log_marginal_likelihood_iterative,
 };
@@ -22,10 +23,17 @@ use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let [_, path, n, runs] = args.as_slice() else {
-        bail!("usage: iterative_check FILE.csv N RANK:PROBES[,RANK:PROBES…]");
+    let (path, n, runs, fit_rows) = match args.as_slice() {
+        [_, path, n, runs] => (path, n, runs, None),
+        [_, path, n, runs, fit] => (path, n, runs, Some(fit)),
+        _ => bail!("usage: iterative_check FILE.csv N RANK:PROBES[:SEED][,…] [FIT_ROWS]"),
     };
     let n: usize = n.parse().context("N")?;
+    let fit_rows: usize = fit_rows
+        .map(|f| f.parse())
+        .transpose()
+        .context("FIT_ROWS")?
+        .unwrap_or(n);
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {path}"))?;
     let mut lines = text.lines();
     let header: Vec<String> = lines
@@ -45,38 +53,64 @@ fn main() -> anyhow::Result<()> {
         .collect::<Result<_, _>>()
         .context("parsing the rows")?;
     let d = cols - 3;
-    let inputs: Vec<f64> = rows.iter().flat_map(|r| r[..d].to_vec()).collect();
-    let targets: Vec<f64> = rows.iter().flat_map(|r| r[d..].to_vec()).collect();
+    let n = rows.len();
+    // Every column z-scored over the N rows.
+    let mut z = rows.clone();
+    for c in 0..cols {
+        let mean = rows.iter().map(|r| r[c]).sum::<f64>() / n as f64;
+        let sd = (rows.iter().map(|r| (r[c] - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let sd = if sd < 1e-12 { 1.0 } else { sd };
+        for r in &mut z {
+            r[c] = (r[c] - mean) / sd;
+        }
+    }
+    let head = &z[..fit_rows.min(n)];
     let data = ResidualDataset::new(
-        SampleMatrix::from_row_major(rows.len(), d, inputs)?,
-        SampleMatrix::from_row_major(rows.len(), 3, targets)?,
+        SampleMatrix::from_row_major(
+            head.len(),
+            d,
+            head.iter().flat_map(|r| r[..d].to_vec()).collect(),
+        )?,
+        SampleMatrix::from_row_major(
+            head.len(),
+            3,
+            head.iter().flat_map(|r| r[d..].to_vec()).collect(),
+        )?,
         header[..d].to_vec(),
         header[d..].to_vec(),
     )?;
     let t = Instant::now();
-    let mut gp = ExactGp::new(ExactGpParams::default())?;
+    let mut gp = ExactGp::new(ExactGpParams {
+        standardize: false,
+        ..ExactGpParams::default()
+    })?;
     gp.fit(&data)?;
     println!(
         "dense fit on {} rows: {:.1} s",
-        rows.len(),
+        head.len(),
         t.elapsed().as_secs_f64()
     );
     let state = gp.state().context("no state")?;
-    let (x, y) = (to_faer(&state.x_train), to_faer(&state.y_train));
     let group = &state.groups[0];
+    let x = faer::Mat::from_fn(n, d, |i, j| z[i][j]);
+    let y = faer::Mat::from_fn(n, 3, |i, j| z[i][d + j]);
     let t = Instant::now();
-    let dense = log_marginal_likelihood(
-        &group.kernel,
-        group.noise_variance,
-        x.as_ref(),
-        y.as_ref(),
-        true,
-    )?;
-    let g0 = dense.gradient.clone().unwrap_or_default();
+    let dense = if std::env::var("DENSE").as_deref() == Ok("0") {
+        None
+    } else {
+        Some(log_marginal_likelihood(
+            &group.kernel,
+            group.noise_variance,
+            x.as_ref(),
+            y.as_ref(),
+            true,
+        )?)
+    };
+    let dense_secs = t.elapsed().as_secs_f64();
+    let dense_lml = dense.as_ref().map_or(f64::NAN, |e| e.lml);
+    let g0 = dense.and_then(|e| e.gradient).unwrap_or_default();
     println!(
-        "dense: LML {:.3} ({:.2} s per evaluation with its gradient; noise {:.4}; gradient norm {:.3e})",
-        dense.lml,
-        t.elapsed().as_secs_f64(),
+        "n = {n}: dense LML {dense_lml:.3} ({dense_secs:.2} s per evaluation with its gradient; noise {:.4}; gradient norm {:.3e})",
         group.noise_variance,
         g0.iter().map(|v| v * v).sum::<f64>().sqrt()
     );
@@ -112,7 +146,7 @@ fn main() -> anyhow::Result<()> {
         println!(
             "rank {rank} probes {probes}: LML {:.3} (Δ {:+.3}), gradient cosine {cosine:.5}, {} CG iterations, {:.2} s",
             it.lml,
-            it.lml - dense.lml,
+            it.lml - dense_lml,
             it.iterations,
             t.elapsed().as_secs_f64()
         );

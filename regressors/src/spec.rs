@@ -143,13 +143,20 @@ impl RegressorSpec {
     /// need at its peak (bytes), for the models whose need grows with the
     /// data (`None` for the others): an exact GP holds about five `n × n`
     /// matrices (the Gram matrix, its Cholesky factor, its inverse and the
-    /// gradient's scratch), a sparse GP about eight `m × n` ones and its
+    /// gradient's scratch), three with `solver: iterative`, a sparse GP about eight `m × n` ones and its
     /// `m × m` factors, with `m` the inducing points it will use; a
     /// sparse-spectrum GP its warm-up GP's and its `D × D` factor.
     pub fn fit_memory_bytes(&self, n: usize, d: usize, p: usize) -> Option<u64> {
         let f64s = |count: u128| u64::try_from(count.saturating_mul(8)).unwrap_or(u64::MAX);
         let (n, d, p) = (n as u128, d as u128, p as u128);
         match self {
+            Self::ExactGp(e) if e.solver == crate::exact_gp::Solver::Iterative => {
+                // K and W while learning, then the posterior's factor; the
+                // preconditioner and the CG blocks are n × (k + p + t).
+                let k = e.iterative.preconditioner_rank as u128;
+                let t = e.iterative.probes as u128;
+                Some(f64s(3 * n * n + 6 * n * (k + p + t) + 4 * n * (d + p)))
+            }
             Self::ExactGp(_) => Some(f64s(5 * n * n + 4 * n * (d + p))),
             Self::SparseGp(s) => {
                 let m = (s.inducing.count as u128).min(n);

@@ -304,3 +304,42 @@ fn the_preconditioner_cuts_the_iterations_and_threads_do_not_change_a_bit() {
     faer::set_global_parallelism(one);
     assert_eq!(seq, two);
 }
+
+#[test]
+fn a_fit_by_iterative_solves_lands_where_the_dense_fit_does() {
+    use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, Solver};
+    use gpodo_traits::ResidualRegressor;
+    // Noisy targets (as full-rate residuals are): few CG iterations.
+    let mut r = rng(9);
+    let x = inputs(&mut r, 300, 3);
+    let y = targets(&mut r, &x, 0.5);
+    let data = dataset(&x, &y);
+    let fit = |solver| {
+        let mut gp = ExactGp::new(ExactGpParams {
+            solver,
+            ..ExactGpParams::default()
+        })
+        .unwrap();
+        let report = gp.fit(&data).unwrap();
+        (report.objective.unwrap(), gp)
+    };
+    let (dense, dense_gp) = fit(Solver::Dense);
+    let (iterative, iterative_gp) = fit(Solver::Iterative);
+    println!("dense optimum {dense:.3}, iterative {iterative:.3}");
+    // The report's likelihood is the exact one at the learned
+    // hyperparameters (the posterior's factor).
+    assert!((dense - iterative).abs() < 1.0, "{dense} vs {iterative}");
+    let q = sample_matrix(&inputs(&mut r, 20, 3));
+    let (a, b) = (
+        dense_gp.predict(&q).unwrap(),
+        iterative_gp.predict(&q).unwrap(),
+    );
+    let worst = a
+        .mean
+        .as_slice()
+        .iter()
+        .zip(b.mean.as_slice())
+        .map(|(u, v)| (u - v).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 0.05, "predictions differ by {worst}");
+}

@@ -15,4 +15,4 @@ pub mod posterior;
 pub use crate::scaling::GpPredictions;
 pub use choice::KernelChoice;
 pub use model::{ExactGp, ExactGpState, GroupState};
-pub use params::{ExactGpParams, OutputSharing};
+pub use params::{ExactGpParams, OutputSharing, Solver};

@@ -6,8 +6,9 @@
 use faer::MatRef;
 use gpodo_traits::StartRecord;
 
+use super::iterative::{IterativeSolver, log_marginal_likelihood_iterative};
 use super::likelihood::log_marginal_likelihood;
-use super::params::ExactGpParams;
+use super::params::{ExactGpParams, Solver};
 use crate::RegressorError;
 use crate::hyperopt::starts::{self, EXACT_GP_HALVE_AFTER};
 use crate::hyperopt::{HyperProblem, HyperoptParams, Objective, ProgressSink, SearchSpace};
@@ -30,11 +31,13 @@ pub struct Optimized {
     pub starts: Vec<StartRecord>,
 }
 
-/// The log marginal likelihood as a function of `(log θ, log σ_n²)`.
+/// The log marginal likelihood as a function of `(log θ, log σ_n²)`,
+/// evaluated densely, or by the iterative solver of this fit.
 struct Lml<'a> {
     template: &'a Kernel,
     x: MatRef<'a, f64>,
     y: MatRef<'a, f64>,
+    iterative: Option<IterativeSolver>,
 }
 
 impl Lml<'_> {
@@ -46,11 +49,35 @@ impl Lml<'_> {
     }
 }
 
+impl Lml<'_> {
+    /// The likelihood at `log_theta`, and its gradient when asked.
+    fn at(
+        &self,
+        log_theta: &[f64],
+        with_gradient: bool,
+    ) -> Result<(f64, Option<Vec<f64>>), RegressorError> {
+        let (kernel, noise) = self.hyperparameters(log_theta);
+        match &self.iterative {
+            None => log_marginal_likelihood(&kernel, noise, self.x, self.y, with_gradient)
+                .map(|e| (e.lml, e.gradient)),
+            Some(solver) => log_marginal_likelihood_iterative(
+                &kernel,
+                noise,
+                self.x,
+                self.y,
+                with_gradient,
+                solver,
+                || false,
+            )
+            .map(|e| (e.lml, e.gradient)),
+        }
+    }
+}
+
 impl Objective for Lml<'_> {
     fn evaluate(&self, log_theta: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
-        let (kernel, noise) = self.hyperparameters(log_theta);
-        let eval = log_marginal_likelihood(&kernel, noise, self.x, self.y, true)?;
-        Ok((eval.lml, eval.gradient.unwrap_or_default()))
+        let (lml, gradient) = self.at(log_theta, true)?;
+        Ok((lml, gradient.unwrap_or_default()))
     }
 }
 
@@ -79,11 +106,10 @@ pub fn maximize_lml(
         template: &template,
         x,
         y,
+        iterative: (params.solver == Solver::Iterative)
+            .then(|| IterativeSolver::new(x.nrows(), params.iterative)),
     };
-    let score = |c: &[f64]| {
-        let (kernel, noise) = objective.hyperparameters(c);
-        log_marginal_likelihood(&kernel, noise, x, y, false).map(|e| e.lml)
-    };
+    let score = |c: &[f64]| objective.at(c, false).map(|e| e.0);
     let problem = HyperProblem {
         objective: &objective,
         score: &score,

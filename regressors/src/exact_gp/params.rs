@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::choice::KernelChoice;
+use super::iterative::IterativeSettings;
 use crate::RegressorError;
 use crate::hyperopt::HyperoptParams;
 use crate::kernels::{KernelExpr, KernelInit, LeafName};
@@ -18,6 +19,21 @@ pub enum OutputSharing {
     Shared,
     /// One independent GP, with its own hyperparameters, per output.
     Independent,
+}
+
+/// How the exact GP evaluates its log marginal likelihood while it learns
+/// the hyperparameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Solver {
+    /// A Cholesky factor and an inverse per evaluation, `O(n³)` (default).
+    #[default]
+    Dense,
+    /// Batched preconditioned conjugate gradients and stochastic Lanczos
+    /// quadrature, `O(n²)` per iteration, no `n × n` inverse
+    /// ([`super::iterative`]); the `iterative:` settings apply. The
+    /// posterior of the learned model is then one Cholesky factor.
+    Iterative,
 }
 
 /// Exact GP settings. Every field has a default; see `experiments/README.md`.
@@ -48,6 +64,10 @@ pub struct ExactGpParams {
     pub hyperopt: HyperoptParams,
     /// Seed of the candidate and restart perturbations (default 0).
     pub seed: u64,
+    /// How the likelihood is evaluated while learning (default `dense`).
+    pub solver: Solver,
+    /// The iterative solver's settings (read with `solver: iterative`).
+    pub iterative: IterativeSettings,
 }
 
 impl Default for ExactGpParams {
@@ -62,6 +82,8 @@ impl Default for ExactGpParams {
             optimize: true,
             hyperopt: HyperoptParams::default(),
             seed: 0,
+            solver: Solver::Dense,
+            iterative: IterativeSettings::default(),
         }
     }
 }
@@ -96,6 +118,7 @@ impl ExactGpParams {
                 });
             }
         }
+        self.iterative.check()?;
         self.hyperopt
             .check("exact_gp", self.optimize, &self.init, self.noise_variance)
     }

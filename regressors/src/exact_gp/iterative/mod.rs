@@ -57,6 +57,32 @@ pub struct IterativeSettings {
     pub seed: u64,
 }
 
+impl IterativeSettings {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the field (under `iterative.`).
+    pub fn check(&self) -> Result<(), RegressorError> {
+        let bad = |field: &str, expected: &str| {
+            Err(RegressorError::InvalidSpec {
+                regressor: "exact_gp".into(),
+                field: format!("iterative.{field}"),
+                expected: expected.into(),
+            })
+        };
+        if self.probes == 0 {
+            return bad("probes", "at least 1 probe vector");
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return bad("tolerance", "a relative residual in (0, 1)");
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations", "at least 1");
+        }
+        Ok(())
+    }
+}
+
 impl Default for IterativeSettings {
     fn default() -> Self {
         Self {
