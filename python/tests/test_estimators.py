@@ -289,6 +289,9 @@ def test_other_threads_run_while_a_fit_runs():
 
 def test_ctrl_c_interrupts_a_fit_at_its_next_iteration():
     X, Y = data(n=1500, d=8)
+    # Python's own Ctrl-C handler, as in a terminal or a notebook (a process
+    # started in the background by a shell inherits SIGINT ignored).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     try:
@@ -296,6 +299,7 @@ def test_ctrl_c_interrupts_a_fit_at_its_next_iteration():
             ExactGP(hyperopt={"max_iters": 1000}).fit(X, Y)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
 
 
 def test_progress_goes_to_sys_stderr_only_when_verbose(capsys):
