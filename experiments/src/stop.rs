@@ -37,6 +37,10 @@ impl FitProgress for StopOnRequest {
     fn iteration(&self, _start: usize, _iteration: u64, _objective: f64) -> ControlFlow<()> {
         control_flow()
     }
+
+    fn stop_requested(&self) -> bool {
+        requested()
+    }
 }
 
 /// Installs the Ctrl-C handler: the first asks to stop, the second exits

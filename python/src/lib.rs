@@ -66,13 +66,32 @@ struct PythonProgress {
     interrupted: Mutex<Option<PyErr>>,
 }
 
+impl PythonProgress {
+    /// Whether Ctrl-C was pressed, now or before: Python's signal handlers
+    /// run here, and a `KeyboardInterrupt` is kept for the fit to raise.
+    fn interrupted(&self, py: Python<'_>) -> bool {
+        let Ok(mut slot) = self.interrupted.lock() else {
+            return true;
+        };
+        if slot.is_some() {
+            return true;
+        }
+        if let Err(e) = py.check_signals() {
+            *slot = Some(e);
+            return true;
+        }
+        false
+    }
+}
+
 impl FitProgress for PythonProgress {
+    fn stop_requested(&self) -> bool {
+        Python::attach(|py| self.interrupted(py))
+    }
+
     fn iteration(&self, start: usize, iteration: u64, objective: f64) -> ControlFlow<()> {
         Python::attach(|py| {
-            if let Err(e) = py.check_signals() {
-                if let Ok(mut slot) = self.interrupted.lock() {
-                    *slot = Some(e);
-                }
+            if self.interrupted(py) {
                 return ControlFlow::Break(());
             }
             if self.verbose {

@@ -6,7 +6,9 @@
 //! and by iterative solves for each preconditioner rank, probe count and
 //! seed asked, and prints one line each: the LML difference, the gradient's
 //! cosine with the dense one, the CG iterations and the seconds of each
-//! evaluation (`DENSE=0` skips the dense evaluation).
+//! evaluation (`DENSE=0` skips the dense evaluation). `FIT_ROWS = 0`
+//! evaluates at the start policy's first base instead (variance 1,
+//! lengthscale 1, noise 0.01).
 //!
 //! `cargo run --release -p gpodo-regressors --example iterative_check --
 //! FILE.csv N RANK:PROBES[:SEED][,…] [FIT_ROWS]`
@@ -64,7 +66,7 @@ fn main() -> anyhow::Result<()> {
             r[c] = (r[c] - mean) / sd;
         }
     }
-    let head = &z[..fit_rows.min(n)];
+    let head = &z[..fit_rows.clamp(2, n)];
     let data = ResidualDataset::new(
         SampleMatrix::from_row_major(
             head.len(),
@@ -79,9 +81,16 @@ fn main() -> anyhow::Result<()> {
         header[..d].to_vec(),
         header[d..].to_vec(),
     )?;
+    // FIT_ROWS = 0: no fit, the start policy's first base (variance 1,
+    // lengthscale 1, noise 0.01) instead.
     let t = Instant::now();
     let mut gp = ExactGp::new(ExactGpParams {
         standardize: false,
+        optimize: fit_rows > 0,
+        init: gpodo_regressors::kernels::KernelInit {
+            lengthscale: (fit_rows == 0).then_some(1.0),
+            ..Default::default()
+        },
         ..ExactGpParams::default()
     })?;
     gp.fit(&data)?;

@@ -326,6 +326,21 @@ fn a_fit_by_iterative_solves_lands_where_the_dense_fit_does() {
     let (dense, dense_gp) = fit(Solver::Dense);
     let (iterative, iterative_gp) = fit(Solver::Iterative);
     println!("dense optimum {dense:.3}, iterative {iterative:.3}");
+    // From a 100-row subset's dense optimum: the same optimum.
+    let mut from_subset = ExactGp::new(ExactGpParams {
+        solver: Solver::Iterative,
+        iterative: IterativeSettings {
+            subset_rows: 100,
+            ..IterativeSettings::default()
+        },
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    let report = from_subset.fit(&data).unwrap();
+    let lml = report.objective.unwrap();
+    println!("from the subset's optimum {lml:.3}");
+    assert!((dense - lml).abs() < 1.0, "{dense} vs {lml}");
+    assert!(report.starts.iter().all(|s| s.label.contains("100-row subset")), "{:?}", report.starts);
     // The report's likelihood is the exact one at the learned
     // hyperparameters (the posterior's factor).
     assert!((dense - iterative).abs() < 1.0, "{dense} vs {iterative}");
@@ -342,4 +357,46 @@ fn a_fit_by_iterative_solves_lands_where_the_dense_fit_does() {
         .map(|(u, v)| (u - v).abs())
         .fold(0.0, f64::max);
     assert!(worst < 0.05, "predictions differ by {worst}");
+}
+
+#[test]
+fn a_stop_asked_between_cg_iterations_stops_the_fit() {
+    use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, Solver};
+    use gpodo_traits::{FitProgress, ResidualRegressor};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    /// Never stops at an optimiser iteration; asks to stop after `after`
+    /// questions between CG iterations.
+    struct StopInside {
+        asked: AtomicUsize,
+        after: usize,
+    }
+    impl FitProgress for StopInside {
+        fn iteration(&self, _: usize, _: u64, _: f64) -> std::ops::ControlFlow<()> {
+            std::ops::ControlFlow::Continue(())
+        }
+        fn stop_requested(&self) -> bool {
+            self.asked.fetch_add(1, Ordering::SeqCst) >= self.after
+        }
+    }
+    let mut r = rng(10);
+    let x = inputs(&mut r, 200, 3);
+    let y = targets(&mut r, &x, 0.5);
+    let data = dataset(&x, &y);
+    let progress = Arc::new(StopInside {
+        asked: AtomicUsize::new(0),
+        after: 25,
+    });
+    let mut gp = ExactGp::new(ExactGpParams {
+        solver: Solver::Iterative,
+        ..ExactGpParams::default()
+    })
+    .unwrap();
+    gp.set_progress(Some(progress.clone()));
+    let e = gp.fit(&data).unwrap_err();
+    assert!(e.to_string().contains("stopped"), "{e}");
+    assert!(gp.state().is_none(), "nothing half-fitted");
+    // It was asked from inside the evaluations: more than once per
+    // optimiser iteration, and it stopped soon after.
+    assert!(progress.asked.load(Ordering::SeqCst) > 25);
 }

@@ -159,6 +159,14 @@ pub trait FitProgress: Send + Sync {
     /// `ControlFlow::Break(())` stops the fit: it returns an error saying
     /// so, never a half-fitted model.
     fn iteration(&self, start: usize, iteration: u64, objective: f64) -> std::ops::ControlFlow<()>;
+
+    /// Asked between the steps of one long objective evaluation (the
+    /// iterative exact GP's conjugate-gradient iterations): `true` stops the
+    /// fit there, as `ControlFlow::Break` from [`FitProgress::iteration`]
+    /// does. Never asked to stop by default.
+    fn stop_requested(&self) -> bool {
+        false
+    }
 }
 
 /// A regressor of odometry residuals.

@@ -20,7 +20,7 @@ use crate::dense::{column, for_column_blocks, recycle, trace};
 use crate::kernels::Kernel;
 
 /// `log 2π`.
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
+pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 /// One evaluation of the objective.
 #[derive(Debug, Clone, PartialEq)]

@@ -38,6 +38,8 @@ struct Lml<'a> {
     x: MatRef<'a, f64>,
     y: MatRef<'a, f64>,
     iterative: Option<IterativeSolver>,
+    /// Asked between the iterative solver's CG iterations.
+    progress: &'a ProgressSink,
 }
 
 impl Lml<'_> {
@@ -67,7 +69,7 @@ impl Lml<'_> {
                 self.y,
                 with_gradient,
                 solver,
-                || false,
+                || self.progress.stop_requested(),
             )
             .map(|e| (e.lml, e.gradient)),
         }
@@ -101,6 +103,35 @@ pub fn maximize_lml(
     progress: &ProgressSink,
     warm: Option<&[f64]>,
 ) -> Result<Optimized, RegressorError> {
+    let n = x.nrows();
+    let subset = params.iterative.subset_rows;
+    if params.solver == Solver::Iterative && warm.is_none() && subset > 0 && subset < n {
+        // The start: a dense fit, from the start policy, on rows spread
+        // evenly over the training set; the iterative fit goes on from its
+        // optimum alone, where the noise is learned and CG is quick.
+        let rows: Vec<usize> = (0..subset).map(|i| i * n / subset).collect();
+        let xs = faer::Mat::from_fn(subset, x.ncols(), |i, j| x[(rows[i], j)]);
+        let ys = faer::Mat::from_fn(subset, y.ncols(), |i, j| y[(rows[i], j)]);
+        let dense = ExactGpParams {
+            solver: Solver::Dense,
+            ..params.clone()
+        };
+        let first = maximize_lml(xs.as_ref(), ys.as_ref(), &dense, progress, None)?;
+        let mut coords = first.kernel.log_params();
+        coords.push(first.noise_variance.ln());
+        tracing::debug!(
+            rows = subset,
+            lml = first.lml,
+            "iterative exact GP: the subset's dense optimum"
+        );
+        let mut out = maximize_lml(x, y, params, progress, Some(&coords))?;
+        out.evaluations += first.evaluations;
+        out.iterations += first.iterations;
+        for s in &mut out.starts {
+            s.label = format!("{} ({subset}-row subset's dense optimum)", s.label);
+        }
+        return Ok(out);
+    }
     let template = params.kernel_expr().build(x.ncols(), &params.init);
     let objective = Lml {
         template: &template,
@@ -108,6 +139,7 @@ pub fn maximize_lml(
         y,
         iterative: (params.solver == Solver::Iterative)
             .then(|| IterativeSolver::new(x.nrows(), params.iterative)),
+        progress,
     };
     let score = |c: &[f64]| objective.at(c, false).map(|e| e.0);
     let problem = HyperProblem {
@@ -139,6 +171,11 @@ pub fn maximize_lml(
     let result = crate::hyperopt::learn(&problem, &hyperopt, params.seed, progress);
     // The evaluations' buffers are not needed once the search is over.
     crate::dense::release_spare();
+    // A stop asked inside an evaluation fails that evaluation only; the
+    // fit stops as a whole.
+    if progress.stop_requested() {
+        return Err(RegressorError::Stopped);
+    }
     let (out, records) = result?;
     let (kernel, noise_variance) = objective.hyperparameters(&out.coords);
     Ok(Optimized {

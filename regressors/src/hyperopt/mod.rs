@@ -163,6 +163,14 @@ pub struct Maximized {
 #[derive(Clone, Default)]
 pub struct ProgressSink(pub Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>);
 
+impl ProgressSink {
+    /// Whether the fit's progress asks to stop now
+    /// ([`gpodo_traits::FitProgress::stop_requested`]).
+    pub fn stop_requested(&self) -> bool {
+        self.0.as_ref().is_some_and(|p| p.stop_requested())
+    }
+}
+
 impl std::fmt::Debug for ProgressSink {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(if self.0.is_some() {

@@ -303,6 +303,14 @@ impl FitProgress for Numbered {
         }
         flow
     }
+
+    fn stop_requested(&self) -> bool {
+        let stop = self.stopped.load(Ordering::Relaxed) || self.inner.stop_requested();
+        if stop {
+            self.stopped.store(true, Ordering::Relaxed);
+        }
+        stop
+    }
 }
 
 /// Advances every racer to `policy.halve_after` iterations (unset or 0:

@@ -33,12 +33,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::RegressorError;
 use crate::dense::{par, symmetric_times, trace};
+use crate::exact_gp::likelihood::LN_2PI;
 use crate::kernels::Kernel;
 use mbcg::{batched_cg, lanczos_log_quadrature};
 use preconditioner::Preconditioner;
-
-/// `log 2π`.
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 /// Settings of the iterative solves.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -55,6 +53,12 @@ pub struct IterativeSettings {
     pub max_iterations: usize,
     /// Seed of the probe vectors (default 0).
     pub seed: u64,
+    /// Rows, spread evenly over the training set, of a dense fit (from the
+    /// start policy) whose optimum the iterative fit starts from alone
+    /// (default 2000; 0, or at least the training rows: the start policy's
+    /// candidates, evaluated iteratively). At the policy's small initial
+    /// noise CG needs hundreds of iterations; near an optimum, few.
+    pub subset_rows: usize,
 }
 
 impl IterativeSettings {
@@ -91,6 +95,7 @@ impl Default for IterativeSettings {
             tolerance: 1e-6,
             max_iterations: 1000,
             seed: 0,
+            subset_rows: 2000,
         }
     }
 }
@@ -194,6 +199,14 @@ pub fn log_marginal_likelihood_iterative(
         settings.max_iterations,
         &stop,
     )?;
+    tracing::debug!(
+        n,
+        iterations = solved.iterations,
+        relative_residual = solved.relative_residual,
+        preconditioner_rank = rank,
+        noise_variance,
+        "iterative exact-GP solve"
+    );
     let alpha = solved.solution.as_ref().subcols(0, p);
     let u = solved.solution.as_ref().subcols(p, t);
     let pz = pre.solve(z.as_ref());
