@@ -340,7 +340,14 @@ fn a_fit_by_iterative_solves_lands_where_the_dense_fit_does() {
     let lml = report.objective.unwrap();
     println!("from the subset's optimum {lml:.3}");
     assert!((dense - lml).abs() < 1.0, "{dense} vs {lml}");
-    assert!(report.starts.iter().all(|s| s.label.contains("100-row subset")), "{:?}", report.starts);
+    assert!(
+        report
+            .starts
+            .iter()
+            .all(|s| s.label.contains("100-row subset")),
+        "{:?}",
+        report.starts
+    );
     // The report's likelihood is the exact one at the learned
     // hyperparameters (the posterior's factor).
     assert!((dense - iterative).abs() < 1.0, "{dense} vs {iterative}");
