@@ -16,7 +16,8 @@ pub type DrawnCurve<'a> = (&'a str, &'a [PointSummary]);
 /// control.
 pub type Panel<'a> = (DrawnCurve<'a>, Option<DrawnCurve<'a>>);
 
-fn io(e: impl std::fmt::Display) -> std::io::Error {
+/// A plotters error as an I/O error.
+pub(crate) fn io(e: impl std::fmt::Display) -> std::io::Error {
     std::io::Error::other(e.to_string())
 }
 
@@ -35,6 +36,32 @@ pub fn colour(i: usize) -> RGBColor {
         RGBColor(23, 190, 207),
     ];
     PALETTE[i % PALETTE.len()]
+}
+
+/// Draws `line` in `colour` with a dot at each point, labelled `label` in
+/// the chart's legend (the figures' one way to draw a curve).
+///
+/// # Errors
+/// When plotters cannot draw.
+pub fn draw_labelled_line<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    line: Vec<(f64, f64)>,
+    colour: RGBColor,
+    label: String,
+) -> std::io::Result<()>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart
+        .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
+        .map_err(io)?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
+    chart
+        .draw_series(line.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
+        .map_err(io)?;
+    Ok(())
 }
 
 /// The axis ranges every panel shares: (frames, RMSE).
@@ -132,16 +159,7 @@ pub fn curves_svg(panels: &[Panel<'_>]) -> std::io::Result<String> {
                     .iter()
                     .map(|p| (p.frames, clamp(p.rmse.estimate)))
                     .collect();
-                chart
-                    .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
-                    .map_err(io)?
-                    .label(role)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
-                    });
-                chart
-                    .draw_series(line.into_iter().map(|p| Circle::new(p, 3, c.filled())))
-                    .map_err(io)?;
+                draw_labelled_line(&mut chart, line, c, role.to_string())?;
             }
             chart
                 .configure_series_labels()

@@ -5,11 +5,7 @@
 use plotters::prelude::*;
 
 use crate::execute::prequential::Prequential;
-use crate::report::curve_plot::colour;
-
-fn io(e: impl std::fmt::Display) -> std::io::Error {
-    std::io::Error::other(e.to_string())
-}
+use crate::report::curve_plot::{colour, draw_labelled_line, io};
 
 /// The figure as SVG text.
 ///
@@ -85,16 +81,7 @@ fn draw(
                 .enumerate()
                 .map(|(k, v)| (x(k), *v))
                 .collect();
-            chart
-                .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
-                .map_err(io)?
-                .label(score.label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
-                });
-            chart
-                .draw_series(line.into_iter().map(|q| Circle::new(q, 3, c.filled())))
-                .map_err(io)?;
+            draw_labelled_line(&mut chart, line, c, score.label.clone())?;
         }
         chart
             .configure_series_labels()
