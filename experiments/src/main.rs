@@ -190,7 +190,8 @@ enum SimulateFormat {
 #[derive(Subcommand)]
 enum BagCommand {
     /// Topics, types, message counts, rates and duration (what `ros2 bag
-    /// info` shows).
+    /// info` shows), and what a topic map needs: each topic's frame ids, a
+    /// `JointState`'s joint names, a TF topic's parent → child pairs.
     Info {
         /// The bag.
         file: PathBuf,
@@ -289,10 +290,15 @@ fn run(
 fn plan(file: &Path) -> anyhow::Result<()> {
     let plan = load_plan(file)?;
     println!(
-        "{}: {} run(s) of `{}` (sweep seed {}){}",
+        "{}: {} run(s) of `{}` ({} seed {}){}",
         file.display(),
         plan.runs.len(),
         plan.name,
+        if plan.runs.len() == 1 {
+            "experiment"
+        } else {
+            "sweep"
+        },
         plan.seed,
         if plan.replicates.is_empty() {
             String::new()
@@ -468,7 +474,11 @@ fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> a
         attitude_without_imu: Default::default(),
     };
     match gpodo_experiments::execute::data::speed_ratio(&spec, logs)? {
-        None => println!("no unit check: the ground truth never moves"),
+        None => println!(
+            "no unit check: fewer than {} seconds drive faster than {} m/s",
+            gpodo_datasets::speed_check::MIN_MOVING_WINDOWS,
+            gpodo_datasets::speed_check::MOVING_SPEED_MPS
+        ),
         Some(ratio) => {
             println!(
                 "unit check: the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds; [0.5, 2] passes)"

@@ -179,7 +179,8 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
         this_shard = mine.len(),
         to_run = todo.len(),
         folder = %dir.display(),
-        "sweep"
+        "{}",
+        if single { "experiment" } else { "sweep" }
     );
     let configs: Vec<&ExperimentConfig> = todo.iter().map(|r| &r.config).collect();
     let multi = if options.quiet {

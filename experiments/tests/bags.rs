@@ -271,8 +271,11 @@ mod synthetic {
         assert_eq!(metrics["dataset"]["attitude"], "level");
         let report = std::fs::read_to_string(tmp.path().join("out/report.md")).unwrap();
         assert!(
-            report.contains("No IMU: the motion model solved the yaw rate from the wheels")
-                && report.contains("| exact GP: rbf |"),
+            report.contains(
+                "No IMU: the motion model took its yaw rate from the wheels (solved with the slip"
+            ) && report.contains("| exact GP: rbf |")
+                && report.contains("Unit check:")
+                && !report.contains("outside [0.5, 2]"),
             "{report}"
         );
         // The GP learns something the wheels alone get wrong.
@@ -292,7 +295,7 @@ mod synthetic {
         common::assert_succeeded(&out, "");
         let report = std::fs::read_to_string(tmp.path().join("out-gt/report.md")).unwrap();
         assert!(
-            report.contains("Roll and pitch for the contact geometry came from the ground truth"),
+            report.contains("Roll and pitch for the load weighting came from the ground truth"),
             "{report}"
         );
         // `gpodo import` writes a log without IMU columns, which reads back.

@@ -218,12 +218,19 @@ pub fn visit_messages_with(
 
 /// The file of the bag at `path`: `path` itself, or, for a ROS 2 bag
 /// folder (what `ros2 bag record` writes: `metadata.yaml` beside its
-/// storage files), the one `.mcap` or `.db3` file inside it.
+/// storage files) or its `metadata.yaml`, the one `.mcap` or `.db3` file
+/// inside that folder.
 ///
 /// # Errors
 /// [`BagError::UnknownFormat`] for a folder without exactly one such file,
 /// naming what it holds.
 pub fn bag_file(path: &Path) -> Result<PathBuf, BagError> {
+    // A ROS 2 bag's `metadata.yaml` stands for its folder.
+    if path.file_name().is_some_and(|n| n == "metadata.yaml")
+        && let Some(folder) = path.parent().filter(|f| f.is_dir())
+    {
+        return bag_file(folder);
+    }
     if !path.is_dir() {
         return Ok(path.to_path_buf());
     }
@@ -471,6 +478,10 @@ mod tests {
         );
         std::fs::write(folder.join("run_1_0.mcap"), b"x").unwrap();
         assert_eq!(bag_file(&folder).unwrap(), folder.join("run_1_0.mcap"));
+        assert_eq!(
+            bag_file(&folder.join("metadata.yaml")).unwrap(),
+            folder.join("run_1_0.mcap")
+        );
         std::fs::write(folder.join("run_1_1.mcap"), b"x").unwrap();
         let e = bag_file(&folder).unwrap_err().to_string();
         assert!(e.contains("run_1_0.mcap, run_1_1.mcap"), "{e}");

@@ -26,14 +26,16 @@ use crate::execute::calibration::{ResidualStatistics, residual_statistics};
 use crate::execute::odometry::{DeadReckoning, dead_reckoning};
 use crate::execute::results::{Attitude, DatasetSummary, ModelRows, RunSummary};
 
-/// Warns when the motion model's speed is far from the ground truth's over
-/// the moving parts of the training runs' `steps` (median ratio outside
-/// [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]): most likely a joint in
-/// the wrong unit. A warning, never a silent fix.
-fn warn_on_speed_units(steps: &[Vec<LogStep>]) {
-    if let Some(warning) = median_speed_ratio(steps).and_then(unit_warning) {
+/// The median ratio of the motion model's speed to the ground truth's over
+/// the moving parts of the training runs' `steps`, with a warning when it is
+/// outside [`gpodo_datasets::speed_check::PLAUSIBLE_RATIO`]: most likely a
+/// joint in the wrong unit. A warning, never a silent fix.
+fn check_speed_units(steps: &[Vec<LogStep>]) -> Option<f64> {
+    let ratio = median_speed_ratio(steps);
+    if let Some(warning) = ratio.and_then(unit_warning) {
         tracing::warn!("{warning} (the training runs)");
     }
+    ratio
 }
 
 /// The median ratio of the motion model's translational speed to the
@@ -184,6 +186,30 @@ fn attitude_source(
     }
 }
 
+/// Where a motion model without a gyro takes its yaw rate from.
+fn yaw_rate_source(spec: &MotionModelSpec) -> &'static str {
+    match spec {
+        MotionModelSpec::WeightedJacobian { .. } => {
+            "the wheels (solved with the slip, as an unknown of the weighted Jacobian)"
+        }
+        MotionModelSpec::SkidSteer { .. } => "the wheel speed difference (`yaw: wheels`)",
+        MotionModelSpec::ReportedOdometry { .. } => "the robot's reported odometry",
+    }
+}
+
+/// Whether any ground-truth pose of `train` or `test` is tilted: a GNSS
+/// ground truth has no orientation, and gpodo stores it level.
+fn ground_truth_has_attitude(train: &[RoverLog], test: &[RoverLog]) -> bool {
+    train
+        .iter()
+        .chain(test)
+        .flat_map(|l| &l.ground_truth)
+        .any(|pose| {
+            let (roll, pitch, _) = pose.rotation.euler_angles();
+            roll != 0.0 || pitch != 0.0
+        })
+}
+
 /// Sets every sample's off-board roll and pitch to its ground truth's.
 fn with_ground_truth_attitude(log: &mut RoverLog) {
     for (sample, pose) in log.samples.iter_mut().zip(&log.ground_truth) {
@@ -208,7 +234,13 @@ fn from_logs(
         in_rover_order(train_logs, rover.as_ref())?,
         in_rover_order(test_logs, rover.as_ref())?,
     );
-    let attitude = attitude_source(&config.motion_model, &train_logs, &test_logs)?;
+    let mut attitude = attitude_source(&config.motion_model, &train_logs, &test_logs)?;
+    if attitude == Attitude::GroundTruth && !ground_truth_has_attitude(&train_logs, &test_logs) {
+        tracing::warn!(
+            "`attitude_without_imu: ground_truth`, but the ground truth carries no roll or pitch (a GNSS fix has none): the ground is taken as level"
+        );
+        attitude = Attitude::Level;
+    }
     if attitude == Attitude::GroundTruth {
         for log in train_logs.iter_mut().chain(test_logs.iter_mut()) {
             with_ground_truth_attitude(log);
@@ -220,7 +252,7 @@ fn from_logs(
         .iter()
         .map(|log| log_steps(log, model.as_ref(), radius))
         .collect::<Result<Vec<_>, _>>()?;
-    warn_on_speed_units(&train_steps);
+    let speed_ratio = check_speed_units(&train_steps);
     let train = residual_dataset_from_steps(&refs(train_logs), &train_steps, &config.residuals)?;
     let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
     let dead_reckoning = test_logs
@@ -239,6 +271,9 @@ fn from_logs(
             target_names: train.target_names.clone(),
             terrain_max_slope_deg,
             attitude,
+            yaw_rate_without_imu: (attitude != Attitude::Imu)
+                .then(|| yaw_rate_source(&config.motion_model).to_string()),
+            speed_ratio,
         },
         train,
         test,
@@ -385,6 +420,8 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                     target_names: train.target_names.clone(),
                     terrain_max_slope_deg: None,
                     attitude: Attitude::Imu,
+                    yaw_rate_without_imu: None,
+                    speed_ratio: None,
                 },
                 train,
                 test,

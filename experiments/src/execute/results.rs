@@ -47,6 +47,14 @@ pub struct DatasetSummary {
     /// Where the motion model's roll and pitch came from.
     #[serde(default)]
     pub attitude: Attitude,
+    /// Without an IMU, where the motion model's yaw rate came from.
+    #[serde(default)]
+    pub yaw_rate_without_imu: Option<String>,
+    /// The unit check: the median ratio of the motion model's speed to the
+    /// ground truth's over the training runs' moving seconds (`None` for a
+    /// residual table, or runs that never move).
+    #[serde(default)]
+    pub speed_ratio: Option<f64>,
 }
 
 /// Where the motion model's roll and pitch came from.

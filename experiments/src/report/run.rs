@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use gpodo_datasets::speed_check::unit_warning;
 use gpodo_frontends::scheme::SchemeResult;
 
 use crate::config::DatasetSpec;
@@ -76,7 +77,32 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     if let Some(slope) = r.dataset.terrain_max_slope_deg {
         let _ = writeln!(s, "\nSteepest terrain slope: {slope:.1}°.");
     }
-    let no_imu = "No IMU: the motion model solved the yaw rate from the wheels, and the regressors got no IMU inputs";
+    if r.dataset.speed_ratio.is_none() {
+        let _ = writeln!(
+            s,
+            "\nUnit check: none; fewer than {} seconds of the training runs drive faster than {} m/s.",
+            gpodo_datasets::speed_check::MIN_MOVING_WINDOWS,
+            gpodo_datasets::speed_check::MOVING_SPEED_MPS
+        );
+    }
+    if let Some(ratio) = r.dataset.speed_ratio {
+        let verdict = unit_warning(ratio).map_or_else(
+            || "within [0.5, 2]: the wheels' units are plausible".to_string(),
+            |w| format!("**outside [0.5, 2]**: {w}"),
+        );
+        let _ = writeln!(
+            s,
+            "\nUnit check: the motion model's speed is {ratio:.3}× the ground truth's (median over the training runs' moving seconds), {verdict}."
+        );
+    }
+    let yaw = r
+        .dataset
+        .yaw_rate_without_imu
+        .as_deref()
+        .unwrap_or("the wheels");
+    let no_imu = format!(
+        "No IMU: the motion model took its yaw rate from {yaw}, and the regressors got no IMU inputs"
+    );
     match r.dataset.attitude {
         Attitude::Imu => {}
         Attitude::Level => {
@@ -88,7 +114,7 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
         Attitude::GroundTruth => {
             let _ = writeln!(
                 s,
-                "\n{no_imu}. Roll and pitch for the contact geometry came from the ground truth (off board, `attitude_without_imu: ground_truth`); they are not regressor inputs."
+                "\n{no_imu}. Roll and pitch for the load weighting came from the ground truth (off board, `attitude_without_imu: ground_truth`); they are not regressor inputs."
             );
         }
     }
