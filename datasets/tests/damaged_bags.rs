@@ -1,9 +1,13 @@
 //! Damaged recordings fail fast and clearly. An MCAP written by gpodo's
 //! own writer is damaged at 200 seeded offsets (8 bytes overwritten) and
-//! cut at 20 seeded lengths; so are the shipped MCAP, ROS 1 and (with the
-//! `db3` feature) SQLite fixtures. Every import returns within a watchdog far
+//! cut at 20 seeded lengths, and so are the shipped MCAP, ROS 1 and (with the
+//! `db3` feature) SQLite fixtures, 40 of their 200 offsets in the first 256
+//! bytes and 40 in the last eighth. Every read returns within a watchdog far
 //! above the intact file's time, never panics, and either fails with an
-//! error naming the file or returns exactly the intact file's rows.
+//! error naming the file or returns the intact file's rows (the written
+//! MCAP), or messages (the fixtures: equal but where the damage fell inside
+//! a message's own bytes, which a container without checksums cannot
+//! tell from data).
 //! Skipping damaged chunks reads the intact file less whole chunks and
 //! counts what it lost. A stamp far outside the recording and a `rate_hz`
 //! typo are refused before the common clock is walked.
@@ -259,18 +263,20 @@ fn a_damaged_chunk_is_named_or_skipped_with_what_it_held() {
     );
 }
 
-/// `BagInfo::read` (every message visited) on another thread, or `None`
-/// when it has not returned within `limit` or panicked.
-fn info_within(path: &Path, limit: Duration) -> Option<Result<usize, String>> {
-    let (tx, rx) = mpsc::channel();
-    let path = path.to_path_buf();
-    std::thread::spawn(move || {
-        let out = gpodo_datasets::bags::BagInfo::read(&path)
-            .map(|i| i.messages)
-            .map_err(|e| e.to_string());
-        let _ = tx.send(out);
-    });
-    rx.recv_timeout(limit).ok()
+/// The damage of case `k` of 220 to a file of `len` bytes: 20 cuts at
+/// seeded lengths, then 8 bytes overwritten at 200 seeded offsets, 40 of
+/// them in the first 256 bytes (magic, header, the first records), 40 in
+/// the last eighth (indexes, summary, footer) and the rest anywhere.
+fn case(k: usize, len: usize, rng: &mut ChaCha8Rng) -> (Option<usize>, Option<usize>) {
+    if k < 20 {
+        return (Some(rng.random_range(0..len)), None);
+    }
+    let at = match k {
+        20..60 => rng.random_range(0..256.min(len - 8)),
+        60..100 => rng.random_range(len - len / 8..len - 8),
+        _ => rng.random_range(0..len - 8),
+    };
+    (None, Some(at))
 }
 
 #[test]
@@ -284,25 +290,75 @@ fn the_shipped_fixtures_damaged_give_their_messages_or_a_clear_error() {
     }
     for name in names {
         let bytes = std::fs::read(fixtures.join(name)).unwrap();
-        let intact = gpodo_datasets::bags::BagInfo::read(&fixtures.join(name))
+        let intact = messages_within(&fixtures.join(name), OnDamage::Stop, Duration::from_secs(5))
             .unwrap()
-            .messages;
+            .unwrap()
+            .0;
         let damaged = tmp.path().join(format!("damaged-{name}"));
-        for k in 0..200 {
+        let (mut refused, mut equal, mut payload) = (0, 0, 0);
+        for k in 0..220 {
             let mut b = bytes.clone();
-            if k % 10 == 9 {
-                b.truncate(rng.random_range(0..bytes.len()));
-            } else {
-                let at = rng.random_range(0..b.len() - 8);
+            let (cut, at) = case(k, bytes.len(), &mut rng);
+            if let Some(len) = cut {
+                b.truncate(len);
+            }
+            if let Some(at) = at {
                 b[at..at + 8].copy_from_slice(&rng.random::<u64>().to_le_bytes());
             }
             std::fs::write(&damaged, &b).unwrap();
-            match info_within(&damaged, Duration::from_secs(5)) {
+            match messages_within(&damaged, OnDamage::Stop, Duration::from_secs(5)) {
                 None => panic!("{name} case {k}: no answer (a hang or a panic)"),
-                Some(Err(e)) => assert!(e.contains("damaged-"), "{name} case {k}: {e}"),
-                Some(Ok(n)) => assert_eq!(n, intact, "{name} case {k}"),
+                Some(Err(e)) => {
+                    assert!(e.contains("damaged-"), "{name} case {k}: {e}");
+                    refused += 1;
+                }
+                Some(Ok((read, _))) => {
+                    // Every message is there, on its topic at its time. A
+                    // container without checksums (this MCAP stores CRC 0,
+                    // a ROS 1 bag and SQLite have none) cannot tell damage
+                    // inside one message's bytes from data: at most the
+                    // messages those 8 bytes touch may differ, and only
+                    // where the damage fell.
+                    assert_eq!(
+                        read.len(),
+                        intact.len(),
+                        "{name} case {k}: at {at:?} cut {cut:?}, {:?}",
+                        read.iter().map(|m| (&m.0, m.1)).collect::<Vec<_>>()
+                    );
+                    let differ: Vec<usize> =
+                        (0..read.len()).filter(|&i| read[i] != intact[i]).collect();
+                    for &i in &differ {
+                        assert_eq!(
+                            (&read[i].0, read[i].1),
+                            (&intact[i].0, intact[i].1),
+                            "{name} case {k}: message {i} moved"
+                        );
+                    }
+                    let in_payload = at.is_some_and(|at| {
+                        differ.iter().all(|&i| {
+                            let payload = &intact[i].2;
+                            payload.len() >= 8
+                                && bytes
+                                    .windows(payload.len())
+                                    .position(|w| w == payload)
+                                    .is_some_and(|p| at + 8 > p && at < p + payload.len())
+                        })
+                    });
+                    assert!(
+                        differ.is_empty() || (differ.len() <= 2 && in_payload),
+                        "{name} case {k}: messages {differ:?} differ from the intact file's, not where the damage fell"
+                    );
+                    if differ.is_empty() {
+                        equal += 1;
+                    } else {
+                        payload += 1;
+                    }
+                }
             }
         }
+        eprintln!(
+            "{name}: of 220 cases, {refused} refused, {equal} read intact, {payload} read with the damage inside one message's bytes"
+        );
     }
 }
 
@@ -336,4 +392,48 @@ fn a_stamp_far_outside_the_recording_or_a_rate_typo_is_refused_at_once() {
     let e = import_bag(&bag.path, "x", &map).unwrap_err();
     assert!(matches!(e, ImportError::TooManyRows { .. }), "{e}");
     assert!(e.to_string().contains("`rate_hz: 1000000000`"), "{e}");
+}
+
+#[test]
+fn bag_info_says_which_checksums_the_file_had_and_a_damaged_summary_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bag = write_mcap(&straight(), tmp.path()).unwrap();
+    let info = gpodo_datasets::bags::BagInfo::read(&bag.path).unwrap();
+    let sums = info.checksums.unwrap();
+    assert!(
+        sums.chunks_checked > 1 && sums.chunks_without == 0,
+        "{sums:?}"
+    );
+    assert_eq!((sums.data_section, sums.summary), (Some(true), Some(true)));
+    assert!(
+        info.checked().contains("the CRCs of") && !info.checked().contains("none stored"),
+        "{}",
+        info.checked()
+    );
+    // The shipped MCAP fixture stores 0 for every CRC: said, not claimed.
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/messages.mcap");
+    let info = gpodo_datasets::bags::BagInfo::read(&fixture).unwrap();
+    assert!(
+        info.checked()
+            .contains("no CRCs: the file stores none for 1 chunk"),
+        "{}",
+        info.checked()
+    );
+    // Damage in the summary section (between the data end and the footer).
+    let mut bytes = std::fs::read(&bag.path).unwrap();
+    let footer = bytes.len() - 8 - 9 - 20;
+    let summary_start = u64::from_le_bytes(bytes[footer + 9..footer + 17].try_into().unwrap());
+    let at = (summary_start as usize + footer) / 2;
+    for b in &mut bytes[at..at + 4] {
+        *b ^= 0x5a;
+    }
+    let damaged = tmp.path().join("damaged-summary.mcap");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let e = gpodo_datasets::bags::BagInfo::read(&damaged)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("damaged-summary.mcap") && e.contains("summary"),
+        "{e}"
+    );
 }

@@ -56,3 +56,67 @@ impl std::fmt::Display for Damage {
         )
     }
 }
+
+/// Which checksums a read could verify: a writer may store 0 for "none".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct Checksums {
+    /// Chunks whose CRC was checked against their data.
+    pub chunks_checked: usize,
+    /// Chunks stored without a CRC (0): their damage is seen only where it
+    /// breaks a record's structure.
+    pub chunks_without: usize,
+    /// The data section's CRC: `Some(true)` checked, `Some(false)` stored
+    /// as 0, `None` not reached.
+    pub data_section: Option<bool>,
+    /// The summary section's CRC (in the footer), likewise.
+    pub summary: Option<bool>,
+}
+
+impl std::fmt::Display for Checksums {
+    /// `CRCs of 3 chunks, the data section and the summary checked` or what
+    /// the file stores without.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut checked = Vec::new();
+        let mut without = Vec::new();
+        let plural = |n: usize| if n == 1 { "" } else { "s" };
+        if self.chunks_checked > 0 {
+            checked.push(format!(
+                "{} chunk{}",
+                self.chunks_checked,
+                plural(self.chunks_checked)
+            ));
+        }
+        if self.chunks_without > 0 {
+            without.push(format!(
+                "{} chunk{}",
+                self.chunks_without,
+                plural(self.chunks_without)
+            ));
+        }
+        for (what, state) in [
+            ("the data section", self.data_section),
+            ("the summary", self.summary),
+        ] {
+            match state {
+                Some(true) => checked.push(what.to_string()),
+                Some(false) => without.push(what.to_string()),
+                None => {}
+            }
+        }
+        match (checked.is_empty(), without.is_empty()) {
+            (true, true) => f.write_str("no CRCs"),
+            (false, true) => write!(f, "the CRCs of {}", checked.join(", ")),
+            (true, false) => write!(
+                f,
+                "no CRCs: the file stores none for {}",
+                without.join(", ")
+            ),
+            (false, false) => write!(
+                f,
+                "the CRCs of {}, and none stored for {}",
+                checked.join(", "),
+                without.join(", ")
+            ),
+        }
+    }
+}

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::{BagError, BagFormat, Damage, OnDamage, visit_messages_with};
+use super::{BagError, BagFormat, Checksums, Damage, OnDamage, visit_messages_with};
 
 /// One topic of a bag.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -118,6 +118,8 @@ pub struct BagInfo {
     /// The damaged chunks skipped ([`OnDamage::Skip`]); empty for an
     /// intact file.
     pub damage: Damage,
+    /// The checksums the file stored and the read checked (MCAP).
+    pub checksums: Option<Checksums>,
 }
 
 impl BagInfo {
@@ -192,19 +194,23 @@ impl BagInfo {
             end_ns,
             topics,
             damage: visited.damage,
+            checksums: visited.checksums,
         })
     }
 
-    /// What reading the file checked, by format.
-    pub fn checked(&self) -> &'static str {
+    /// What reading the file checked.
+    pub fn checked(&self) -> String {
         match self.format {
-            BagFormat::Mcap => {
-                "every record's length, every chunk's CRC, the data section's CRC, stamps within the summary's span, counts against the summary; rates from the messages read"
-            }
+            BagFormat::Mcap => format!(
+                "every record's length, {}, stamps within the summary's span, counts against the summary; rates from the messages read",
+                self.checksums.unwrap_or_default()
+            ),
             BagFormat::Ros1 => {
-                "every record's header and length, the index section; rates from the messages read"
+                "every record's header and length, the index section (a ROS 1 bag stores no checksums); rates from the messages read".into()
             }
-            BagFormat::Db3 => "SQLite's own checks; rates from the messages read",
+            BagFormat::Db3 => {
+                "SQLite's own structure checks (it stores no checksums); rates from the messages read".into()
+            }
         }
     }
 

@@ -23,7 +23,7 @@ use mcap::read::{ChannelAccumulator, Summary, parse_record};
 use mcap::records::{self, Record, op};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
-use super::damage::{Damage, OnDamage};
+use super::damage::{Checksums, Damage, OnDamage};
 use super::{BagError, BagFormat, RawMessage, Visited};
 
 /// The most bytes one MCAP record (a chunk's uncompressed data included)
@@ -49,6 +49,8 @@ struct Walk<'a> {
     summary: Option<Summary>,
     channels: ChannelAccumulator<'static>,
     damage: Damage,
+    /// Which checksums were there to check.
+    checksums: Checksums,
     /// Messages visited.
     visited: usize,
     /// The latest receive time visited (ns).
@@ -230,6 +232,11 @@ impl Walk<'_> {
                 return self.damaged(format!("the chunk at byte {at} is unreadable ({e})"), span);
             }
         };
+        if header.uncompressed_crc == 0 {
+            self.checksums.chunks_without += 1;
+        } else {
+            self.checksums.chunks_checked += 1;
+        }
         let span = self.chunk_span(at, Some(&header));
         let record = &self.bytes[at..at + 9 + body.len()];
         let read = self.read_chunk(record).and_then(|(definitions, messages)| {
@@ -259,6 +266,44 @@ impl Walk<'_> {
                 )
             }
         }
+    }
+
+    /// Checks the summary section's CRC, which the footer at byte `at`
+    /// (with `body`) stores: over the bytes from the summary's start
+    /// through the footer's `summary_offset_start` field.
+    fn check_summary_crc(&mut self, at: usize, body: &[u8]) -> Result<(), BagError> {
+        let Ok(Record::Footer(footer)) = parse_record(op::FOOTER, body) else {
+            return Ok(());
+        };
+        if footer.summary_start == 0 {
+            return Ok(());
+        }
+        self.checksums.summary = Some(footer.summary_crc != 0);
+        // The footer's body: summary_start, summary_offset_start, then the CRC.
+        let end = at + 9 + 16;
+        let Some(covered) = usize::try_from(footer.summary_start)
+            .ok()
+            .and_then(|start| self.bytes.get(start..end))
+        else {
+            return self.damaged(
+                format!(
+                    "the footer puts the summary at byte {}, outside the file",
+                    footer.summary_start
+                ),
+                None,
+            );
+        };
+        let calculated = crc32fast::hash(covered);
+        if footer.summary_crc != 0 && footer.summary_crc != calculated && self.damage.is_empty() {
+            return self.damaged(
+                format!(
+                    "the summary section's CRC is {:08X}, its bytes give {calculated:08X}: the statistics or indexes after the messages are damaged",
+                    footer.summary_crc
+                ),
+                None,
+            );
+        }
+        Ok(())
     }
 
     /// Where to go on after a record at byte `at` whose length cannot be
@@ -305,6 +350,7 @@ pub(super) fn visit_mcap(
         summary: None,
         channels: ChannelAccumulator::default(),
         damage: Damage::default(),
+        checksums: Checksums::default(),
         visited: 0,
         last_ns: 0,
     };
@@ -384,6 +430,7 @@ pub(super) fn visit_mcap(
             }
             op::DATA_END => {
                 if let Ok(Record::DataEnd(d)) = parse_record(opcode, body) {
+                    walk.checksums.data_section = Some(d.data_section_crc != 0);
                     let calculated = crc32fast::hash(&bytes[..at]);
                     if d.data_section_crc != 0
                         && d.data_section_crc != calculated
@@ -401,6 +448,7 @@ pub(super) fn visit_mcap(
             }
             op::FOOTER => {
                 footer = true;
+                walk.check_summary_crc(at, body)?;
                 break;
             }
             _ => {}
@@ -412,6 +460,20 @@ pub(super) fn visit_mcap(
             format!(
                 "the file ends at byte {} without its footer: truncated, or still being recorded",
                 bytes.len()
+            ),
+            None,
+        )?;
+    }
+    // A damaged opcode turns a chunk into a record of unknown kind, which
+    // the format says to pass over: only the summary's count notices.
+    if walk.damage.is_empty()
+        && let Some(s) = walk.summary.as_ref().and_then(|s| s.stats.as_ref())
+        && s.message_count != walk.visited as u64
+    {
+        walk.damaged(
+            format!(
+                "the summary declares {} messages, the records hold {}: a record's opcode or length is damaged",
+                s.message_count, walk.visited
             ),
             None,
         )?;
@@ -434,6 +496,7 @@ pub(super) fn visit_mcap(
         messages: walk.visited,
         damage,
         declared_counts: walk.summary.as_ref().and_then(declared_counts),
+        checksums: Some(walk.checksums),
     })
 }
 

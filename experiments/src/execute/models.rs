@@ -77,6 +77,7 @@ pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, 
         code_version: code_version(),
         training_rows: rows.train.len(),
     };
+    crate::execute::fit::check_memory(spec, label, &rows.train, crate::memory::available_bytes())?;
     let (mut file, model) = ModelFile::fit(spec, &rows.train, Some(scaler), provenance)?;
     file.label = label.to_string();
     let test_predictions =

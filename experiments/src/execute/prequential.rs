@@ -115,6 +115,12 @@ fn fit_baseline(
     data: &ResidualDataset,
     warm: Option<&ExactGpState>,
 ) -> Result<(Fitted, FitRecord), PipelineError> {
+    crate::execute::fit::check_memory(
+        baseline,
+        &baseline.label(),
+        data,
+        crate::memory::available_bytes(),
+    )?;
     let t = Instant::now();
     let fitted = fit_untimed(baseline, data, warm)?;
     let record = fitted.record(t.elapsed().as_secs_f64());
