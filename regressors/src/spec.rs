@@ -143,14 +143,20 @@ impl RegressorSpec {
     /// need at its peak (bytes), for the models whose need grows with the
     /// data (`None` for the others): an exact GP holds about five `n × n`
     /// matrices (the Gram matrix, its Cholesky factor, its inverse and the
-    /// gradient's scratch), three with `solver: iterative`, a sparse GP about eight `m × n` ones and its
+    /// gradient's scratch), three when it can only solve iteratively
+    /// (`solver: iterative`, or `auto` above its small-noise dense limit),
+    /// a sparse GP about eight `m × n` ones and its
     /// `m × m` factors, with `m` the inducing points it will use; a
     /// sparse-spectrum GP its warm-up GP's and its `D × D` factor.
     pub fn fit_memory_bytes(&self, n: usize, d: usize, p: usize) -> Option<u64> {
         let f64s = |count: u128| u64::try_from(count.saturating_mul(8)).unwrap_or(u64::MAX);
         let (n, d, p) = (n as u128, d as u128, p as u128);
         match self {
-            Self::ExactGp(e) if e.solver == crate::exact_gp::Solver::Iterative => {
+            Self::ExactGp(e)
+                if !e
+                    .solver
+                    .may_be_dense(usize::try_from(n).unwrap_or(usize::MAX)) =>
+            {
                 // K and W while learning, then the posterior's factor; the
                 // preconditioner and the CG blocks are n × (k + p + t).
                 let k = e.iterative.preconditioner_rank as u128;
@@ -267,6 +273,20 @@ mod tests {
         // Five 20 000 × 20 000 matrices of f64: 16 GB.
         let need = exact.fit_memory_bytes(20_000, 28, 3).unwrap();
         assert!((16.0e9..16.1e9).contains(&(need as f64)), "{need}");
+        // `solver: auto` can only solve iteratively above its small-noise
+        // dense limit: three matrices there, five (dense) at or below it.
+        let auto = parse(r#"{"kind": "exact_gp", "solver": "auto"}"#).unwrap();
+        let need = auto.fit_memory_bytes(20_000, 28, 3).unwrap();
+        assert!((9.6e9..9.8e9).contains(&(need as f64)), "{need}");
+        let at = crate::exact_gp::Solver::AUTO_SMALL_NOISE_DENSE_UP_TO_ROWS;
+        assert_eq!(
+            auto.fit_memory_bytes(at, 28, 3),
+            exact.fit_memory_bytes(at, 28, 3)
+        );
+        assert_eq!(
+            crate::exact_gp::Solver::Auto.resolve(at + 1),
+            crate::exact_gp::Solver::Iterative
+        );
         let sparse = parse(r#"{"kind": "sparse_gp", "inducing": {"count": 1000000000}}"#).unwrap();
         // The inducing points it will use are the rows.
         assert_eq!(

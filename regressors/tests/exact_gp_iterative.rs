@@ -407,3 +407,133 @@ fn a_stop_asked_between_cg_iterations_stops_the_fit() {
     // optimiser iteration, and it stopped soon after.
     assert!(progress.asked.load(Ordering::SeqCst) > 25);
 }
+
+/// The first `n` rows of the authors' ExoTeR table (`shared/data`, beside
+/// the workspace), inputs and targets z-scored on those rows.
+fn exoter(n: usize) -> (Mat<f64>, Mat<f64>) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/data/exoter_gp_train_1s.csv"
+    );
+    let mut reader =
+        csv::Reader::from_path(path).unwrap_or_else(|e| panic!("the ExoTeR table at {path}: {e}"));
+    let rows: Vec<Vec<f64>> = reader
+        .records()
+        .take(n)
+        .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let width = rows[0].len();
+    let z = Mat::from_fn(n, width, |i, j| {
+        let column = rows.iter().map(|r| r[j]);
+        let mean = column.clone().sum::<f64>() / n as f64;
+        let sd = (column.map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        if sd > 1e-12 {
+            (rows[i][j] - mean) / sd
+        } else {
+            0.0
+        }
+    });
+    (
+        z.as_ref().subcols(0, width - 3).to_owned(),
+        z.as_ref().subcols(width - 3, 3).to_owned(),
+    )
+}
+
+#[test]
+fn preconditioning_cuts_the_cg_iterations_on_the_exoter_table() {
+    let (x, y) = exoter(1869);
+    // The start policy's lengthscale √d, at the small noise the ExoTeR fit
+    // learns (0.0216 of the standardised targets' variance).
+    let kernel =
+        gpodo_regressors::kernels::KernelExpr::Leaf(gpodo_regressors::kernels::LeafName::Rbf)
+            .build(x.ncols(), &gpodo_regressors::kernels::KernelInit::default());
+    let iterations = |rank: usize| {
+        let solver = IterativeSolver::new(
+            x.nrows(),
+            IterativeSettings {
+                preconditioner_rank: rank,
+                ..IterativeSettings::default()
+            },
+        );
+        log_marginal_likelihood_iterative(
+            &kernel,
+            0.0216,
+            x.as_ref(),
+            y.as_ref(),
+            false,
+            &solver,
+            || false,
+        )
+        .unwrap()
+        .iterations
+    };
+    let (none, hundred, three_hundred) = (iterations(0), iterations(100), iterations(300));
+    eprintln!(
+        "CG iterations on ExoTeR: {none} without, {hundred} at rank 100, {three_hundred} at 300"
+    );
+    assert!(
+        hundred * 2 < none && three_hundred < hundred,
+        "CG iterations: {none} without a preconditioner, {hundred} at rank 100, {three_hundred} at rank 300"
+    );
+}
+
+#[test]
+fn solver_auto_goes_dense_at_small_noise_and_iterative_at_large_noise_above_its_crossover() {
+    use gpodo_regressors::exact_gp::optimize::maximize_lml;
+    use gpodo_regressors::exact_gp::{ExactGpParams, Solver};
+    use gpodo_regressors::hyperopt::ProgressSink;
+    let n = Solver::AUTO_ITERATIVE_ABOVE_ROWS + 1;
+    let mut r = rng(11);
+    let x = inputs(&mut r, n, 2);
+    let params = ExactGpParams {
+        solver: Solver::Auto,
+        iterative: IterativeSettings {
+            subset_rows: 300,
+            ..IterativeSettings::default()
+        },
+        ..ExactGpParams::default()
+    };
+    // A dense fit reports the exact likelihood at its optimum, to the bit;
+    // an iterative one its estimate, off by at least the CG tolerance's
+    // error (here the rank-300 preconditioner of a two-input kernel is
+    // nearly exact, so by little more).
+    let mut exact_gap = |noise: f64| {
+        let y = targets(&mut r, &x, noise);
+        let out = maximize_lml(
+            x.as_ref(),
+            y.as_ref(),
+            &params,
+            &ProgressSink::default(),
+            None,
+        )
+        .unwrap();
+        let exact = log_marginal_likelihood(
+            &out.kernel,
+            out.noise_variance,
+            x.as_ref(),
+            y.as_ref(),
+            false,
+        )
+        .unwrap()
+        .lml;
+        println!(
+            "noise sd {noise}: learned noise variance {:.4}, LML {:.4}, exact {exact:.4}",
+            out.noise_variance, out.lml
+        );
+        assert!(
+            out.starts
+                .iter()
+                .all(|s| s.label.contains("300-row subset")),
+            "{:?}",
+            out.starts
+        );
+        (out.lml - exact).abs()
+    };
+    let small = exact_gap(0.02);
+    assert!(small < 1e-10, "small noise: dense expected, off by {small}");
+    let large = exact_gap(1.0);
+    assert!(
+        large > 1e-9 && large < 5.0,
+        "large noise: an iterative estimate expected, off by {large}"
+    );
+}

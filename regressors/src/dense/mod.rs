@@ -45,6 +45,33 @@ const SPARE_BYTES_PER_THREAD: usize = 1 << 30;
 std::thread_local! {
     /// Large matrices handed back by [`recycle`], for [`zeros`] to reuse.
     static SPARE: std::cell::RefCell<Vec<Mat<f64>>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// This thread's cap on its spare buffers (bytes).
+    static SPARE_LIMIT: std::cell::Cell<usize> = const { std::cell::Cell::new(SPARE_BYTES_PER_THREAD) };
+}
+
+/// Raises this thread's cap on spare buffers to at least `bytes` until it
+/// is dropped. A fit whose evaluations each need `n × n` buffers larger
+/// than the default cap (the iterative exact GP at n = 20 000: three of
+/// 3.2 GB) holds them from one evaluation to the next, rather than
+/// returning them to the system to be faulted in and zeroed again (a third
+/// of its time); its peak memory is the same.
+#[derive(Debug)]
+pub struct SpareLimit {
+    previous: usize,
+}
+
+impl SpareLimit {
+    /// The cap raised to at least `bytes`.
+    pub fn at_least(bytes: usize) -> Self {
+        let previous = SPARE_LIMIT.with(|l| l.replace(l.get().max(bytes)));
+        Self { previous }
+    }
+}
+
+impl Drop for SpareLimit {
+    fn drop(&mut self) {
+        SPARE_LIMIT.with(|l| l.set(self.previous));
+    }
 }
 
 /// An `nrows × ncols` matrix of zeros, reusing a buffer of that shape that
@@ -88,17 +115,19 @@ pub fn scratch(nrows: usize, ncols: usize) -> Mat<f64> {
 }
 
 /// Hands a matrix no longer needed back to this thread's spare buffers
-/// (large ones only, at most 1 GiB per thread, the oldest dropped first).
+/// (large ones only, at most 1 GiB per thread unless a [`SpareLimit`]
+/// raises it, the oldest dropped first).
 pub fn recycle(m: Mat<f64>) {
     let entries = m.nrows() * m.ncols();
-    if entries < RECYCLE_MIN_ENTRIES || entries * 8 > SPARE_BYTES_PER_THREAD {
+    let limit = SPARE_LIMIT.with(std::cell::Cell::get);
+    if entries < RECYCLE_MIN_ENTRIES || entries * 8 > limit {
         return;
     }
     SPARE.with(|spare| {
         let mut spare = spare.borrow_mut();
         spare.push(m);
         let bytes = |v: &Vec<Mat<f64>>| v.iter().map(|m| m.nrows() * m.ncols() * 8).sum::<usize>();
-        while bytes(&spare) > SPARE_BYTES_PER_THREAD {
+        while bytes(&spare) > limit {
             spare.remove(0);
         }
     });

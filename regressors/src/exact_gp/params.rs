@@ -34,6 +34,49 @@ pub enum Solver {
     /// ([`super::iterative`]); the `iterative:` settings apply. The
     /// posterior of the learned model is then one Cholesky factor.
     Iterative,
+    /// Dense up to [`Solver::AUTO_ITERATIVE_ABOVE_ROWS`] training rows;
+    /// above, iterative, unless the noise variance learned on the
+    /// iterative fit's subset is small (below 0.05 of the standardised
+    /// targets' variance) and the rows are at most
+    /// [`Solver::AUTO_SMALL_NOISE_DENSE_UP_TO_ROWS`]: then dense, from the
+    /// subset's optimum.
+    Auto,
+}
+
+impl Solver {
+    /// The training rows above which `auto` solves iteratively: where an
+    /// iterative evaluation (rank-300 preconditioner, 16 probes) became
+    /// faster than a dense one on both a well- and an ill-conditioned
+    /// `K + σ_n² I` (`cargo bench -p gpodo-regressors --bench
+    /// exact_gp_solvers`; `bench/README.md`, "By iterative solves").
+    pub const AUTO_ITERATIVE_ABOVE_ROWS: usize = 4000;
+
+    /// The most training rows `auto` fits densely when the noise is small:
+    /// there CG needs many iterations, and a dense evaluation stayed about
+    /// twice as fast as an iterative one up to n = 6000 (same benchmark);
+    /// from the measured `n³` and `n²` growth, they meet at about 15 000.
+    /// Five `n × n` matrices at 12 000 rows are 5.8 GB.
+    pub const AUTO_SMALL_NOISE_DENSE_UP_TO_ROWS: usize = 12_000;
+
+    /// Whether a fit on `n` rows may evaluate densely (and so needs the
+    /// dense path's memory).
+    pub fn may_be_dense(self, n: usize) -> bool {
+        match self {
+            Self::Dense => true,
+            Self::Iterative => false,
+            Self::Auto => n <= Self::AUTO_SMALL_NOISE_DENSE_UP_TO_ROWS,
+        }
+    }
+
+    /// The solver a fit on `n` rows starts with: `auto` resolved by `n`
+    /// alone (above its crossover it may still go dense at small noise).
+    pub fn resolve(self, n: usize) -> Self {
+        match self {
+            Self::Auto if n > Self::AUTO_ITERATIVE_ABOVE_ROWS => Self::Iterative,
+            Self::Auto => Self::Dense,
+            other => other,
+        }
+    }
 }
 
 /// Exact GP settings. Every field has a default; see `experiments/README.md`.
@@ -66,7 +109,8 @@ pub struct ExactGpParams {
     pub seed: u64,
     /// How the likelihood is evaluated while learning (default `dense`).
     pub solver: Solver,
-    /// The iterative solver's settings (read with `solver: iterative`).
+    /// The iterative solver's settings (read with `solver: iterative`, or
+    /// `auto` above its crossover).
     pub iterative: IterativeSettings,
 }
 
