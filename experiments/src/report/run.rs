@@ -77,23 +77,25 @@ fn runs_section(s: &mut String, r: &ExperimentResults) {
     if let Some(slope) = r.dataset.terrain_max_slope_deg {
         let _ = writeln!(s, "\nSteepest terrain slope: {slope:.1}°.");
     }
-    if r.dataset.speed_ratio.is_none() {
-        let _ = writeln!(
-            s,
-            "\nUnit check: none; fewer than {} seconds of the training runs drive faster than {} m/s.",
-            gpodo_datasets::speed_check::MIN_MOVING_WINDOWS,
-            gpodo_datasets::speed_check::MOVING_SPEED_MPS
-        );
-    }
-    if let Some(ratio) = r.dataset.speed_ratio {
-        let verdict = unit_warning(ratio).map_or_else(
-            || "within [0.5, 2]: the wheels' units are plausible".to_string(),
-            |w| format!("**outside [0.5, 2]**: {w}"),
-        );
-        let _ = writeln!(
-            s,
-            "\nUnit check: the motion model's speed is {ratio:.3}× the ground truth's (median over the training runs' moving seconds), {verdict}."
-        );
+    match r.dataset.speed_ratio {
+        None => {
+            let _ = writeln!(
+                s,
+                "\nUnit check: none; fewer than {} seconds of the training runs drive faster than {} m/s.",
+                gpodo_datasets::speed_check::MIN_MOVING_WINDOWS,
+                gpodo_datasets::speed_check::MOVING_SPEED_MPS
+            );
+        }
+        Some(ratio) => {
+            let verdict = unit_warning(ratio).map_or_else(
+                || "within [0.5, 2]: the wheels' units are plausible".to_string(),
+                |w| format!("**outside [0.5, 2]**: {w}"),
+            );
+            let _ = writeln!(
+                s,
+                "\nUnit check: the motion model's speed is {ratio:.3}× the ground truth's (median over the training runs' moving seconds), {verdict}."
+            );
+        }
     }
     let yaw = r
         .dataset
