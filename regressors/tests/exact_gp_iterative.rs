@@ -183,6 +183,29 @@ fn the_lanczos_log_determinant_is_unbiased_on_a_known_spectrum() {
     );
 }
 
+/// One iterative evaluation of `kernel` with `noise` on `(x, y)` by a fresh
+/// solver with `settings`, never stopped.
+fn iterative(
+    kernel: &Kernel,
+    noise: f64,
+    x: &Mat<f64>,
+    y: &Mat<f64>,
+    settings: IterativeSettings,
+    with_gradient: bool,
+) -> gpodo_regressors::exact_gp::iterative::IterativeEvaluation {
+    let solver = IterativeSolver::new(x.nrows(), settings);
+    log_marginal_likelihood_iterative(
+        kernel,
+        noise,
+        x.as_ref(),
+        y.as_ref(),
+        with_gradient,
+        &solver,
+        || false,
+    )
+    .unwrap()
+}
+
 fn dense_and_iterative(
     kernel: &Kernel,
     noise: f64,
@@ -191,17 +214,7 @@ fn dense_and_iterative(
     settings: &IterativeSettings,
 ) -> (f64, Vec<f64>, f64, Vec<f64>, usize) {
     let dense = log_marginal_likelihood(kernel, noise, x.as_ref(), y.as_ref(), true).unwrap();
-    let solver = IterativeSolver::new(x.nrows(), *settings);
-    let it = log_marginal_likelihood_iterative(
-        kernel,
-        noise,
-        x.as_ref(),
-        y.as_ref(),
-        true,
-        &solver,
-        || false,
-    )
-    .unwrap();
+    let it = iterative(kernel, noise, x, y, *settings, true);
     (
         dense.lml,
         dense.gradient.unwrap(),
@@ -240,18 +253,7 @@ fn the_iterative_likelihood_and_gradient_agree_with_the_dense_ones() {
                 probes: 4,
                 ..settings
             };
-            let solver = IterativeSolver::new(400, s);
-            log_marginal_likelihood_iterative(
-                &kernel,
-                noise,
-                x.as_ref(),
-                y.as_ref(),
-                false,
-                &solver,
-                || false,
-            )
-            .unwrap()
-            .lml
+            iterative(&kernel, noise, &x, &y, s, false).lml
         })
         .collect();
     let mean = estimates.iter().sum::<f64>() / 50.0;
@@ -278,17 +280,7 @@ fn the_preconditioner_cuts_the_iterations_and_threads_do_not_change_a_bit() {
             preconditioner_rank: rank,
             ..IterativeSettings::default()
         };
-        let solver = IterativeSolver::new(300, s);
-        log_marginal_likelihood_iterative(
-            &kernel,
-            0.01,
-            x.as_ref(),
-            y.as_ref(),
-            true,
-            &solver,
-            || false,
-        )
-        .unwrap()
+        iterative(&kernel, 0.01, &x, &y, s, true)
     };
     let (none, some) = (run(0), run(40));
     println!(
@@ -448,24 +440,11 @@ fn preconditioning_cuts_the_cg_iterations_on_the_exoter_table() {
         gpodo_regressors::kernels::KernelExpr::Leaf(gpodo_regressors::kernels::LeafName::Rbf)
             .build(x.ncols(), &gpodo_regressors::kernels::KernelInit::default());
     let iterations = |rank: usize| {
-        let solver = IterativeSolver::new(
-            x.nrows(),
-            IterativeSettings {
-                preconditioner_rank: rank,
-                ..IterativeSettings::default()
-            },
-        );
-        log_marginal_likelihood_iterative(
-            &kernel,
-            0.0216,
-            x.as_ref(),
-            y.as_ref(),
-            false,
-            &solver,
-            || false,
-        )
-        .unwrap()
-        .iterations
+        let s = IterativeSettings {
+            preconditioner_rank: rank,
+            ..IterativeSettings::default()
+        };
+        iterative(&kernel, 0.0216, &x, &y, s, false).iterations
     };
     let (none, hundred, three_hundred) = (iterations(0), iterations(100), iterations(300));
     eprintln!(

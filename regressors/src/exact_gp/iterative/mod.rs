@@ -47,7 +47,11 @@ pub struct IterativeSettings {
     pub probes: usize,
     /// Rank `k` of the pivoted-Cholesky preconditioner (default 300; 0: none).
     pub preconditioner_rank: usize,
-    /// Relative residual at which a column's CG stops (default 1e-6).
+    /// Relative residual at which a column's CG stops (default 1e-6). The
+    /// iteration count is not fixed: the tolerance is tight enough that the
+    /// objective, with its probes fixed, is smooth for L-BFGS: where the
+    /// count changes between two nearby points, the estimate moves by the
+    /// solves' residual error, far below the optimiser's steps.
     pub tolerance: f64,
     /// CG iterations at most (default 1000).
     pub max_iterations: usize,
