@@ -410,6 +410,15 @@ fn bag_info_says_which_checksums_the_file_had_and_a_damaged_summary_is_named() {
         "{}",
         info.checked()
     );
+    // Rates from the summary's statistics too: 600 IMU messages over the
+    // 59.9 s the summary declares.
+    let imu = info.topics.iter().find(|t| t.topic == "/imu/data").unwrap();
+    let rate = imu.summary_rate_hz.unwrap();
+    assert!((rate - 600.0 / 59.9).abs() < 1e-6, "{rate}");
+    assert!(
+        info.to_text()
+            .contains("the summary: 10.02 Hz over the recording")
+    );
     // The shipped MCAP fixture stores 0 for every CRC: said, not claimed.
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/messages.mcap");
     let info = gpodo_datasets::bags::BagInfo::read(&fixture).unwrap();

@@ -28,6 +28,10 @@ pub struct TopicInfo {
     /// Messages the file's summary declares for the topic (MCAP with
     /// summary statistics), beside the `count` actually read.
     pub declared_count: Option<u64>,
+    /// The rate the summary's statistics give: the declared count over the
+    /// recording's declared span (Hz; MCAP with summary statistics). It
+    /// does not depend on any message's stamp being right.
+    pub summary_rate_hz: Option<f64>,
     /// What a topic map needs of its messages: frame ids (`frame` or
     /// `frame → child` for odometry), joint names, or a TF message's
     /// `parent → child` pairs, each once, in the order first seen (from
@@ -151,6 +155,7 @@ impl BagInfo {
                     last_ns: m.log_time_ns,
                     median_interval_ns: None,
                     declared_count: None,
+                    summary_rate_hz: None,
                     names: Vec::new(),
                 };
                 let is_tf = super::ros1_type_name(m.message_type) == "tf2_msgs/TFMessage";
@@ -181,6 +186,12 @@ impl BagInfo {
                     .declared_counts
                     .as_ref()
                     .map(|c| c.get(&info.topic).copied().unwrap_or(0));
+                info.summary_rate_hz = info
+                    .declared_count
+                    .zip(visited.declared_span_ns)
+                    .map(|(n, (start, end))| (n, end.saturating_sub(start) as f64 * 1e-9))
+                    .filter(|&(_, secs)| secs > 0.0)
+                    .map(|(n, secs)| n as f64 / secs);
                 info
             })
             .collect();
@@ -202,8 +213,13 @@ impl BagInfo {
     pub fn checked(&self) -> String {
         match self.format {
             BagFormat::Mcap => format!(
-                "every record's length, {}, stamps within the summary's span, counts against the summary; rates from the messages read",
-                self.checksums.unwrap_or_default()
+                "every record's length, {}, stamps within the summary's span, counts against the summary; rates from the messages read{}",
+                self.checksums.unwrap_or_default(),
+                if self.topics.iter().any(|t| t.summary_rate_hz.is_some()) {
+                    " and from the summary's statistics"
+                } else {
+                    " (the summary has no statistics, or a zero span, to give rates)"
+                }
             ),
             BagFormat::Ros1 => {
                 "every record's header and length, the index section (a ROS 1 bag stores no checksums); rates from the messages read".into()
@@ -261,10 +277,18 @@ impl BagInfo {
                 Some(r) => format!("{r:8.2} Hz"),
                 None => "rate unknown (fewer than two distinct stamps)".into(),
             };
-            let declared = match t.declared_count {
+            let mut declared = match t.declared_count {
                 Some(n) if n != t.count as u64 => format!("; the summary declares {n}"),
                 _ => String::new(),
             };
+            // Beside the typical rate, unless stamps far apart stretch the
+            // summary's declared span too (the line says so already).
+            if let Some(r) = t
+                .summary_rate_hz
+                .filter(|&r| t.typical_rate_hz().is_none_or(|typical| r >= 0.5 * typical))
+            {
+                declared.push_str(&format!("; the summary: {r:.2} Hz over the recording"));
+            }
             s.push_str(&format!(
                 "  {:width$}  {:type_width$}  {:>7} msgs  {rate}  ({}{}{declared})\n",
                 t.topic,

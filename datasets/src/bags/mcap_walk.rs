@@ -478,6 +478,7 @@ pub(super) fn visit_mcap(
             None,
         )?;
     }
+    let declared_span_ns = walk.declared_span();
     let mut damage = walk.damage;
     if !damage.is_empty() {
         let stats = walk.summary.as_ref().and_then(|s| s.stats.as_ref());
@@ -497,6 +498,7 @@ pub(super) fn visit_mcap(
         damage,
         declared_counts: walk.summary.as_ref().and_then(declared_counts),
         checksums: Some(walk.checksums),
+        declared_span_ns,
     })
 }
 

@@ -189,6 +189,9 @@ pub struct Visited {
     /// The checksums an MCAP file stored and the read checked (`None` for
     /// formats without checksums).
     pub checksums: Option<Checksums>,
+    /// The first and last receive times the file's summary declares (ns;
+    /// MCAP with summary statistics).
+    pub declared_span_ns: Option<(u64, u64)>,
 }
 
 /// Calls `visit` with every message of the bag at `path`, in file order;
