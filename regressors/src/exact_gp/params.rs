@@ -44,18 +44,20 @@ pub enum Solver {
 }
 
 impl Solver {
-    /// The training rows above which `auto` solves iteratively: where an
-    /// iterative evaluation (rank-300 preconditioner, 16 probes) became
-    /// faster than a dense one on both a well- and an ill-conditioned
-    /// `K + σ_n² I` (`cargo bench -p gpodo-regressors --bench
-    /// exact_gp_solvers`; `bench/README.md`, "By iterative solves").
+    /// The training rows above which `auto` considers iterative solves: at
+    /// a large noise variance an iterative evaluation (rank-300
+    /// preconditioner, 16 probes) is as fast as a dense one at 2000 rows and
+    /// 1.8× faster at 4000, which pays for the dense fit on its subset
+    /// (`cargo bench -p gpodo-regressors --bench exact_gp_solvers`;
+    /// `bench/README.md`, "By iterative solves").
     pub const AUTO_ITERATIVE_ABOVE_ROWS: usize = 4000;
 
     /// The most training rows `auto` fits densely when the noise is small:
-    /// there CG needs many iterations, and a dense evaluation stayed about
-    /// twice as fast as an iterative one up to n = 6000 (same benchmark);
-    /// from the measured `n³` and `n²` growth, they meet at about 15 000.
-    /// Five `n × n` matrices at 12 000 rows are 5.8 GB.
+    /// there CG's iterations grow with `n`, and a dense evaluation stayed
+    /// 1.96× (4000 rows) and 1.82× (6000) faster than an iterative one
+    /// (same benchmark), a lead that shrinks too slowly to end before the
+    /// dense path's memory does. 12 000 rows keep its five `n × n` matrices
+    /// at 5.8 GB.
     pub const AUTO_SMALL_NOISE_DENSE_UP_TO_ROWS: usize = 12_000;
 
     /// Whether a fit on `n` rows may evaluate densely (and so needs the
