@@ -237,6 +237,52 @@ mod synthetic {
     }
 
     #[test]
+    fn the_run_report_gives_the_unit_check_and_warns_on_wheel_speeds_off_by_two_pi() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = Command::new(GPODO)
+            .args([
+                "--quiet",
+                "simulate",
+                "--format",
+                "mcap",
+                "--seed",
+                "3",
+                "--training-runs",
+                "1",
+                "--training-run-secs",
+                "300",
+                "--out",
+            ])
+            .arg(tmp.path().join("mcap"))
+            .output()
+            .unwrap();
+        common::assert_succeeded(&out, "");
+        let topics = std::fs::read_to_string(tmp.path().join("mcap/topics.yaml")).unwrap();
+        assert!(topics.contains("rate_scale: 1.0"), "{topics}");
+        // Wheel rates read as if they were in rpm: 2π too fast.
+        let wrong = topics.replace("rate_scale: 1.0", "rate_scale: 6.283185307179586");
+        for (name, map, expected) in [
+            ("right", topics.as_str(), "the wheels' units are plausible"),
+            ("wrong", wrong.as_str(), "**outside [0.5, 2]**"),
+        ] {
+            let indented: String = map.lines().map(|l| format!("    {l}\n")).collect();
+            let yaml = format!(
+                "name: {name}\ndataset:\n  kind: bags\n  train: [mcap/train_01.mcap]\n  test: [mcap/test.mcap]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - kind: zero\n"
+            );
+            let file = tmp.path().join(format!("{name}.yaml"));
+            std::fs::write(&file, yaml).unwrap();
+            let out = common::gpodo_on("run", &file, &tmp.path().join(name), &[]);
+            common::assert_succeeded(&out, "");
+            let report = std::fs::read_to_string(tmp.path().join(name).join("report.md")).unwrap();
+            let line = report
+                .lines()
+                .find(|l| l.starts_with("Unit check:"))
+                .unwrap_or_else(|| panic!("{name}: no unit check in\n{report}"));
+            assert!(line.contains(expected), "{name}: {line}");
+        }
+    }
+
+    #[test]
     fn a_recording_without_an_imu_is_imported_and_learned_without_imu_inputs() {
         let tmp = tempfile::tempdir().unwrap();
         simulate_with("mcap", &tmp.path().join("mcap"), &["--no-imu"]);
