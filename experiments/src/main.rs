@@ -481,7 +481,7 @@ fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> a
         ),
         Some(ratio) => {
             println!(
-                "unit check: the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds; [0.5, 2] passes)"
+                "unit check: the motion model's speed is {ratio:.2}× the ground truth's (median over the moving seconds; plausible within [0.5, 2])"
             );
             if let Some(warning) = gpodo_datasets::speed_check::unit_warning(ratio) {
                 tracing::warn!("{warning}");
