@@ -20,7 +20,7 @@
 //! here). Inputs are left in physical units: normalisation uses training
 //! statistics only, see [`gpodo_traits::Standardizer`].
 
-use gpodo_traits::{MotionModel, ResidualDataset, SampleMatrix};
+use gpodo_traits::{MotionModel, Predictions, ResidualDataset, SampleMatrix};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -40,6 +40,13 @@ pub struct ResidualConfig {
     /// Take absolute values of the (averaged) targets, as in the authors'
     /// ExoTeR table. Default: false (signed residuals).
     pub absolute_targets: bool,
+    /// Score the regressors on the test runs' windows of this length (s)
+    /// when they train on one row per step (`window_secs: null`): their
+    /// per-step predictions are averaged over each window with the window's
+    /// own weights ([`window_rows`]), so that models trained on steps and on
+    /// windows are scored on the same held-out rows. `None` (default): the
+    /// test rows are made as the training rows are.
+    pub score_window_secs: Option<f64>,
 }
 
 impl Default for ResidualConfig {
@@ -47,6 +54,7 @@ impl Default for ResidualConfig {
         Self {
             window_secs: Some(1.0),
             absolute_targets: false,
+            score_window_secs: None,
         }
     }
 }
@@ -57,11 +65,34 @@ impl ResidualConfig {
     /// # Errors
     /// [`DatasetError::InvalidConfig`] naming the field.
     pub fn validate(&self) -> Result<(), DatasetError> {
+        let bad = |field: &str, expected: &str| {
+            Err(DatasetError::InvalidConfig {
+                field: format!("residuals.{field}"),
+                expected: expected.into(),
+            })
+        };
+        if let Some(s) = self.score_window_secs {
+            if !(s.is_finite() && s > 0.0) {
+                return bad("score_window_secs", "a positive number of seconds, or null");
+            }
+            if self.window_secs.is_some_and(|w| w != s) {
+                return bad(
+                    "score_window_secs",
+                    "the same length as `window_secs`, or `window_secs: null` (one training row per step)",
+                );
+            }
+            if self.absolute_targets {
+                return bad(
+                    "score_window_secs",
+                    "no scoring windows with `absolute_targets` (the mean of absolute step residuals is not the absolute window mean)",
+                );
+            }
+        }
         match self.window_secs {
-            Some(w) if !(w.is_finite() && w > 0.0) => Err(DatasetError::InvalidConfig {
-                field: "residuals.window_secs".into(),
-                expected: "a positive number of seconds, or null for one row per step".into(),
-            }),
+            Some(w) if !(w.is_finite() && w > 0.0) => bad(
+                "window_secs",
+                "a positive number of seconds, or null for one row per step",
+            ),
             _ => Ok(()),
         }
     }
@@ -227,6 +258,98 @@ pub fn window_rows(rows: &[LogStep], window_secs: f64) -> Vec<WindowRow> {
     out
 }
 
+/// Windows over one-row-per-step residuals, to score per-step predictions
+/// on window targets ([`ResidualConfig::score_window_secs`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepWindows {
+    /// Each window's duration-weighted mean residual (m/s), `windows × 3`.
+    pub targets: SampleMatrix,
+    /// Each window's steps: the step's row in the logs' steps concatenated
+    /// in order (the rows of a `window_secs: null` dataset) and its weight
+    /// (its duration over the window's covered time; they sum to 1).
+    pub members: Vec<Vec<(usize, f64)>>,
+}
+
+impl StepWindows {
+    /// The windows of `window_secs` over each log's steps ([`window_rows`],
+    /// so the same windows, with the same targets, as a dataset made with
+    /// `window_secs`), indexing the steps of all logs concatenated.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] for a window that is not a positive
+    /// number of seconds.
+    pub fn new(steps: &[Vec<LogStep>], window_secs: f64) -> Result<Self, DatasetError> {
+        if !(window_secs.is_finite() && window_secs > 0.0) {
+            return Err(DatasetError::InvalidConfig {
+                field: "residuals.score_window_secs".into(),
+                expected: "a positive number of seconds".into(),
+            });
+        }
+        let mut targets = Vec::new();
+        let mut members = Vec::new();
+        let mut offset = 0;
+        for rows in steps {
+            for w in window_rows(rows, window_secs) {
+                let covered: f64 = rows[w.steps.clone()].iter().map(|r| r.dt_secs).sum();
+                members.push(
+                    w.steps
+                        .clone()
+                        .map(|k| (offset + k, rows[k].dt_secs / covered))
+                        .collect(),
+                );
+                targets.extend(w.residual.iter());
+            }
+            offset += rows.len();
+        }
+        let n = members.len();
+        Ok(Self {
+            targets: SampleMatrix::from_row_major(n, 3, targets)?,
+            members,
+        })
+    }
+
+    /// Per-step predictions averaged over each window with its weights: the
+    /// mean of the window's mean, and, for the variance, the steps' errors
+    /// taken as independent (`Σ wᵢ² σᵢ²`).
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] when the predictions have fewer rows
+    /// than the windows index.
+    pub fn average(&self, predictions: &Predictions) -> Result<Predictions, DatasetError> {
+        let (rows, p) = (predictions.mean.nrows(), predictions.mean.ncols());
+        let needed = self
+            .members
+            .iter()
+            .flat_map(|m| m.iter().map(|&(k, _)| k + 1))
+            .max()
+            .unwrap_or(0);
+        if rows < needed || predictions.variance.nrows() != rows {
+            return Err(DatasetError::InvalidConfig {
+                field: "predictions".into(),
+                expected: format!(
+                    "one row per step ({needed} at least) for the scoring windows, not {rows}"
+                ),
+            });
+        }
+        let n = self.members.len();
+        let mut mean = vec![0.0; n * p];
+        let mut variance = vec![0.0; n * p];
+        for (i, m) in self.members.iter().enumerate() {
+            for &(k, w) in m {
+                let (mu, var) = (predictions.mean.row(k), predictions.variance.row(k));
+                for j in 0..p {
+                    mean[i * p + j] += w * mu[j];
+                    variance[i * p + j] += w * w * var[j];
+                }
+            }
+        }
+        Ok(Predictions {
+            mean: SampleMatrix::from_row_major(n, p, mean)?,
+            variance: SampleMatrix::from_row_major(n, p, variance)?,
+        })
+    }
+}
+
 /// Builds the residual dataset of several logs (rows concatenated in order).
 ///
 /// # Errors
@@ -363,6 +486,91 @@ mod tests {
         assert!((out[0].1.x - expected).abs() < 1e-15, "{}", out[0].1.x);
     }
 
+    #[test]
+    fn scoring_windows_average_step_predictions_into_the_window_targets() {
+        // Two logs: the second's indices start after the first's 10 steps;
+        // one step of the first lasts 0.5 s (a dropped sample).
+        let mut first = rows(&[0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.25, 2.5]);
+        first[6].dt_secs = 0.5;
+        let second = rows(&[10.0, 10.25, 10.5, 10.75, 11.0, 11.25]);
+        let steps = vec![first.clone(), second.clone()];
+        let windows = StepWindows::new(&steps, 1.0).unwrap();
+        // The same windows and targets as window_rows gives.
+        let expected: Vec<WindowRow> = window_rows(&first, 1.0)
+            .into_iter()
+            .chain(window_rows(&second, 1.0))
+            .collect();
+        assert_eq!(windows.members.len(), expected.len());
+        for (i, w) in expected.iter().enumerate() {
+            for j in 0..3 {
+                assert_eq!(windows.targets.row(i)[j], w.residual[j]);
+            }
+        }
+        assert_eq!(windows.members[3][0].0, 10, "the second log's first step");
+        // Predicting every step's own residual, variance 1: the average is
+        // the window target, the variance the sum of squared weights.
+        let all: Vec<&LogStep> = first.iter().chain(&second).collect();
+        let n = all.len();
+        let mean = SampleMatrix::from_row_major(
+            n,
+            3,
+            all.iter()
+                .flat_map(|s| s.residual.iter().copied())
+                .collect(),
+        )
+        .unwrap();
+        let variance = SampleMatrix::from_row_major(n, 3, vec![1.0; 3 * n]).unwrap();
+        let averaged = windows.average(&Predictions { mean, variance }).unwrap();
+        for i in 0..expected.len() {
+            let squares: f64 = windows.members[i].iter().map(|(_, w)| w * w).sum();
+            for j in 0..3 {
+                assert!((averaged.mean.row(i)[j] - windows.targets.row(i)[j]).abs() < 1e-15);
+                assert!((averaged.variance.row(i)[j] - squares).abs() < 1e-15);
+            }
+        }
+        // Window [1, 2): steps 1.0, 1.25 (0.25 s each) and 1.5 (0.5 s).
+        let weights: Vec<f64> = windows.members[1].iter().map(|(_, w)| *w).collect();
+        assert_eq!(weights, vec![0.25, 0.25, 0.5]);
+        // Fewer predictions than steps is an error, not a panic.
+        let short = Predictions {
+            mean: SampleMatrix::from_row_major(2, 3, vec![0.0; 6]).unwrap(),
+            variance: SampleMatrix::from_row_major(2, 3, vec![1.0; 6]).unwrap(),
+        };
+        assert!(windows.average(&short).is_err());
+    }
+
+    #[test]
+    fn scoring_windows_are_checked_against_the_training_rows() {
+        let per_step = |score: f64| ResidualConfig {
+            window_secs: None,
+            score_window_secs: Some(score),
+            ..Default::default()
+        };
+        assert!(per_step(1.0).validate().is_ok());
+        let field = |c: ResidualConfig| match c.validate() {
+            Err(DatasetError::InvalidConfig { field, .. }) => field,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(field(per_step(0.0)), "residuals.score_window_secs");
+        let other_window = ResidualConfig {
+            window_secs: Some(2.0),
+            score_window_secs: Some(1.0),
+            ..Default::default()
+        };
+        assert_eq!(field(other_window), "residuals.score_window_secs");
+        let absolute = ResidualConfig {
+            absolute_targets: true,
+            ..per_step(1.0)
+        };
+        assert_eq!(field(absolute), "residuals.score_window_secs");
+        let same = ResidualConfig {
+            window_secs: Some(1.0),
+            score_window_secs: Some(1.0),
+            ..Default::default()
+        };
+        assert!(same.validate().is_ok());
+    }
+
     /// Reports a constant body velocity.
     struct Constant(Vector3<f64>);
 
@@ -410,6 +618,7 @@ mod tests {
         let config = ResidualConfig {
             window_secs: None,
             absolute_targets: false,
+            score_window_secs: None,
         };
         let data = residual_dataset(&[&log], &model, 0.07, &config).unwrap();
         let y = data.targets.row(0);

@@ -101,6 +101,7 @@ fn residual_stats(
         &ResidualConfig {
             window_secs: None,
             absolute_targets: true,
+            ..Default::default()
         },
     )
     .unwrap();

@@ -137,6 +137,26 @@ fn an_invalid_value_names_the_field_and_range() {
 }
 
 #[test]
+fn scoring_windows_must_match_the_training_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("{GOOD}residuals: {{ window_secs: 2.0, score_window_secs: 1.0 }}\n");
+    let e = error_of(dir.path(), "w.yaml", &text);
+    check(
+        &e,
+        "invalid `residuals.score_window_secs`",
+        "w.yaml",
+        7,
+        51,
+        "`window_secs: null`",
+    );
+    let text = format!(
+        "{GOOD}residuals: {{ window_secs: null, score_window_secs: 1.0 }}\nabsolute_regressors: [{{ kind: zero }}]\n"
+    );
+    let e = error_of(dir.path(), "a.yaml", &text);
+    assert!(e.contains("absolute_regressors"), "{e}");
+}
+
+#[test]
 fn sweeps_are_checked_before_anything_runs() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

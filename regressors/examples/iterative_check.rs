@@ -8,7 +8,11 @@
 //! cosine with the dense one, the CG iterations and the seconds of each
 //! evaluation (`DENSE=0` skips the dense evaluation). `FIT_ROWS = 0`
 //! evaluates at the start policy's first base instead (variance 1,
-//! lengthscale 1, noise 0.01).
+//! lengthscale 1, noise 0.01). `VARIANCE_RANKS=64,256` also conditions the
+//! GP on the N rows densely and by iterative solves with a Krylov basis of
+//! each rank, predicts the next `TEST_ROWS` rows (default 2000) and prints
+//! the variances' largest and median relative excess over the exact ones,
+//! the means' largest difference and the seconds each took.
 //!
 //! `cargo run --release -p gpodo-regressors --example iterative_check --
 //! FILE.csv N RANK:PROBES[:SEED][,…] [FIT_ROWS]`
@@ -23,6 +27,9 @@ use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
 use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
 
+mod support;
+use support::table::Table;
+
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let (path, n, runs, fit_rows) = match args.as_slice() {
@@ -36,36 +43,28 @@ fn main() -> anyhow::Result<()> {
         .transpose()
         .context("FIT_ROWS")?
         .unwrap_or(n);
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {path}"))?;
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .context("empty file")?
-        .split(',')
-        .map(String::from)
-        .collect();
-    let cols = header.len();
-    let rows: Vec<Vec<f64>> = lines
-        .take(n)
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.trim().parse::<f64>())
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .collect::<Result<_, _>>()
-        .context("parsing the rows")?;
-    let d = cols - 3;
-    let n = rows.len();
-    // Every column z-scored over the N rows.
-    let mut z = rows.clone();
-    for c in 0..cols {
-        let mean = rows.iter().map(|r| r[c]).sum::<f64>() / n as f64;
-        let sd = (rows.iter().map(|r| (r[c] - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
-        let sd = if sd < 1e-12 { 1.0 } else { sd };
-        for r in &mut z {
-            r[c] = (r[c] - mean) / sd;
-        }
-    }
+    let test_rows: usize = std::env::var("TEST_ROWS")
+        .ok()
+        .map(|v| v.parse())
+        .transpose()
+        .context("TEST_ROWS")?
+        .unwrap_or(2000);
+    let variance_ranks: Vec<usize> = std::env::var("VARIANCE_RANKS")
+        .ok()
+        .map(|v| v.split(',').map(str::parse).collect::<Result<_, _>>())
+        .transpose()
+        .context("VARIANCE_RANKS")?
+        .unwrap_or_default();
+    let held_out = if variance_ranks.is_empty() {
+        0
+    } else {
+        test_rows
+    };
+    let table = Table::read(path, n + held_out, n)?;
+    let (header, z) = (&table.header, &table.rows);
+    let n = n.min(z.len());
+    let m = z.len() - n;
+    let d = table.inputs();
     let head = &z[..fit_rows.clamp(2, n)];
     let data = ResidualDataset::new(
         SampleMatrix::from_row_major(
@@ -162,6 +161,57 @@ fn main() -> anyhow::Result<()> {
             it.iterations,
             t.elapsed().as_secs_f64()
         );
+    }
+    if !variance_ranks.is_empty() && m > 0 {
+        use gpodo_regressors::exact_gp::posterior::Posterior;
+        let xs = faer::Mat::from_fn(m, d, |i, j| z[n + i][j]);
+        let t = Instant::now();
+        let exact = Posterior::new(
+            group.kernel.clone(),
+            group.noise_variance,
+            x.clone(),
+            y.clone(),
+        )?;
+        let exact_moments = exact.predict(xs.as_ref());
+        println!(
+            "dense posterior and {m} predictions: {:.2} s",
+            t.elapsed().as_secs_f64()
+        );
+        for rank in variance_ranks {
+            let solver = IterativeSolver::new(n, IterativeSettings::default());
+            let t = Instant::now();
+            let posterior = Posterior::iterative(
+                group.kernel.clone(),
+                group.noise_variance,
+                x.clone(),
+                y.clone(),
+                &solver,
+                rank,
+            )?;
+            let built = t.elapsed().as_secs_f64();
+            let moments = posterior.predict(xs.as_ref());
+            let mut excess: Vec<f64> = (0..m)
+                .map(|i| {
+                    let (a, b) = (
+                        moments.latent_variance[i] + moments.noise_variance,
+                        exact_moments.latent_variance[i] + exact_moments.noise_variance,
+                    );
+                    (a - b) / b
+                })
+                .collect();
+            excess.sort_by(f64::total_cmp);
+            let mean_gap = (0..m)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| (moments.mean[(i, j)] - exact_moments.mean[(i, j)]).abs())
+                .fold(0.0, f64::max);
+            println!(
+                "variance rank {rank}: predictive variance excess over exact: median {:.2e}, largest {:.2e}, smallest {:.2e}; means apart by {mean_gap:.2e} at most; {built:.2} s to condition, {:.2} s to predict",
+                excess[m / 2],
+                excess[m - 1],
+                excess[0],
+                t.elapsed().as_secs_f64() - built
+            );
+        }
     }
     Ok(())
 }

@@ -113,6 +113,12 @@ pub enum DatasetSpec {
         /// terrain statistics).
         #[serde(default)]
         route: gpodo_datasets::sim::route::Route,
+        /// Override of the preset's motion-capture jitter per frame (m), the
+        /// white noise of the ground-truth positions: differenced over one
+        /// 80-ms step it is most of a per-step residual's noise, over a 1-s
+        /// window a twelfth of it.
+        #[serde(default)]
+        mocap_jitter_m: Option<f64>,
     },
     /// Rover logs in gpodo's trajectory CSV format (paths relative to the
     /// experiment file).

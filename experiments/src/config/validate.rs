@@ -39,6 +39,22 @@ impl ExperimentConfig {
         self.residuals
             .validate()
             .map_err(|e| Issue::from_dataset("", e))?;
+        if self.residuals.score_window_secs.is_some() {
+            if matches!(self.dataset, DatasetSpec::ResidualTable { .. }) {
+                return Err(Issue::new(
+                    "residuals.score_window_secs",
+                    "scoring windows on a residual table",
+                    "no `score_window_secs`: a table's rows are scored as they are",
+                ));
+            }
+            if !self.absolute_regressors.is_empty() {
+                return Err(Issue::new(
+                    "residuals.score_window_secs",
+                    "scoring windows with `absolute_regressors`",
+                    "no `score_window_secs`, or no |residual| regressors (the mean of absolute step residuals is not the absolute window mean)",
+                ));
+            }
+        }
         self.bench
             .validate(self.regressors.len())
             .map_err(|(field, expected)| {

@@ -289,7 +289,7 @@ fn bench_one(
     let t = Instant::now();
     let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
     let batch_predict_secs = t.elapsed().as_secs_f64();
-    let evaluation = evaluate(&predictions, &rows.test.targets)?;
+    let evaluation = rows.score(&predictions)?;
     let predict_latency = predict_latency(model.as_ref(), &rows.test, settings.predict_queries)?;
     let online = if model.supports_online_update() {
         Some(online_pass(spec, rows, settings.learning_curve_every)?)

@@ -8,9 +8,7 @@ use std::path::PathBuf;
 use gpodo_frontends::tum::StampedPose;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
-use gpodo_datasets::residuals::{
-    LogStep, log_steps, residual_dataset, residual_dataset_from_steps,
-};
+use gpodo_datasets::residuals::{LogStep, StepWindows, log_steps, residual_dataset_from_steps};
 use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::speed_check::{median_speed_ratio, unit_warning};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
@@ -138,6 +136,9 @@ fn motion_model(
 pub(crate) struct PreparedData {
     pub(crate) train: ResidualDataset,
     pub(crate) test: ResidualDataset,
+    /// The windows the test rows are scored on, when they are not the
+    /// rows themselves.
+    pub(crate) test_windows: Option<StepWindows>,
     pub(crate) summary: DatasetSummary,
     pub(crate) motion_model: Option<String>,
     pub(crate) dead_reckoning: Vec<(String, DeadReckoning)>,
@@ -254,7 +255,18 @@ fn from_logs(
         .collect::<Result<Vec<_>, _>>()?;
     let speed_ratio = check_speed_units(&train_steps);
     let train = residual_dataset_from_steps(&refs(train_logs), &train_steps, &config.residuals)?;
-    let test = residual_dataset(&refs(test_logs), model.as_ref(), radius, &config.residuals)?;
+    let test_steps = test_logs
+        .iter()
+        .map(|log| log_steps(log, model.as_ref(), radius))
+        .collect::<Result<Vec<_>, _>>()?;
+    let test = residual_dataset_from_steps(&refs(test_logs), &test_steps, &config.residuals)?;
+    let test_windows = match (
+        config.residuals.window_secs,
+        config.residuals.score_window_secs,
+    ) {
+        (None, Some(window)) => Some(StepWindows::new(&test_steps, window)?),
+        _ => None,
+    };
     let dead_reckoning = test_logs
         .iter()
         .map(|log| Ok((log.name.clone(), dead_reckoning(log, model.as_ref())?)))
@@ -277,6 +289,7 @@ fn from_logs(
         },
         train,
         test,
+        test_windows,
         motion_model: Some(model.name().to_string()),
         dead_reckoning,
         test_logs,
@@ -296,6 +309,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             training_run_secs,
             test_max_secs,
             route,
+            mocap_jitter_m,
         } => {
             let mut sim = SimulatorConfig::preset(*preset, *seed);
             sim.route = *route;
@@ -307,6 +321,9 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             }
             if let Some(s) = test_max_secs {
                 sim.test_max_secs = *s;
+            }
+            if let Some(j) = mocap_jitter_m {
+                sim.sensors.mocap_jitter_m = *j;
             }
             tracing::info!(seed, "simulating the testbed");
             let testbed = sim.simulate()?;
@@ -425,6 +442,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                 },
                 train,
                 test,
+                test_windows: None,
                 motion_model: None,
                 dead_reckoning: Vec::new(),
                 test_logs: Vec::new(),
@@ -475,7 +493,14 @@ pub(crate) fn model_rows(data: &PreparedData) -> Result<(ModelRows, Standardizer
     train.inputs = scaler.transform(&data.train.inputs)?;
     let mut test = data.test.clone().with_standardized_inputs(true);
     test.inputs = scaler.transform(&data.test.inputs)?;
-    Ok((ModelRows { train, test }, scaler))
+    Ok((
+        ModelRows {
+            train,
+            test,
+            test_windows: data.test_windows.clone(),
+        },
+        scaler,
+    ))
 }
 
 /// One line on what importing a bag did: rows kept and dropped, each

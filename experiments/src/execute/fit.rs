@@ -1,20 +1,18 @@
 //! One regressor fitted on the training rows and scored on the test rows.
 
 use gpodo_regressors::RegressorSpec;
-use gpodo_regressors::metrics::evaluate;
 use gpodo_traits::{ResidualDataset, ResidualRegressor};
 
 use crate::error::PipelineError;
-use crate::execute::results::RegressorResult;
+use crate::execute::results::{ModelRows, RegressorResult};
 
 /// Fits one regressor on the training rows and scores it on the test rows.
 pub(crate) fn fit_and_score(
     spec: &RegressorSpec,
-    train: &ResidualDataset,
-    test: &ResidualDataset,
+    rows: &ModelRows,
     progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 ) -> Result<(RegressorResult, Box<dyn ResidualRegressor>), PipelineError> {
-    let label = spec.label();
+    let (label, train) = (spec.label(), &rows.train);
     check_memory(spec, &label, train, crate::memory::available_bytes())?;
     tracing::info!(regressor = %label, n = train.len(), "fitting");
     let mut model = spec.build()?;
@@ -24,8 +22,8 @@ pub(crate) fn fit_and_score(
         source,
     };
     let fit = model.fit(train).map_err(wrap)?;
-    let predictions = model.predict(&test.inputs).map_err(wrap)?;
-    let evaluation = evaluate(&predictions, &test.targets)?;
+    let predictions = model.predict(&rows.test.inputs).map_err(wrap)?;
+    let evaluation = rows.score(&predictions)?;
     tracing::info!(regressor = %label, secs = fit.duration_secs, "fitted");
     Ok((
         RegressorResult {

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use gpodo_regressors::metrics::{Evaluation, evaluate};
+use gpodo_regressors::metrics::Evaluation;
 use gpodo_regressors::model_file::{ModelFile, ModelFileError, Provenance};
 use gpodo_traits::{Predictions, SampleMatrix};
 
@@ -87,8 +87,7 @@ pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, 
                 label: label.to_string(),
                 source,
             })?;
-    let evaluation = evaluate(&test_predictions, &rows.test.targets)
-        .map_err(|e| ModelError::Pipeline(e.into()))?;
+    let evaluation = rows.score(&test_predictions)?;
     Ok(FittedModel {
         file,
         test_inputs: (data.test.input_names.clone(), data.test.inputs.clone()),

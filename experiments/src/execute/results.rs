@@ -1,14 +1,16 @@
 //! What a run produced: the data summary, each regressor's scores, each
 //! scheme's row, and the rows and traverses the reports draw.
 
+use gpodo_datasets::residuals::StepWindows;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::scheme::SchemeResult;
 use gpodo_frontends::traverse::Traverse;
-use gpodo_regressors::metrics::Evaluation;
-use gpodo_traits::{FitReport, ResidualDataset};
+use gpodo_regressors::metrics::{Evaluation, evaluate};
+use gpodo_traits::{FitReport, Predictions, ResidualDataset};
 use serde::{Deserialize, Serialize};
 
 use crate::config::ExperimentConfig;
+use crate::error::PipelineError;
 use crate::execute::calibration::ResidualStatistics;
 use crate::execute::odometry::DeadReckoning;
 
@@ -140,6 +142,24 @@ pub struct ExperimentResults {
 pub struct ModelRows {
     /// Training rows.
     pub train: ResidualDataset,
-    /// Test rows.
+    /// Test rows: what the regressors predict.
     pub test: ResidualDataset,
+    /// The windows the test rows' predictions are averaged over and scored
+    /// on (`residuals.score_window_secs` with one row per step); `None`:
+    /// scored row by row.
+    pub test_windows: Option<StepWindows>,
+}
+
+impl ModelRows {
+    /// Scores predictions of the test rows: on the scoring windows when
+    /// there are some, else row by row.
+    ///
+    /// # Errors
+    /// [`PipelineError`] when the predictions do not match the test rows.
+    pub fn score(&self, predictions: &Predictions) -> Result<Evaluation, PipelineError> {
+        Ok(match &self.test_windows {
+            Some(windows) => evaluate(&windows.average(predictions)?, &windows.targets)?,
+            None => evaluate(predictions, &self.test.targets)?,
+        })
+    }
 }

@@ -156,10 +156,14 @@ fn fit_shared(
         None => Arc::new(crate::stop::StopOnRequest),
     });
     let (mut result, model) = if absolute {
-        let (train, test) = (absolute_rows(&p.rows.train), absolute_rows(&p.rows.test));
-        fit_and_score(spec, &train, &test, sink)?
+        let rows = ModelRows {
+            train: absolute_rows(&p.rows.train),
+            test: absolute_rows(&p.rows.test),
+            test_windows: None,
+        };
+        fit_and_score(spec, &rows, sink)?
     } else {
-        fit_and_score(spec, &p.rows.train, &p.rows.test, sink)?
+        fit_and_score(spec, &p.rows, sink)?
     };
     result.label = label;
     if let Some(s) = spinner {

@@ -204,10 +204,18 @@ fn clamped_counts(s: &mut String, regressors: &[RegressorResult]) {
 
 fn table_one(s: &mut String, r: &ExperimentResults) {
     let targets = r.dataset.target_names.join(", ");
-    let units = match (&r.config.dataset, r.config.residuals.window_secs) {
-        (DatasetSpec::ResidualTable { .. }, _) => "in the table's target units".to_string(),
-        (_, Some(w)) => format!("m/s ({w}-s mean body-velocity residuals)"),
-        (_, None) => "m/s (per-step body-velocity residuals)".to_string(),
+    let residuals = &r.config.residuals;
+    let units = match (
+        &r.config.dataset,
+        residuals.window_secs,
+        residuals.score_window_secs,
+    ) {
+        (DatasetSpec::ResidualTable { .. }, _, _) => "in the table's target units".to_string(),
+        (_, Some(w), _) => format!("m/s ({w}-s mean body-velocity residuals)"),
+        (_, None, Some(w)) => format!(
+            "m/s (trained on per-step body-velocity residuals, scored on the test runs' {w}-s means: each window's per-step predictions averaged with the window's weights, their variances as if the steps' errors were independent)"
+        ),
+        (_, None, None) => "m/s (per-step body-velocity residuals)".to_string(),
     };
     let mut pooled = Table::new(&["Regressor", "RMSE", "MAE"]);
     let mut detail = Table::new(&[

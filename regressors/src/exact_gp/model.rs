@@ -13,10 +13,49 @@ use gpodo_traits::{Error, FitReport, ResidualDataset, ResidualRegressor, SampleM
 use serde::{Deserialize, Serialize};
 
 use super::choice::KernelChoice;
-use super::optimize::maximize_lml;
+use super::iterative::IterativeSolver;
+use super::optimize::{conditions_iteratively, maximize_lml};
 use super::params::{ExactGpParams, OutputSharing};
 use super::posterior::Posterior;
 use crate::RegressorError;
+
+/// Conditions the GP of `params` with `kernel` and `noise_variance` on
+/// `(x, y)`: by iterative solves where its hyperparameters are learned so
+/// ([`conditions_iteratively`]), else by a dense factor.
+///
+/// # Errors
+/// [`RegressorError::NotPositiveDefinite`] when `K_y` cannot be factorised
+/// or CG breaks down.
+fn condition(
+    params: &ExactGpParams,
+    kernel: Kernel,
+    noise_variance: f64,
+    x: Mat<f64>,
+    y: Mat<f64>,
+) -> Result<Posterior, RegressorError> {
+    let n = x.nrows();
+    if conditions_iteratively(params, n, noise_variance) {
+        let solver = IterativeSolver::new(n, params.iterative);
+        let _spare = crate::dense::SpareLimit::at_least(3 * n * n * std::mem::size_of::<f64>());
+        let posterior = Posterior::iterative(
+            kernel,
+            noise_variance,
+            x,
+            y,
+            &solver,
+            params.iterative.variance_rank,
+        );
+        crate::dense::release_spare();
+        posterior
+    } else {
+        Posterior::new(kernel, noise_variance, x, y)
+    }
+}
+
+/// The standard error (nats) of an iterative likelihood estimate above
+/// which a fit warns that its optimum may be off: the optimiser's line
+/// searches compare values a few nats apart.
+const UNRELIABLE_ESTIMATE_NATS: f64 = 1.0;
 use crate::dense::to_faer;
 use crate::hyperopt::ProgressSink;
 use crate::kernels::Kernel;
@@ -130,7 +169,8 @@ impl ExactGp {
                     detail: "saved GP state: a group's outputs or kernel width do not match the training data".into(),
                 });
             }
-            posteriors.push(Posterior::new(
+            posteriors.push(condition(
+                &state.params,
                 g.kernel.clone(),
                 g.noise_variance,
                 x.clone(),
@@ -287,7 +327,20 @@ impl ExactGp {
             } else {
                 (kernel0, self.params.noise_variance)
             };
-            let posterior = Posterior::new(kernel.clone(), noise, x.clone(), yg)?;
+            let posterior = condition(&self.params, kernel.clone(), noise, x.clone(), yg)?;
+            if let Some(standard_error) = posterior.lml_standard_error {
+                tracing::debug!(
+                    estimate = posterior.lml,
+                    standard_error,
+                    "iterative estimate of the log marginal likelihood at the optimum"
+                );
+                if standard_error > UNRELIABLE_ESTIMATE_NATS {
+                    tracing::warn!(
+                        standard_error,
+                        "the iterative likelihood estimate has a standard error of {standard_error:.1} nats at the fit's optimum, where the optimiser compared values nats apart: the hyperparameters may be off; `solver: dense`, or more `iterative.probes` (the error falls as one over their square root)"
+                    );
+                }
+            }
             objective += posterior.lml;
             jitter = jitter.max(posterior.jitter());
             let prefix = if matches!(self.params.outputs, OutputSharing::Independent) {

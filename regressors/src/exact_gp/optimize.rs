@@ -20,6 +20,23 @@ use crate::kernels::Kernel;
 /// simulated full-rate rows (noise 0.9) by under one.
 const SMALL_NOISE_VARIANCE: f64 = 0.05;
 
+/// Whether the posterior of an exact GP with `params` on `n` rows, at the
+/// noise variance `noise_variance` it learned, is conditioned by iterative
+/// solves rather than a dense factor: as its hyperparameters were learned
+/// (`solver: iterative`; `auto` above its crossover, unless the noise is
+/// small and the rows few enough that the dense path is taken; here the
+/// learned noise decides, where the fit used its subset's).
+pub(crate) fn conditions_iteratively(
+    params: &ExactGpParams,
+    n: usize,
+    noise_variance: f64,
+) -> bool {
+    params.solver.resolve(n) == Solver::Iterative
+        && !(params.solver == Solver::Auto
+            && noise_variance < SMALL_NOISE_VARIANCE
+            && params.solver.may_be_dense(n))
+}
+
 /// The outcome of hyperparameter learning.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Optimized {

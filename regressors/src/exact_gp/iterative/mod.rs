@@ -20,6 +20,7 @@
 //! pivoted Cholesky factor of `K` of rank `k`
 //! ([`pivoted_cholesky::pivoted_cholesky`]).
 
+pub mod love;
 pub mod mbcg;
 pub mod pivoted_cholesky;
 pub mod preconditioner;
@@ -55,8 +56,14 @@ pub struct IterativeSettings {
     pub tolerance: f64,
     /// CG iterations at most (default 1000).
     pub max_iterations: usize,
-    /// Seed of the probe vectors (default 0).
+    /// Seed of the probe vectors and of the predictive variances' Krylov
+    /// start block (default 0).
     pub seed: u64,
+    /// Columns of the Krylov basis of the predictive variances after an
+    /// iterative fit ([`love::KrylovVariance`]; default 256): each test
+    /// row then costs `O(n k)`, and its latent variance is never below the
+    /// exact one.
+    pub variance_rank: usize,
     /// Rows, spread evenly over the training set, of a dense fit (from the
     /// start policy) whose optimum the iterative fit starts from alone
     /// (default 2000; 0, or at least the training rows: the start policy's
@@ -87,6 +94,9 @@ impl IterativeSettings {
         if self.max_iterations == 0 {
             return bad("max_iterations", "at least 1");
         }
+        if self.variance_rank == 0 {
+            return bad("variance_rank", "at least 1 column");
+        }
         Ok(())
     }
 }
@@ -99,6 +109,7 @@ impl Default for IterativeSettings {
             tolerance: 1e-6,
             max_iterations: 1000,
             seed: 0,
+            variance_rank: 256,
             subset_rows: 2000,
         }
     }
@@ -147,6 +158,13 @@ pub struct IterativeEvaluation {
     pub relative_residual: f64,
     /// The preconditioner's rank (fewer than asked when `K` has lower rank).
     pub preconditioner_rank: usize,
+    /// The standard error of `lml` from its probes: `p/2` times the sample
+    /// standard deviation of the probes' log-determinant terms over `√t`
+    /// (0 with one probe: there is no spread to measure). Hutchinson's
+    /// estimator has variance `2‖log(P^{-1/2} K_y P^{-1/2})‖²_F / t` for
+    /// Gaussian probes, which grows as the noise shrinks beneath the
+    /// kernel's spectrum.
+    pub lml_standard_error: f64,
 }
 
 /// The log marginal likelihood of the exact GP with `kernel` and noise
@@ -166,6 +184,99 @@ pub fn log_marginal_likelihood_iterative(
     solver: &IterativeSolver,
     stop: impl Fn() -> bool,
 ) -> Result<IterativeEvaluation, RegressorError> {
+    let clock = std::time::Instant::now();
+    let cache = kernel.gram_lower_with_cache(x);
+    tracing::debug!(
+        gram_secs = clock.elapsed().as_secs_f64(),
+        "iterative exact-GP kernel matrix"
+    );
+    let out = evaluate(
+        kernel,
+        &cache,
+        noise_variance,
+        x,
+        y,
+        with_gradient,
+        solver,
+        &stop,
+    );
+    cache.recycle();
+    out.map(|(evaluation, _)| evaluation)
+}
+
+/// The GP conditioned by iterative solves: the weights `K_y⁻¹ Y` by CG (to
+/// the solver's tolerance), the likelihood's estimate there, and the
+/// Krylov basis of the predictive variances ([`love::KrylovVariance`], of
+/// `variance_rank` columns, its start block from the solver's seed).
+#[derive(Debug, Clone)]
+pub struct IterativePosterior {
+    /// `K_y⁻¹ Y`.
+    pub alpha: Mat<f64>,
+    /// The predictive variances' basis.
+    pub variance: love::KrylovVariance,
+    /// The likelihood's estimate and its standard error.
+    pub evaluation: IterativeEvaluation,
+}
+
+/// Conditions the GP with `kernel` and `noise_variance` on `(x, y)` by
+/// `solver`'s iterative solves and a Krylov basis of `variance_rank`
+/// columns for the variances; the kernel matrix is formed once for both.
+///
+/// # Errors
+/// As [`log_marginal_likelihood_iterative`].
+pub fn iterative_posterior(
+    kernel: &Kernel,
+    noise_variance: f64,
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    solver: &IterativeSolver,
+    variance_rank: usize,
+) -> Result<IterativePosterior, RegressorError> {
+    let cache = kernel.gram_lower_with_cache(x);
+    let out = evaluate(kernel, &cache, noise_variance, x, y, false, solver, &|| {
+        false
+    })
+    .and_then(|(evaluation, alpha)| {
+        let k = cache.k.as_ref();
+        let clock = std::time::Instant::now();
+        let variance = love::KrylovVariance::new(
+            |v| {
+                let mut out = symmetric_times(k, v);
+                out += v * faer::Scale(noise_variance);
+                out
+            },
+            x.nrows(),
+            variance_rank,
+            solver.settings.seed,
+        )?;
+        tracing::debug!(
+            rank = variance.rank(),
+            secs = clock.elapsed().as_secs_f64(),
+            "iterative exact GP: the predictive variances' Krylov basis"
+        );
+        Ok(IterativePosterior {
+            alpha,
+            variance,
+            evaluation,
+        })
+    });
+    cache.recycle();
+    out
+}
+
+/// [`log_marginal_likelihood_iterative`] on a kernel matrix already
+/// formed (`cache`, its lower triangle), with the weights `K_y⁻¹ Y`.
+#[allow(clippy::too_many_arguments)]
+fn evaluate(
+    kernel: &Kernel,
+    cache: &crate::kernels::GramCache,
+    noise_variance: f64,
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    with_gradient: bool,
+    solver: &IterativeSolver,
+    stop: &dyn Fn() -> bool,
+) -> Result<(IterativeEvaluation, Mat<f64>), RegressorError> {
     let (n, p) = (y.nrows(), y.ncols());
     let settings = &solver.settings;
     if solver.draws.nrows() != n + settings.preconditioner_rank.min(n) {
@@ -177,8 +288,6 @@ pub fn log_marginal_likelihood_iterative(
     }
     let t = settings.probes;
     let clock = std::time::Instant::now();
-    let cache = kernel.gram_lower_with_cache(x);
-    let gram_secs = clock.elapsed().as_secs_f64();
     let l =
         pivoted_cholesky::pivoted_cholesky(cache.k.as_ref(), settings.preconditioner_rank, 1e-10);
     let rank = l.ncols();
@@ -203,7 +312,7 @@ pub fn log_marginal_likelihood_iterative(
         b.as_ref(),
         settings.tolerance,
         settings.max_iterations,
-        &stop,
+        stop,
     )?;
     tracing::debug!(
         n,
@@ -211,8 +320,7 @@ pub fn log_marginal_likelihood_iterative(
         relative_residual = solved.relative_residual,
         preconditioner_rank = rank,
         noise_variance,
-        gram_secs,
-        solve_secs = clock.elapsed().as_secs_f64() - gram_secs,
+        solve_secs = clock.elapsed().as_secs_f64(),
         "iterative exact-GP solve"
     );
     let alpha = solved.solution.as_ref().subcols(0, p);
@@ -221,13 +329,21 @@ pub fn log_marginal_likelihood_iterative(
     let data_fit: f64 = (0..p)
         .map(|c| (0..n).map(|i| y[(i, c)] * alpha[(i, c)]).sum::<f64>())
         .sum();
-    let mut quadrature = 0.0;
-    for i in 0..t {
-        let weight: f64 = (0..n).map(|r| z[(r, i)] * pz[(r, i)]).sum();
-        let c = p + i;
-        quadrature += weight * lanczos_log_quadrature(&solved.alphas[c], &solved.betas[c])?;
-    }
-    let log_det = pre.log_det() + quadrature / t.max(1) as f64;
+    let terms = (0..t)
+        .map(|i| {
+            let weight: f64 = (0..n).map(|r| z[(r, i)] * pz[(r, i)]).sum();
+            let c = p + i;
+            Ok(weight * lanczos_log_quadrature(&solved.alphas[c], &solved.betas[c])?)
+        })
+        .collect::<Result<Vec<f64>, RegressorError>>()?;
+    let quadrature = terms.iter().sum::<f64>() / t.max(1) as f64;
+    let log_det = pre.log_det() + quadrature;
+    let lml_standard_error = if t > 1 {
+        let spread = terms.iter().map(|q| (q - quadrature).powi(2)).sum::<f64>() / (t - 1) as f64;
+        0.5 * p as f64 * (spread / t as f64).sqrt()
+    } else {
+        0.0
+    };
     let lml = -0.5 * data_fit - 0.5 * p as f64 * log_det - 0.5 * (n * p) as f64 * LN_2PI;
     if !lml.is_finite() {
         return Err(RegressorError::NotPositiveDefinite {
@@ -261,7 +377,7 @@ pub fn log_marginal_likelihood_iterative(
         }
         let m = kernel.n_params();
         let mut g = vec![0.0; m + 1];
-        kernel.accumulate_gradient(x, &cache, w.as_ref(), &mut g[..m]);
+        kernel.accumulate_gradient(x, cache, w.as_ref(), &mut g[..m]);
         g[m] = noise_variance * trace(w.as_ref());
         crate::dense::recycle(w);
         for v in &mut g {
@@ -269,12 +385,14 @@ pub fn log_marginal_likelihood_iterative(
         }
         g
     });
-    cache.recycle();
-    Ok(IterativeEvaluation {
+    let alpha = alpha.to_owned();
+    let evaluation = IterativeEvaluation {
         lml,
         gradient,
         iterations: solved.iterations,
         relative_residual: solved.relative_residual,
         preconditioner_rank: rank,
-    })
+        lml_standard_error,
+    };
+    Ok((evaluation, alpha))
 }
