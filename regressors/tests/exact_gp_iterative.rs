@@ -647,7 +647,8 @@ fn the_krylov_variances_are_bounded_by_the_exact_ones_and_reach_them_at_full_ran
 }
 
 #[test]
-fn an_iterative_posterior_predicts_as_the_dense_one_does_and_reloads_to_the_bit() {
+fn an_iterative_posterior_predicts_as_the_dense_one_does_and_reloads_to_the_bit_at_any_thread_count()
+ {
     use gpodo_regressors::exact_gp::posterior::Posterior;
     use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, Solver};
     use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};

@@ -111,6 +111,16 @@ fn absolute_rows(rows: &gpodo_traits::ResidualDataset) -> gpodo_traits::Residual
     out
 }
 
+/// Whether a fit needing `needed` bytes runs alone: when `threads` of it
+/// at once would need more than 80 % of the `available` memory (the rest
+/// is room for what the estimate leaves out).
+fn runs_alone(needed: Option<u64>, available: Option<u64>, threads: u64) -> bool {
+    matches!(
+        (needed, available),
+        (Some(needed), Some(free)) if needed.saturating_mul(threads) > free / 5 * 4
+    )
+}
+
 /// A rough relative cost of fitting `spec` on `n` rows, to start the
 /// longest fits first: `n³` per exact-GP evaluation, times the kernel's
 /// terms (a sum needs about twice the evaluations of one kernel); `n m²`
@@ -252,22 +262,34 @@ impl SharedWork {
             .map(|(key, fit)| (fit_cost(fit.0, fit.2.rows.train.len()), key, fit))
             .collect();
         fits.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let fitted: Vec<(String, FitOutcome)> = fits
+        let run = |(key, (spec, absolute, p)): (String, FitJob<'_>)| {
+            let fitted = fit_shared(spec, absolute, &p, progress).map_err(|e| {
+                if crate::stop::requested() {
+                    tracing::info!(regressor = %spec.label(), "fit stopped");
+                } else {
+                    tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
+                }
+                (spec.label(), e.to_string())
+            });
+            (key, fitted)
+        };
+        // Fits of which as many as there are threads would need more than
+        // 80 % of the memory left (what the estimate leaves out needs room)
+        // run one at a time: each checks the memory it needs before it
+        // starts, a check two at once could both pass. The rest then run in
+        // parallel.
+        let available = crate::memory::available_bytes();
+        let threads = rayon::current_num_threads() as u64;
+        let (large, rest): (Vec<_>, Vec<_>) = fits
             .into_iter()
             .map(|(_, key, fit)| (key, fit))
-            .par_bridge()
-            .map(|(key, (spec, absolute, p))| {
-                let fitted = fit_shared(spec, absolute, &p, progress).map_err(|e| {
-                    if crate::stop::requested() {
-                        tracing::info!(regressor = %spec.label(), "fit stopped");
-                    } else {
-                        tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
-                    }
-                    (spec.label(), e.to_string())
-                });
-                (key, fitted)
-            })
-            .collect();
+            .partition(|(_, (spec, _, p))| {
+                let rows = &p.rows.train;
+                let (n, d, o) = (rows.len(), rows.inputs.ncols(), rows.targets.ncols());
+                runs_alone(spec.fit_memory_bytes(n, d, o), available, threads)
+            });
+        let mut fitted: Vec<(String, FitOutcome)> = large.into_iter().map(run).collect();
+        fitted.extend(rest.into_iter().par_bridge().map(run).collect::<Vec<_>>());
         let counts = SharedCounts {
             datasets: prepared.len(),
             fits: fitted.len(),
@@ -469,4 +491,21 @@ fn build_traverses(
         .iter()
         .map(|log| build_traverse(log, model.as_ref(), *radius, window, scaler))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::runs_alone;
+
+    #[test]
+    fn fits_that_two_at_once_would_not_leave_a_fifth_of_the_memory_run_alone() {
+        const GB: u64 = 1_000_000_000;
+        // The full-rate exact GP (10.05 GB estimated) on 24.5 GB, 2 threads.
+        assert!(runs_alone(Some(10 * GB), Some(24 * GB), 2));
+        assert!(!runs_alone(Some(10 * GB), Some(24 * GB), 1));
+        assert!(!runs_alone(Some(GB), Some(24 * GB), 2));
+        // Unknown needs or memory: in parallel.
+        assert!(!runs_alone(None, Some(GB), 2));
+        assert!(!runs_alone(Some(u64::MAX), None, 2));
+    }
 }
