@@ -18,6 +18,12 @@ use super::optimize::{conditions_iteratively, maximize_lml};
 use super::params::{ExactGpParams, OutputSharing};
 use super::posterior::Posterior;
 use crate::RegressorError;
+use crate::dense::to_faer;
+use crate::hyperopt::ProgressSink;
+use crate::kernels::Kernel;
+use crate::scaling::{
+    GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
+};
 
 /// Conditions the GP of `params` with `kernel` and `noise_variance` on
 /// `(x, y)`: by iterative solves where its hyperparameters are learned so
@@ -56,12 +62,6 @@ fn condition(
 /// which a fit warns that its optimum may be off: the optimiser's line
 /// searches compare values a few nats apart.
 const UNRELIABLE_ESTIMATE_NATS: f64 = 1.0;
-use crate::dense::to_faer;
-use crate::hyperopt::ProgressSink;
-use crate::kernels::Kernel;
-use crate::scaling::{
-    GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
-};
 
 /// One output group's learned model, serialisable.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
