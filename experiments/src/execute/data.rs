@@ -249,16 +249,18 @@ fn from_logs(
     }
     let (train_logs, test_logs) = (&train_logs, &test_logs);
     let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
-    let train_steps = train_logs
-        .iter()
-        .map(|log| log_steps(log, model.as_ref(), radius))
-        .collect::<Result<Vec<_>, _>>()?;
+    let steps_of = |logs: &[RoverLog]| {
+        logs.iter()
+            .map(|log| {
+                log.validate()?;
+                log_steps(log, model.as_ref(), radius)
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let train_steps = steps_of(train_logs)?;
     let speed_ratio = check_speed_units(&train_steps);
     let train = residual_dataset_from_steps(&refs(train_logs), &train_steps, &config.residuals)?;
-    let test_steps = test_logs
-        .iter()
-        .map(|log| log_steps(log, model.as_ref(), radius))
-        .collect::<Result<Vec<_>, _>>()?;
+    let test_steps = steps_of(test_logs)?;
     let test = residual_dataset_from_steps(&refs(test_logs), &test_steps, &config.residuals)?;
     let test_windows = match (
         config.residuals.window_secs,
