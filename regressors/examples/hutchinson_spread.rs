@@ -17,7 +17,7 @@
 use anyhow::{Context, bail};
 use gpodo_regressors::exact_gp::iterative::pivoted_cholesky::pivoted_cholesky;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
+use gpodo_traits::ResidualRegressor;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 mod support;
@@ -43,23 +43,7 @@ fn main() -> anyhow::Result<()> {
         .context("NOISE")?;
     let table = Table::read(path, n, n)?;
     let (n, d) = (table.rows.len(), table.inputs());
-    let rows = |range: std::ops::Range<usize>| {
-        SampleMatrix::from_row_major(
-            n,
-            range.len(),
-            table
-                .rows
-                .iter()
-                .flat_map(|r| r[range.clone()].to_vec())
-                .collect(),
-        )
-    };
-    let data = ResidualDataset::new(
-        rows(0..d)?,
-        rows(d..d + 3)?,
-        table.header[..d].to_vec(),
-        table.header[d..].to_vec(),
-    )?;
+    let data = table.dataset(n)?;
     let mut gp = ExactGp::new(ExactGpParams {
         standardize: false,
         optimize: noise.is_none(),

@@ -25,7 +25,7 @@ use gpodo_regressors::exact_gp::iterative::{
 };
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams};
-use gpodo_traits::{ResidualDataset, ResidualRegressor, SampleMatrix};
+use gpodo_traits::ResidualRegressor;
 
 mod support;
 use support::table::Table;
@@ -61,25 +61,11 @@ fn main() -> anyhow::Result<()> {
         test_rows
     };
     let table = Table::read(path, n + held_out, n)?;
-    let (header, z) = (&table.header, &table.rows);
+    let z = &table.rows;
     let n = n.min(z.len());
     let m = z.len() - n;
     let d = table.inputs();
-    let head = &z[..fit_rows.clamp(2, n)];
-    let data = ResidualDataset::new(
-        SampleMatrix::from_row_major(
-            head.len(),
-            d,
-            head.iter().flat_map(|r| r[..d].to_vec()).collect(),
-        )?,
-        SampleMatrix::from_row_major(
-            head.len(),
-            3,
-            head.iter().flat_map(|r| r[d..].to_vec()).collect(),
-        )?,
-        header[..d].to_vec(),
-        header[d..].to_vec(),
-    )?;
+    let data = table.dataset(fit_rows.clamp(2, n))?;
     // FIT_ROWS = 0: no fit, the start policy's first base (variance 1,
     // lengthscale 1, noise 0.01) instead.
     let t = Instant::now();
@@ -95,7 +81,7 @@ fn main() -> anyhow::Result<()> {
     gp.fit(&data)?;
     println!(
         "dense fit on {} rows: {:.1} s",
-        head.len(),
+        data.len(),
         t.elapsed().as_secs_f64()
     );
     let state = gp.state().context("no state")?;

@@ -2,6 +2,7 @@
 //! whose last three columns are the targets.
 
 use anyhow::{Context, bail};
+use gpodo_traits::{ResidualDataset, SampleMatrix};
 
 /// The table's column names and its first `rows` rows (fewer when it is
 /// shorter), every column z-scored on the first `fit` of them.
@@ -61,5 +62,28 @@ impl Table {
     /// Input columns.
     pub fn inputs(&self) -> usize {
         self.header.len() - 3
+    }
+
+    /// Its first `rows` rows as a residual dataset.
+    ///
+    /// # Errors
+    /// When the rows are ragged.
+    pub fn dataset(&self, rows: usize) -> anyhow::Result<ResidualDataset> {
+        let (head, d) = (&self.rows[..rows.min(self.rows.len())], self.inputs());
+        let columns = |range: std::ops::Range<usize>| {
+            SampleMatrix::from_row_major(
+                head.len(),
+                range.len(),
+                head.iter()
+                    .flat_map(|r| r[range.clone()].to_vec())
+                    .collect(),
+            )
+        };
+        Ok(ResidualDataset::new(
+            columns(0..d)?,
+            columns(d..d + 3)?,
+            self.header[..d].to_vec(),
+            self.header[d..].to_vec(),
+        )?)
     }
 }

@@ -20,21 +20,28 @@ use crate::kernels::Kernel;
 /// simulated full-rate rows (noise 0.9) by under one.
 const SMALL_NOISE_VARIANCE: f64 = 0.05;
 
+/// Whether `solver: auto` fits `n` rows densely although they are above
+/// its crossover: at a learned noise variance below
+/// [`SMALL_NOISE_VARIANCE`], where iterative estimates spread, and while
+/// the dense path fits in memory.
+fn auto_stays_dense(params: &ExactGpParams, n: usize, noise_variance: f64) -> bool {
+    params.solver == Solver::Auto
+        && noise_variance < SMALL_NOISE_VARIANCE
+        && params.solver.may_be_dense(n)
+}
+
 /// Whether the posterior of an exact GP with `params` on `n` rows, at the
 /// noise variance `noise_variance` it learned, is conditioned by iterative
 /// solves rather than a dense factor: as its hyperparameters were learned
-/// (`solver: iterative`; `auto` above its crossover, unless the noise is
-/// small and the rows few enough that the dense path is taken; here the
-/// learned noise decides, where the fit used its subset's).
+/// (`solver: iterative`; `auto` above its crossover unless
+/// [`auto_stays_dense`]; here the learned noise decides, where the fit
+/// used its subset's).
 pub(crate) fn conditions_iteratively(
     params: &ExactGpParams,
     n: usize,
     noise_variance: f64,
 ) -> bool {
-    params.solver.resolve(n) == Solver::Iterative
-        && !(params.solver == Solver::Auto
-            && noise_variance < SMALL_NOISE_VARIANCE
-            && params.solver.may_be_dense(n))
+    params.solver.resolve(n) == Solver::Iterative && !auto_stays_dense(params, n, noise_variance)
 }
 
 /// The outcome of hyperparameter learning.
@@ -149,8 +156,7 @@ pub fn maximize_lml(
             "iterative exact GP: the subset's dense optimum"
         );
         let small_noise = first.noise_variance < SMALL_NOISE_VARIANCE;
-        let dense_instead =
-            params.solver == Solver::Auto && small_noise && params.solver.may_be_dense(n);
+        let dense_instead = auto_stays_dense(params, n, first.noise_variance);
         let full = ExactGpParams {
             solver: if dense_instead {
                 Solver::Dense
