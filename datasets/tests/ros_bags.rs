@@ -1,7 +1,8 @@
-//! The Husky recording in `../shared/data/ros/` (issue 17 allows tests to
-//! read it), as a ROS 1 bag and as a zstd-chunked ROS 2 MCAP with the same
-//! 16806 messages: both are recognised by their magic bytes and give the
-//! same topics, counts and span (shared/data/README.md lists them).
+//! The Husky recording in `../shared/data/ros/` (one of the real
+//! recordings of `../shared/` that tests may read), as a ROS 1 bag and as
+//! a zstd-chunked ROS 2 MCAP with the same 16806 messages: both are
+//! recognised by their magic bytes and give the same topics, counts and
+//! span (shared/data/README.md lists them).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 

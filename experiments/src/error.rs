@@ -113,6 +113,17 @@ pub enum PipelineError {
     /// The visual front end failed.
     #[error(transparent)]
     Frontend(#[from] gpodo_frontends::FrontendError),
+    /// A file or folder could not be written, or an input not read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A configuration file (a topic map, say) could not be read.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
     /// A scheme of Table II failed.
     #[error("scheme `{label}`: {source}")]
     Scheme {

@@ -6,9 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
-use gpodo_datasets::bags::write::{write_mcap_with, written_topic_map_in};
-use gpodo_datasets::log::write_log_csv;
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_datasets::sim::preset::Preset;
 use gpodo_experiments::config::ExperimentConfig;
 use gpodo_experiments::execute::bench::run_bench;
 use gpodo_experiments::execute::models::{fit_model, predict_csv};
@@ -16,7 +14,7 @@ use gpodo_experiments::plan::load_plan;
 use gpodo_experiments::report::bench::write_bench_report;
 use gpodo_experiments::report::sweep::write_sweep_report;
 use gpodo_experiments::runner::{RunOptions, Shard, results_dir, run_sweep};
-use gpodo_frontends::tum::{StampedPose, format_tum};
+use gpodo_experiments::simulate::{SimulateOptions, simulate_to};
 
 /// Learning odometry residuals with Gaussian processes, and using them to
 /// decide when a rover must look.
@@ -389,54 +387,21 @@ fn import(
     out: &Path,
     rover: Option<&Path>,
 ) -> anyhow::Result<()> {
-    use gpodo_datasets::bags::import::{TopicMap, import_bag};
-    let text = std::fs::read_to_string(topics)
-        .with_context(|| format!("reading the topic map {}", topics.display()))?;
-    let map: TopicMap =
-        serde_saphyr::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", topics.display()))?;
-    let mut stems = std::collections::BTreeSet::new();
-    for file in files {
-        let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned());
-        if !stems.insert(stem.clone()) {
-            anyhow::bail!(
-                "two inputs are named `{}`; their logs would overwrite each other (rename one)",
-                stem.unwrap_or_default()
-            );
-        }
-    }
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut logs = Vec::new();
-    for file in files {
-        let name = file.file_stem().map_or_else(
-            || "recording".to_string(),
-            |s| s.to_string_lossy().into_owned(),
-        );
-        let (log, report) = import_bag(file, &name, &map)?;
-        let (csv, _) = write_log_csv(&log, out)?;
-        if !report.vo_poses.is_empty() {
-            let poses: Vec<StampedPose> = report
-                .vo_poses
-                .iter()
-                .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
-                .collect();
-            let path = out.join(format!("{name}.vo.tum"));
-            let comment = format!(
-                "visual odometry of {} ({}), on the log's clock",
-                file.display(),
-                map.vo.as_deref().unwrap_or("vo")
-            );
-            std::fs::write(&path, format_tum(&comment, &poses))
-                .with_context(|| format!("writing {}", path.display()))?;
+    use gpodo_experiments::import::{import_bags, read_topic_map, unit_check};
+    let map = read_topic_map(topics)?;
+    let imported = import_bags(files, &map, out, |one| {
+        let (log, report) = (&one.log, &one.report);
+        if let Some(path) = &one.vo_tum {
             println!(
                 "wrote {} ({} poses; {} of them camera frames of the log; replay it with `frontend: {{vo: {{kind: replay, path: ...}}}}`)",
                 path.display(),
-                poses.len(),
+                report.vo_poses.len(),
                 log.camera_times_secs.len()
             );
         }
         println!(
             "wrote {} ({} rows at {} Hz, {} dropped in gaps; {:.1} s, {:.1} m of ground truth)",
-            csv.display(),
+            one.csv.display(),
             report.rows,
             map.rate_hz,
             report.rows_dropped,
@@ -452,28 +417,15 @@ fn import(
         if !report.damage.is_empty() {
             println!("  {}", report.damage);
         }
-        logs.push(log);
-    }
-    unit_check(&logs, rover)
-}
-
-/// The unit check of `gpodo import --rover`: the weighted-Jacobian model's
-/// speed against the ground truth's, printed, and a warning when it is
-/// far off.
-fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> anyhow::Result<()> {
-    use gpodo_experiments::config::MotionModelSpec;
+    })?;
     let Some(rover) = rover else {
         println!(
             "no unit check: give `--rover` (the robot's description) to compare the wheels' speed with the ground truth's"
         );
         return Ok(());
     };
-    let spec = MotionModelSpec::WeightedJacobian {
-        rover: Some(rover.to_path_buf()),
-        config: Default::default(),
-        attitude_without_imu: Default::default(),
-    };
-    match gpodo_experiments::execute::data::speed_ratio(&spec, logs)? {
+    let logs: Vec<_> = imported.into_iter().map(|one| one.log).collect();
+    match unit_check(&logs, rover)? {
         None => println!(
             "no unit check: fewer than {} seconds drive faster than {} m/s",
             gpodo_datasets::speed_check::MIN_MOVING_WINDOWS,
@@ -491,70 +443,9 @@ fn unit_check(logs: &[gpodo_datasets::log::RoverLog], rover: Option<&Path>) -> a
     Ok(())
 }
 
-fn simulate(
-    format: SimulateFormat,
-    preset: Preset,
-    seed: u64,
-    out: &Path,
-    (training_runs, training_run_secs): (Option<usize>, Option<f64>),
-    (units, no_imu): (gpodo_datasets::bags::write::WheelUnits, bool),
-) -> anyhow::Result<()> {
-    let mut config = SimulatorConfig::preset(preset, seed);
-    if let Some(n) = training_runs {
-        config.training_runs = n;
-    }
-    if let Some(s) = training_run_secs {
-        config.training_run_secs = s;
-    }
-    let mut testbed = config.simulate()?;
-    if no_imu {
-        for log in testbed.train.iter_mut().chain(testbed.test.iter_mut()) {
-            for sample in &mut log.samples {
-                sample.imu = None;
-            }
-        }
-    }
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    if format == SimulateFormat::Mcap {
-        let logs: Vec<_> = testbed.train.iter().chain(&testbed.test).collect();
-        for log in &logs {
-            let bag = write_mcap_with(log, out, &[], units)?;
-            println!(
-                "wrote {} ({} messages, {:.1} MB, {:.1} m)",
-                bag.path.display(),
-                bag.messages,
-                bag.bytes as f64 / 1e6,
-                log.path_length_m()
-            );
-        }
-        if let Some(first) = logs.first() {
-            let mut dts: Vec<f64> = first
-                .samples
-                .windows(2)
-                .map(|w| w[1].time_secs - w[0].time_secs)
-                .collect();
-            dts.sort_by(f64::total_cmp);
-            // The sample rate, to a micro-hertz (12.5 Hz for the ExoTeR preset).
-            let rate_hz = dts
-                .get(dts.len() / 2)
-                .map_or(10.0, |dt| (1e6 / dt).round() / 1e6);
-            let map = written_topic_map_in(first, rate_hz, units);
-            let path = out.join("topics.yaml");
-            let text = serde_saphyr::to_string(&map).context("writing the topic map")?;
-            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
-            println!("wrote {} (the topic map that imports them)", path.display());
-        }
-        return Ok(());
-    }
-    for log in testbed.train.iter().chain(&testbed.test) {
-        let (csv, camera) = write_log_csv(log, out)?;
-        println!(
-            "wrote {} ({} samples, {:.1} m) and {}",
-            csv.display(),
-            log.samples.len(),
-            log.path_length_m(),
-            camera.display()
-        );
+fn simulate(options: &SimulateOptions, out: &Path) -> anyhow::Result<()> {
+    for written in simulate_to(options, out)? {
+        println!("{written}");
     }
     Ok(())
 }
@@ -660,8 +551,19 @@ fn main() -> anyhow::Result<()> {
                     "--wheel-ticks-per-turn and --wheel-rate apply to `--format mcap`; a rover-log CSV is in rad and rad/s"
                 );
             }
-            let runs = (training_runs, training_run_secs);
-            simulate(format, preset, seed, &out, runs, (units, no_imu))
+            let options = SimulateOptions {
+                preset,
+                seed,
+                training_runs,
+                training_run_secs,
+                format: match format {
+                    SimulateFormat::Csv => gpodo_experiments::simulate::SimulateFormat::Csv,
+                    SimulateFormat::Mcap => gpodo_experiments::simulate::SimulateFormat::Mcap,
+                },
+                units,
+                imu: !no_imu,
+            };
+            simulate(&options, &out)
         }
     }
 }

@@ -1,7 +1,8 @@
-//! `dataset: {kind: bags}` reads ROS bags through a topic map (issue 17
-//! allows tests to read the shared Husky recording): the recording has no
-//! joint encoders, so the ExoTeR model refuses it naming the missing
-//! wheels; a topic the bag does not have is named with the bag's topics.
+//! `dataset: {kind: bags}` reads ROS bags through a topic map (tests may
+//! read the shared Husky recording in `../shared/data/ros/`): the
+//! recording has no joint encoders, so the ExoTeR model refuses it naming
+//! the missing wheels; a topic the bag does not have is named with the
+//! bag's topics.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 

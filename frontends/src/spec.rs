@@ -122,8 +122,10 @@ impl SelectorSpec {
     pub fn reads_residuals(&self) -> bool {
         match self {
             Self::FixedRate { .. } | Self::Oracle(_) | Self::FrontLoaded(_) => false,
+            Self::ResidualSchedule(_) | Self::UncertaintyBudget(_) | Self::Hysteresis { .. } => {
+                true
+            }
             Self::MaxGap { inner, .. } => inner.reads_residuals(),
-            _ => true,
         }
     }
 
@@ -133,7 +135,11 @@ impl SelectorSpec {
         match self {
             Self::Oracle(p) => p.same_as.as_ref(),
             Self::FrontLoaded(p) => Some(&p.same_as),
-            _ => None,
+            Self::FixedRate { .. }
+            | Self::ResidualSchedule(_)
+            | Self::UncertaintyBudget(_)
+            | Self::MaxGap { .. }
+            | Self::Hysteresis { .. } => None,
         }
     }
 
@@ -141,7 +147,12 @@ impl SelectorSpec {
     pub fn oracle(&self) -> Option<&OracleParams> {
         match self {
             Self::Oracle(p) => Some(p),
-            _ => None,
+            Self::FixedRate { .. }
+            | Self::ResidualSchedule(_)
+            | Self::UncertaintyBudget(_)
+            | Self::MaxGap { .. }
+            | Self::Hysteresis { .. }
+            | Self::FrontLoaded(_) => None,
         }
     }
 
@@ -178,7 +189,11 @@ impl SelectorSpec {
                 }
                 wrapper
             }
-            other => other.clone(),
+            // No drift budget inside these.
+            Self::FixedRate { .. }
+            | Self::ResidualSchedule(_)
+            | Self::Oracle(_)
+            | Self::FrontLoaded(_) => self.clone(),
         })
     }
 
@@ -190,7 +205,11 @@ impl SelectorSpec {
         match self {
             Self::Oracle(p) => p.validate(),
             Self::FrontLoaded(p) => p.validate(),
-            _ => self.build().map(|_| ()),
+            Self::FixedRate { .. }
+            | Self::ResidualSchedule(_)
+            | Self::UncertaintyBudget(_)
+            | Self::MaxGap { .. }
+            | Self::Hysteresis { .. } => self.build().map(|_| ()),
         }
     }
 

@@ -1,4 +1,4 @@
-//! Exact GP cost (issue: the baseline of every comparison must be fast):
+//! Exact GP cost (the baseline of every comparison must be fast):
 //! one LML + gradient evaluation and a fit at n = 500, 1000, 2000 with
 //! d = 18 and 28 inputs, 3 outputs, RBF-ARD; beside them, the dense
 //! reference the evaluation is judged against — one Cholesky plus one
@@ -14,6 +14,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::dense::recycle;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
@@ -22,8 +23,9 @@ use gpodo_regressors::hyperopt::HyperoptParams;
 use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_traits::ResidualRegressor;
 
-mod common;
-use common::{data, dataset};
+#[path = "../tests/support/mod.rs"]
+mod support;
+use support::{bench_data as data, dataset};
 
 const SIZES: [usize; 3] = [500, 1000, 2000];
 const DIMS: [usize; 2] = [18, 28];
@@ -42,7 +44,11 @@ fn evaluation(c: &mut Criterion) {
             let label = format!("n{n}_d{d}");
             group.bench_with_input(BenchmarkId::new("lml_and_gradient", &label), &n, |b, _| {
                 b.iter(|| {
-                    log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap()
+                    log_marginal_likelihood(
+                        GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()),
+                        true,
+                    )
+                    .unwrap()
                 })
             });
             let mut k = kernel.gram(x.as_ref());

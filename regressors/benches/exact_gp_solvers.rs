@@ -14,6 +14,7 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::dense::SpareLimit;
 use gpodo_regressors::exact_gp::iterative::{
     IterativeSettings, IterativeSolver, log_marginal_likelihood_iterative,
@@ -21,8 +22,9 @@ use gpodo_regressors::exact_gp::iterative::{
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 
-mod common;
-use common::data;
+#[path = "../tests/support/mod.rs"]
+mod support;
+use support::bench_data as data;
 
 const SIZES: [usize; 4] = [1000, 2000, 4000, 6000];
 const D: usize = 28;
@@ -48,16 +50,17 @@ fn solvers(c: &mut Criterion) {
             let label = format!("n{n}_noise{noise}");
             group.bench_with_input(BenchmarkId::new("dense", &label), &n, |b, _| {
                 b.iter(|| {
-                    log_marginal_likelihood(&kernel, noise, x.as_ref(), y.as_ref(), true).unwrap()
+                    log_marginal_likelihood(
+                        GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+                        true,
+                    )
+                    .unwrap()
                 })
             });
             group.bench_with_input(BenchmarkId::new("iterative", &label), &n, |b, _| {
                 b.iter(|| {
                     log_marginal_likelihood_iterative(
-                        &kernel,
-                        noise,
-                        x.as_ref(),
-                        y.as_ref(),
+                        GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
                         true,
                         &solver,
                         || false,

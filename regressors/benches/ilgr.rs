@@ -20,8 +20,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-mod common;
-use common::{data, dataset, rows};
+#[path = "../tests/support/mod.rs"]
+mod support;
+use support::{bench_data as data, dataset, sample_matrix as rows};
 
 const D: usize = 28;
 

@@ -19,10 +19,12 @@ use gpodo_regressors::kernels::{KernelExpr, KernelInit, LeafName};
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::inducing::place_inducing;
 use gpodo_regressors::sparse_gp::{Approximation, InducingParams, SparseGp, SparseGpParams};
+use gpodo_regressors::{GpProblem, SparseProblem};
 use gpodo_traits::ResidualRegressor;
 
-mod common;
-use common::{data, dataset};
+#[path = "../tests/support/mod.rs"]
+mod support;
+use support::{bench_data as data, dataset};
 
 const D: usize = 28;
 /// Iteration cap of the fit benchmark.
@@ -36,7 +38,10 @@ fn evaluation(c: &mut Criterion) {
     let kernel = KernelExpr::Leaf(LeafName::Rbf).build(D, &KernelInit::default());
     let (x, y) = data(2000, D);
     group.bench_function("exact_lml_and_gradient/n2000", |b| {
-        b.iter(|| log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap())
+        b.iter(|| {
+            log_marginal_likelihood(GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()), true)
+                .unwrap()
+        })
     });
     for n in [2000, 20_000] {
         let (x, y) = data(n, D);
@@ -54,13 +59,12 @@ fn evaluation(c: &mut Criterion) {
                 group.bench_function(id, |b| {
                     b.iter(|| {
                         sparse_objective(
-                            &kernel,
-                            0.1,
-                            z.as_ref(),
-                            x.as_ref(),
-                            y.as_ref(),
-                            method,
-                            1e-6,
+                            SparseProblem {
+                                gp: GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()),
+                                z: z.as_ref(),
+                                approximation: method,
+                                jitter: 1e-6,
+                            },
                             true,
                             true,
                         )

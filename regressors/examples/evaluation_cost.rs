@@ -14,6 +14,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 use faer::Mat;
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::dense::recycle;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
@@ -70,7 +71,8 @@ fn main() {
     let t = Instant::now();
     for _ in 0..reps {
         std::hint::black_box(
-            log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), false).unwrap(),
+            log_marginal_likelihood(GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()), false)
+                .unwrap(),
         );
     }
     println!(
@@ -80,7 +82,8 @@ fn main() {
     let t = Instant::now();
     for _ in 0..reps {
         std::hint::black_box(
-            log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap(),
+            log_marginal_likelihood(GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()), true)
+                .unwrap(),
         );
     }
     let evaluation = t.elapsed().as_secs_f64() * 1e3 / reps as f64;
@@ -101,7 +104,8 @@ fn main() {
             let floor = t.elapsed().as_secs_f64();
             let t = Instant::now();
             std::hint::black_box(
-                log_marginal_likelihood(&kernel, 0.1, x.as_ref(), y.as_ref(), true).unwrap(),
+                log_marginal_likelihood(GpProblem::new(&kernel, 0.1, x.as_ref(), y.as_ref()), true)
+                    .unwrap(),
             );
             t.elapsed().as_secs_f64() / floor
         })

@@ -20,6 +20,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::exact_gp::iterative::{
     IterativeSettings, IterativeSolver, log_marginal_likelihood_iterative,
 };
@@ -93,10 +94,7 @@ fn main() -> anyhow::Result<()> {
         None
     } else {
         Some(log_marginal_likelihood(
-            &group.kernel,
-            group.noise_variance,
-            x.as_ref(),
-            y.as_ref(),
+            GpProblem::new(&group.kernel, group.noise_variance, x.as_ref(), y.as_ref()),
             true,
         )?)
     };
@@ -127,10 +125,7 @@ fn main() -> anyhow::Result<()> {
         let solver = IterativeSolver::new(x.nrows(), settings);
         let t = Instant::now();
         let it = log_marginal_likelihood_iterative(
-            &group.kernel,
-            group.noise_variance,
-            x.as_ref(),
-            y.as_ref(),
+            GpProblem::new(&group.kernel, group.noise_variance, x.as_ref(), y.as_ref()),
             true,
             &solver,
             || false,

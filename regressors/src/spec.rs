@@ -185,6 +185,32 @@ impl RegressorSpec {
         }
     }
 
+    /// A rough relative cost of fitting on `n` rows, to start the longest
+    /// fits of a sweep first: `n³` per exact-GP fit times the kernel's
+    /// additive terms (a sum needs about twice the evaluations of one
+    /// kernel; `kernel: auto` fits every candidate); `n m²` for a sparse
+    /// GP; the warm-up GP's `w³` plus `n D²` for a sparse-spectrum GP; `n³`
+    /// for a plug-in, which may be anything and so starts early; `n` for
+    /// the models that pass over the data once.
+    pub fn fit_cost(&self, n: usize) -> f64 {
+        let n_rows = n as f64;
+        match self {
+            Self::ExactGp(p) => {
+                let fits: usize = match p.kernel.expr() {
+                    Some(k) => k.additive_terms(),
+                    None => p.kernel_candidates.iter().map(|k| k.additive_terms()).sum(),
+                };
+                n_rows.powi(3) * fits as f64
+            }
+            Self::SparseGp(p) => n_rows * (p.inducing.count.min(n) as f64).powi(2),
+            Self::SparseSpectrum(p) => {
+                (p.warmup_rows.min(n) as f64).powi(3) + n_rows * (p.features as f64).powi(2)
+            }
+            Self::External(_) => n_rows.powi(3),
+            Self::Zero { .. } | Self::Ilgr(_) | Self::Knn(_) => n_rows,
+        }
+    }
+
     /// Builds the runtime regressor.
     ///
     /// # Errors

@@ -7,6 +7,7 @@
 mod support;
 
 use faer::Mat;
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::{ExactGp, ExactGpParams, ExactGpState, OutputSharing};
 use gpodo_regressors::hyperopt::{Bounds, HyperoptParams, Optimizer};
@@ -41,17 +42,23 @@ fn lml_gradient_matches_finite_differences() {
             let y = Mat::from_fn(25, outputs, |i, c| y[(i, c)]);
             let kernel = random_kernel(&mut rng, expr, 3);
             let noise = 0.05;
-            let eval =
-                log_marginal_likelihood(&kernel, noise, x.as_ref(), y.as_ref(), true).unwrap();
+            let eval = log_marginal_likelihood(
+                GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+                true,
+            )
+            .unwrap();
             let analytic = eval.gradient.unwrap();
             let mut theta = kernel.log_params();
             theta.push(noise.ln());
             let lml_at = |t: &[f64]| {
                 let mut k = kernel.clone();
                 k.set_log_params(&t[..t.len() - 1]);
-                log_marginal_likelihood(&k, t[t.len() - 1].exp(), x.as_ref(), y.as_ref(), false)
-                    .unwrap()
-                    .lml
+                log_marginal_likelihood(
+                    GpProblem::new(&k, t[t.len() - 1].exp(), x.as_ref(), y.as_ref()),
+                    false,
+                )
+                .unwrap()
+                .lml
             };
             let h = 1e-5;
             for (k, a) in analytic.iter().enumerate() {
@@ -83,7 +90,8 @@ fn the_likelihood_and_its_gradient_are_bit_identical_whatever_the_thread_count()
         let kernel = random_kernel(&mut rng, expr, d);
         let at = |par: faer::Par| {
             faer::set_global_parallelism(par);
-            log_marginal_likelihood(&kernel, 0.05, x.as_ref(), y.as_ref(), true).unwrap()
+            log_marginal_likelihood(GpProblem::new(&kernel, 0.05, x.as_ref(), y.as_ref()), true)
+                .unwrap()
         };
         let sequential = at(faer::Par::Seq);
         for threads in [2, 3] {
@@ -108,9 +116,12 @@ fn one_and_two_point_cases_match_closed_forms() {
 
     let x1 = Mat::from_fn(1, 1, |_, _| 0.4);
     let y1 = Mat::from_fn(1, 1, |_, _| 0.9);
-    let lml = log_marginal_likelihood(&kernel, sn2, x1.as_ref(), y1.as_ref(), false)
-        .unwrap()
-        .lml;
+    let lml = log_marginal_likelihood(
+        GpProblem::new(&kernel, sn2, x1.as_ref(), y1.as_ref()),
+        false,
+    )
+    .unwrap()
+    .lml;
     let v = s2 + sn2;
     assert!((lml - (-0.5 * 0.81 / v - 0.5 * v.ln() - 0.5 * ln2pi)).abs() < 1e-14);
 
@@ -121,9 +132,12 @@ fn one_and_two_point_cases_match_closed_forms() {
     let det = a * a - b * b;
     let quad = (a * 1.0 + a * 0.25 - 2.0 * b * (1.0 * -0.5)) / det;
     let expected = -0.5 * quad - 0.5 * det.ln() - ln2pi;
-    let lml = log_marginal_likelihood(&kernel, sn2, x2.as_ref(), y2.as_ref(), false)
-        .unwrap()
-        .lml;
+    let lml = log_marginal_likelihood(
+        GpProblem::new(&kernel, sn2, x2.as_ref(), y2.as_ref()),
+        false,
+    )
+    .unwrap()
+    .lml;
     assert!((lml - expected).abs() < 1e-13, "{lml} vs {expected}");
 
     // Prediction from one point: mean k*·y/(σ²+σn²), variance σ² − k*²/(σ²+σn²).
@@ -629,10 +643,12 @@ fn a_warm_start_runs_from_the_previous_optimum_alone() {
     let g = &first.state().unwrap().groups[0];
     let state = warm.state().unwrap();
     let at_previous = log_marginal_likelihood(
-        &g.kernel,
-        g.noise_variance,
-        gpodo_regressors::dense::to_faer(&state.x_train).as_ref(),
-        gpodo_regressors::dense::to_faer(&state.y_train).as_ref(),
+        GpProblem::new(
+            &g.kernel,
+            g.noise_variance,
+            gpodo_regressors::dense::to_faer(&state.x_train).as_ref(),
+            gpodo_regressors::dense::to_faer(&state.y_train).as_ref(),
+        ),
         false,
     )
     .unwrap()

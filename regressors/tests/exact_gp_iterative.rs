@@ -8,6 +8,7 @@
 mod support;
 
 use faer::{Mat, MatRef};
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::exact_gp::iterative::mbcg::{batched_cg, lanczos_log_quadrature};
 use gpodo_regressors::exact_gp::iterative::pivoted_cholesky::pivoted_cholesky;
@@ -195,10 +196,7 @@ fn iterative(
 ) -> gpodo_regressors::exact_gp::iterative::IterativeEvaluation {
     let solver = IterativeSolver::new(x.nrows(), settings);
     log_marginal_likelihood_iterative(
-        kernel,
-        noise,
-        x.as_ref(),
-        y.as_ref(),
+        GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
         with_gradient,
         &solver,
         || false,
@@ -213,7 +211,9 @@ fn dense_and_iterative(
     y: &Mat<f64>,
     settings: &IterativeSettings,
 ) -> (f64, Vec<f64>, f64, Vec<f64>, usize) {
-    let dense = log_marginal_likelihood(kernel, noise, x.as_ref(), y.as_ref(), true).unwrap();
+    let dense =
+        log_marginal_likelihood(GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()), true)
+            .unwrap();
     let it = iterative(kernel, noise, x, y, *settings, true);
     (
         dense.lml,
@@ -480,9 +480,12 @@ fn on_exoter_inputs_the_estimate_is_within_half_a_nat_at_large_noise_and_knows_i
     // At the 1-s table's own noise (0.0216) Hutchinson's estimator spreads
     // by nats: each estimate says so, and its standard error is the
     // seeds' spread.
-    let dense = log_marginal_likelihood(&kernel, 0.0216, x.as_ref(), y.as_ref(), false)
-        .unwrap()
-        .lml;
+    let dense = log_marginal_likelihood(
+        GpProblem::new(&kernel, 0.0216, x.as_ref(), y.as_ref()),
+        false,
+    )
+    .unwrap()
+    .lml;
     let seeds = 20;
     let runs: Vec<(f64, f64)> = (0..seeds)
         .map(|seed| {
@@ -570,10 +573,7 @@ fn solver_auto_goes_dense_at_small_noise_and_iterative_at_large_noise_above_its_
         )
         .unwrap();
         let exact = log_marginal_likelihood(
-            &out.kernel,
-            out.noise_variance,
-            x.as_ref(),
-            y.as_ref(),
+            GpProblem::new(&out.kernel, out.noise_variance, x.as_ref(), y.as_ref()),
             false,
         )
         .unwrap()

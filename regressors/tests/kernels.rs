@@ -8,7 +8,7 @@ mod support;
 
 use faer::Mat;
 use gpodo_regressors::dense::frobenius_dot;
-use gpodo_regressors::kernels::{Kernel, KernelExpr, KernelInit};
+use gpodo_regressors::kernels::{GradientTargets, Kernel, KernelExpr, KernelInit};
 use support::*;
 
 const EXPRESSIONS: [&str; 13] = [
@@ -93,8 +93,10 @@ fn cross_and_diagonal_gradients_match_finite_differences() {
             x2.as_ref(),
             &cache,
             w.as_ref(),
-            Some(&mut analytic),
-            Some((&mut dx1, 1.0)),
+            GradientTargets {
+                params: Some(&mut analytic),
+                inputs: Some((&mut dx1, 1.0)),
+            },
         );
         let value = |k: &Kernel, x1: &Mat<f64>| {
             frobenius_dot(w.as_ref(), k.cross(x1.as_ref(), x2.as_ref()).as_ref())

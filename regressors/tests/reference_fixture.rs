@@ -9,6 +9,7 @@
 
 mod support;
 
+use gpodo_regressors::GpProblem;
 use gpodo_regressors::exact_gp::likelihood::log_marginal_likelihood;
 use gpodo_regressors::exact_gp::posterior::Posterior;
 use serde::Deserialize;
@@ -55,8 +56,11 @@ fn lml_gradient_and_predictions_agree_with_gpy() {
     assert_eq!(fixture.cases.len(), 10);
     for case in &fixture.cases {
         let k = kernel(&case.combine, &case.parts);
-        let eval =
-            log_marginal_likelihood(&k, case.noise_variance, x.as_ref(), y.as_ref(), true).unwrap();
+        let eval = log_marginal_likelihood(
+            GpProblem::new(&k, case.noise_variance, x.as_ref(), y.as_ref()),
+            true,
+        )
+        .unwrap();
         assert_eq!(eval.jitter, 0.0, "{}", case.name);
         assert!(
             close(eval.lml, case.log_marginal_likelihood),

@@ -15,6 +15,7 @@ use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::{
     Approximation, InducingInit, InducingParams, SparseGp, SparseGpParams, SparseGpState,
 };
+use gpodo_regressors::{GpProblem, SparseProblem};
 use gpodo_traits::{ResidualRegressor, SampleMatrix};
 use support::*;
 
@@ -42,13 +43,12 @@ fn objective_gradients_match_finite_differences() {
                 let noise = 0.07;
                 let at = |k: &gpodo_regressors::Kernel, s: f64, z: &Mat<f64>| {
                     sparse_objective(
-                        k,
-                        s,
-                        z.as_ref(),
-                        x.as_ref(),
-                        y.as_ref(),
-                        method,
-                        1e-8,
+                        SparseProblem {
+                            gp: GpProblem::new(&k, s, x.as_ref(), y.as_ref()),
+                            z: z.as_ref(),
+                            approximation: method,
+                            jitter: 1e-8,
+                        },
                         false,
                         false,
                     )
@@ -56,13 +56,12 @@ fn objective_gradients_match_finite_differences() {
                     .value
                 };
                 let eval = sparse_objective(
-                    &kernel,
-                    noise,
-                    z.as_ref(),
-                    x.as_ref(),
-                    y.as_ref(),
-                    method,
-                    1e-8,
+                    SparseProblem {
+                        gp: GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+                        z: z.as_ref(),
+                        approximation: method,
+                        jitter: 1e-8,
+                    },
                     true,
                     true,
                 )
@@ -131,18 +130,20 @@ fn inducing_points_at_the_training_points_reproduce_the_exact_gp() {
     let y = targets(&mut rng, &x, 0.1);
     let kernel = random_kernel(&mut rng, "rbf + linear", d);
     let noise = 0.05;
-    let exact = log_marginal_likelihood(&kernel, noise, x.as_ref(), y.as_ref(), false)
-        .unwrap()
-        .lml;
+    let exact = log_marginal_likelihood(
+        GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+        false,
+    )
+    .unwrap()
+    .lml;
     for method in METHODS {
         let sparse = sparse_objective(
-            &kernel,
-            noise,
-            x.as_ref(),
-            x.as_ref(),
-            y.as_ref(),
-            method,
-            0.0,
+            SparseProblem {
+                gp: GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+                z: x.as_ref(),
+                approximation: method,
+                jitter: 0.0,
+            },
             false,
             false,
         )
@@ -205,21 +206,21 @@ fn vfe_is_a_lower_bound_that_tightens_with_more_inducing_points() {
     let x = inputs(&mut rng, n, d);
     let y = targets(&mut rng, &x, 0.1);
     let kernel = random_kernel(&mut rng, "rbf", d);
-    let exact = log_marginal_likelihood(&kernel, 0.05, x.as_ref(), y.as_ref(), false)
-        .unwrap()
-        .lml;
+    let exact =
+        log_marginal_likelihood(GpProblem::new(&kernel, 0.05, x.as_ref(), y.as_ref()), false)
+            .unwrap()
+            .lml;
     let mut previous = f64::NEG_INFINITY;
     for m in [5, 20, 60, 120] {
         // Nested subsets: every m-th row set contains the previous one.
         let z = Mat::from_fn(m, d, |i, q| x[(i, q)]);
         let bound = sparse_objective(
-            &kernel,
-            0.05,
-            z.as_ref(),
-            x.as_ref(),
-            y.as_ref(),
-            Approximation::Vfe,
-            0.0,
+            SparseProblem {
+                gp: GpProblem::new(&kernel, 0.05, x.as_ref(), y.as_ref()),
+                z: z.as_ref(),
+                approximation: Approximation::Vfe,
+                jitter: 0.0,
+            },
             false,
             false,
         )

@@ -14,6 +14,7 @@ use std::collections::BTreeMap;
 
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::{Approximation, SparsePosterior};
+use gpodo_regressors::{GpProblem, SparseProblem};
 use serde::Deserialize;
 use support::gpy_fixture::{Part, gpy_kernel_gradient, kernel, matrix};
 
@@ -68,13 +69,12 @@ fn bound_gradients_and_predictions_agree_with_gpy() {
         };
         let k = kernel(&case.combine, &case.parts);
         let eval = sparse_objective(
-            &k,
-            case.noise_variance,
-            z.as_ref(),
-            x.as_ref(),
-            y.as_ref(),
-            approximation,
-            case.jitter,
+            SparseProblem {
+                gp: GpProblem::new(&k, case.noise_variance, x.as_ref(), y.as_ref()),
+                z: z.as_ref(),
+                approximation,
+                jitter: case.jitter,
+            },
             true,
             true,
         )
@@ -114,15 +114,12 @@ fn bound_gradients_and_predictions_agree_with_gpy() {
                 );
             }
         }
-        let posterior = SparsePosterior::new(
-            k,
-            case.noise_variance,
-            z.clone(),
-            x.as_ref(),
-            y.as_ref(),
+        let posterior = SparsePosterior::new(SparseProblem {
+            gp: GpProblem::new(&k, case.noise_variance, x.as_ref(), y.as_ref()),
+            z: z.as_ref(),
             approximation,
-            case.jitter,
-        )
+            jitter: case.jitter,
+        })
         .unwrap();
         let m = posterior.predict(xs.as_ref());
         for i in 0..xs.nrows() {

@@ -14,6 +14,7 @@ pub mod calibration;
 pub mod data;
 pub mod feature_supply;
 pub mod fit;
+pub mod latency;
 pub mod models;
 pub mod odometry;
 pub mod prequential;

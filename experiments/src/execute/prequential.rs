@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{PrequentialSettings, RefitStart};
 use crate::error::PipelineError;
-use crate::execute::bench::Latency;
+use crate::execute::latency::Latency;
 
 /// One contender's prequential scores.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

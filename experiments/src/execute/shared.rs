@@ -121,31 +121,6 @@ fn runs_alone(needed: Option<u64>, available: Option<u64>, threads: u64) -> bool
     )
 }
 
-/// A rough relative cost of fitting `spec` on `n` rows, to start the
-/// longest fits first: `n³` per exact-GP evaluation, times the kernel's
-/// terms (a sum needs about twice the evaluations of one kernel); `n m²`
-/// for a sparse GP; `n` for the rest.
-fn fit_cost(spec: &gpodo_regressors::RegressorSpec, n: usize) -> f64 {
-    use gpodo_regressors::RegressorSpec;
-    let n = n as f64;
-    match spec {
-        RegressorSpec::ExactGp(p) => {
-            let terms =
-                |k: &gpodo_regressors::kernels::KernelExpr| k.to_string().split('+').count();
-            let fits: usize = match p.kernel.expr() {
-                Some(k) => terms(k),
-                // `kernel: auto` fits every candidate.
-                None => p.kernel_candidates.iter().map(terms).sum(),
-            };
-            n.powi(3) * fits as f64
-        }
-        RegressorSpec::SparseGp(p) => n * (p.inducing.count as f64).powi(2),
-        // A plugin may be anything; start it early.
-        RegressorSpec::External(_) => n.powi(3),
-        _ => n,
-    }
-}
-
 /// Fits one distinct regressor (on |residual| targets when `absolute`) and
 /// predicts its windows on the traverses.
 fn fit_shared(
@@ -259,7 +234,7 @@ impl SharedWork {
         // a sweep on two cores can end with one long fit running alone.
         let mut fits: Vec<_> = fits
             .into_iter()
-            .map(|(key, fit)| (fit_cost(fit.0, fit.2.rows.train.len()), key, fit))
+            .map(|(key, fit)| (fit.0.fit_cost(fit.2.rows.train.len()), key, fit))
             .collect();
         fits.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let run = |(key, (spec, absolute, p)): (String, FitJob<'_>)| {

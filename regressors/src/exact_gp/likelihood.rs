@@ -15,9 +15,8 @@
 use faer::{Mat, MatRef};
 
 use super::cholesky::Cholesky;
-use crate::RegressorError;
 use crate::dense::{column, for_column_blocks, recycle, trace};
-use crate::kernels::Kernel;
+use crate::{GpProblem, RegressorError};
 
 /// `log 2π`.
 pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_3;
@@ -64,17 +63,21 @@ fn weights_lower(mut inverse_lower: Mat<f64>, alpha: MatRef<'_, f64>) -> Mat<f64
     inverse_lower
 }
 
-/// Evaluates the log marginal likelihood, and its gradient when asked.
+/// Evaluates the log marginal likelihood of `problem`, and its gradient
+/// when asked.
 ///
 /// # Errors
 /// [`RegressorError::NotPositiveDefinite`] when `K_y` cannot be factorised.
 pub fn log_marginal_likelihood(
-    kernel: &Kernel,
-    noise_variance: f64,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
+    problem: GpProblem<'_>,
     with_gradient: bool,
 ) -> Result<LmlEvaluation, RegressorError> {
+    let GpProblem {
+        kernel,
+        noise_variance,
+        x,
+        y,
+    } = problem;
     let n = y.nrows();
     // Only lower triangles are formed and read from here on.
     let cache = kernel.gram_lower_with_cache(x);

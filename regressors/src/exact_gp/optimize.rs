@@ -9,10 +9,10 @@ use gpodo_traits::StartRecord;
 use super::iterative::{IterativeSolver, log_marginal_likelihood_iterative};
 use super::likelihood::log_marginal_likelihood;
 use super::params::{ExactGpParams, Solver};
-use crate::RegressorError;
 use crate::hyperopt::starts::{self, EXACT_GP_HALVE_AFTER};
 use crate::hyperopt::{HyperProblem, HyperoptParams, Objective, ProgressSink, SearchSpace};
 use crate::kernels::Kernel;
+use crate::{GpProblem, RegressorError};
 
 /// A learned noise variance (of standardised targets) below which the
 /// iterative solver's stochastic estimates spread widely: on the ExoTeR
@@ -89,19 +89,15 @@ impl Lml<'_> {
         with_gradient: bool,
     ) -> Result<(f64, Option<Vec<f64>>), RegressorError> {
         let (kernel, noise) = self.hyperparameters(log_theta);
+        let problem = GpProblem::new(&kernel, noise, self.x, self.y);
         match &self.iterative {
-            None => log_marginal_likelihood(&kernel, noise, self.x, self.y, with_gradient)
-                .map(|e| (e.lml, e.gradient)),
-            Some(solver) => log_marginal_likelihood_iterative(
-                &kernel,
-                noise,
-                self.x,
-                self.y,
-                with_gradient,
-                solver,
-                || self.progress.stop_requested(),
-            )
-            .map(|e| (e.lml, e.gradient)),
+            None => log_marginal_likelihood(problem, with_gradient).map(|e| (e.lml, e.gradient)),
+            Some(solver) => {
+                log_marginal_likelihood_iterative(problem, with_gradient, solver, || {
+                    self.progress.stop_requested()
+                })
+                .map(|e| (e.lml, e.gradient))
+            }
         }
     }
 }

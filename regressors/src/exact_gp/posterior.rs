@@ -12,9 +12,9 @@ use super::cholesky::Cholesky;
 use super::iterative::love::KrylovVariance;
 use super::iterative::{IterativeSolver, iterative_posterior};
 use super::likelihood::lml_from_factor;
-use crate::RegressorError;
 use crate::dense::gemm;
 use crate::kernels::Kernel;
+use crate::{GpProblem, RegressorError};
 
 /// Predictive moments in the (standardised) units the posterior was built in.
 #[derive(Debug, Clone)]
@@ -101,14 +101,8 @@ impl Posterior {
         solver: &IterativeSolver,
         variance_rank: usize,
     ) -> Result<Self, RegressorError> {
-        let solved = iterative_posterior(
-            &kernel,
-            noise_variance,
-            x.as_ref(),
-            y.as_ref(),
-            solver,
-            variance_rank,
-        )?;
+        let problem = GpProblem::new(&kernel, noise_variance, x.as_ref(), y.as_ref());
+        let solved = iterative_posterior(problem, solver, variance_rank)?;
         Ok(Self {
             kernel,
             noise_variance,

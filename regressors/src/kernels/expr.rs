@@ -66,6 +66,16 @@ impl Default for KernelInit {
 }
 
 impl KernelExpr {
+    /// The number of additive terms, nested sums flattened: 1 for a leaf
+    /// or a product, `Σ` of the children's for a sum (`rbf + linear` has
+    /// 2, `(rbf + linear) + white` 3, `(rbf + linear) * white` 1).
+    pub fn additive_terms(&self) -> usize {
+        match self {
+            Self::Leaf(_) | Self::Product(_) => 1,
+            Self::Sum(children) => children.iter().map(Self::additive_terms).sum(),
+        }
+    }
+
     /// Parses an expression such as `rbf + linear` or `(rbf + linear) * matern32`.
     ///
     /// # Errors
@@ -110,7 +120,7 @@ impl fmt::Display for KernelExpr {
                     .iter()
                     .map(|x| match x {
                         Self::Sum(_) => format!("({x})"),
-                        _ => x.to_string(),
+                        Self::Leaf(_) | Self::Product(_) => x.to_string(),
                     })
                     .collect();
                 f.write_str(&parts.join(" * "))

@@ -9,7 +9,7 @@ use std::str::FromStr;
 use faer::{Mat, MatRef};
 
 use super::expr::KernelInit;
-use super::{GramCache, Linear, ParamKind, RatQuad, Stationary, White};
+use super::{GradientTargets, GramCache, Linear, ParamKind, RatQuad, Stationary, White};
 use crate::dense::trace;
 use crate::kernels::profile::Family;
 
@@ -364,21 +364,16 @@ impl LeafKernel {
         x2: MatRef<'_, f64>,
         cache: &GramCache,
         w: MatRef<'_, f64>,
-        out: Option<&mut [f64]>,
-        dx1: Option<(&mut Mat<f64>, f64)>,
+        to: GradientTargets<'_>,
     ) {
         match self {
             Self::Rbf(s) | Self::Matern52(s) | Self::Matern32(s) => {
-                s.accumulate_cross_gradient(x1, x2, &cache.k, cache.s.as_ref(), w, out, dx1);
+                s.accumulate_cross_gradient(x1, x2, cache, w, to);
             }
-            Self::Linear(l) => l.accumulate_cross_gradient(x1, x2, w, out, dx1),
+            Self::Linear(l) => l.accumulate_cross_gradient(x1, x2, w, to),
             // White noise has no cross-covariance.
             Self::White(_) => {}
-            Self::RatQuad(r) => {
-                if let (Some(s), Some(a)) = (cache.s.as_ref(), cache.a.as_ref()) {
-                    r.accumulate_cross_gradient(x1, x2, &cache.k, s, a, w, out, dx1);
-                }
-            }
+            Self::RatQuad(r) => r.accumulate_cross_gradient(x1, x2, cache, w, to),
         }
     }
 

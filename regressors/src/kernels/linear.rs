@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 
+use super::GradientTargets;
 use crate::dense::{gemm, par, symmetric_times};
 
 /// Hyperparameters of the linear kernel.
@@ -74,16 +75,19 @@ impl Linear {
         }
     }
 
-    /// Adds `Σ_ij W_ij ∂K(X1, X2)_ij/∂log v_q` to `out` and, when asked,
-    /// `input_factor · Σ_j W_ij ∂K_ij/∂X1_iq` to `dx1`.
+    /// Adds `Σ_ij W_ij ∂K(X1, X2)_ij/∂log v_q` to `to.params` and, when
+    /// asked, `factor · Σ_j W_ij ∂K_ij/∂X1_iq` to `to.inputs`.
     pub fn accumulate_cross_gradient(
         &self,
         x1: MatRef<'_, f64>,
         x2: MatRef<'_, f64>,
         w: MatRef<'_, f64>,
-        out: Option<&mut [f64]>,
-        dx1: Option<(&mut Mat<f64>, f64)>,
+        to: GradientTargets<'_>,
     ) {
+        let GradientTargets {
+            params: out,
+            inputs: dx1,
+        } = to;
         let (n1, d) = (x1.nrows(), x1.ncols());
         let mut wx2 = Mat::<f64>::zeros(n1, d);
         gemm(wx2.as_mut(), Accum::Replace, w, x2, 1.0);

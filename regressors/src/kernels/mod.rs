@@ -22,6 +22,7 @@ mod stationary;
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
+pub use cross::GradientTargets;
 pub use distance::median_pairwise_distance;
 pub use expr::{KernelExpr, KernelExprError, KernelInit};
 pub use leaf::{LeafKernel, LeafName, UnknownLeaf};

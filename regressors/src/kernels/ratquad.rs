@@ -13,8 +13,8 @@
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
-use super::Stationary;
 use super::distance::{scaled_sq_dist, scaled_sq_dist_lower};
+use super::{GradientTargets, GramCache, Stationary};
 use crate::dense::{column, for_column_blocks, frobenius_dot};
 
 /// Hyperparameters of the rational quadratic kernel.
@@ -153,35 +153,38 @@ impl RatQuad {
 
     /// As [`Stationary::accumulate_cross_gradient`], with the power's
     /// gradient after the lengthscales'.
-    #[allow(clippy::too_many_arguments)]
     pub fn accumulate_cross_gradient(
         &self,
         x1: MatRef<'_, f64>,
         x2: MatRef<'_, f64>,
-        k: &Mat<f64>,
-        s: &Mat<f64>,
-        a: &Mat<f64>,
+        cache: &GramCache,
         w: MatRef<'_, f64>,
-        out: Option<&mut [f64]>,
-        dx1: Option<(&mut Mat<f64>, f64)>,
+        to: GradientTargets<'_>,
     ) {
         let d = self.lengthscales.len();
-        match out {
+        let GradientTargets { params, inputs } = to;
+        match params {
             Some(out) => {
-                self.stationary().accumulate_cross_gradient(
-                    x1,
-                    x2,
-                    k,
-                    Some(s),
-                    w,
-                    Some(&mut out[..=d]),
-                    dx1,
-                );
-                out[d + 1] += frobenius_dot(w, a.as_ref());
+                let stationary = GradientTargets {
+                    params: Some(&mut out[..=d]),
+                    inputs,
+                };
+                self.stationary()
+                    .accumulate_cross_gradient(x1, x2, cache, w, stationary);
+                if let Some(a) = cache.a.as_ref() {
+                    out[d + 1] += frobenius_dot(w, a.as_ref());
+                }
             }
-            None => self
-                .stationary()
-                .accumulate_cross_gradient(x1, x2, k, Some(s), w, None, dx1),
+            None => self.stationary().accumulate_cross_gradient(
+                x1,
+                x2,
+                cache,
+                w,
+                GradientTargets {
+                    params: None,
+                    inputs,
+                },
+            ),
         }
     }
 }

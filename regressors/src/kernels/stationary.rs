@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::distance::{column_means, scaled_sq_dist, scaled_sq_dist_lower, shift_scale};
 use super::profile::Family;
+use super::{GradientTargets, GramCache};
 use crate::dense::{column, for_column_blocks, frobenius_dot, gemm, hadamard, symmetric_times};
 
 /// Hyperparameters of a stationary ARD kernel.
@@ -181,23 +182,25 @@ impl Stationary {
         }
     }
 
-    /// For `K(X1, X2)` with value `k` and derivative matrix `s` (see
-    /// [`Stationary::cross_with_s`]): adds `Σ_ij W_ij ∂K_ij/∂θ` to `out`
-    /// and, when asked, `Σ_j W_ij ∂K_ij/∂X1_iq` to `dx1` (scaled by
-    /// `input_factor`, 2 for a Gram matrix with symmetric `W`, whose every
-    /// entry depends on both of its points).
-    #[allow(clippy::too_many_arguments)]
+    /// For `K(X1, X2)` with value `cache.k` and derivative matrix `cache.s`
+    /// (see [`Stationary::cross_with_s`]): adds `Σ_ij W_ij ∂K_ij/∂θ` to
+    /// `to.params` and, when asked, `Σ_j W_ij ∂K_ij/∂X1_iq` to `to.inputs`
+    /// (scaled by its factor, 2 for a Gram matrix with symmetric `W`, whose
+    /// every entry depends on both of its points).
     pub fn accumulate_cross_gradient(
         &self,
         x1: MatRef<'_, f64>,
         x2: MatRef<'_, f64>,
-        k: &Mat<f64>,
-        s: Option<&Mat<f64>>,
+        cache: &GramCache,
         w: MatRef<'_, f64>,
-        out: Option<&mut [f64]>,
-        dx1: Option<(&mut Mat<f64>, f64)>,
+        to: GradientTargets<'_>,
     ) {
-        let s = s.unwrap_or(k);
+        let GradientTargets {
+            params: out,
+            inputs: dx1,
+        } = to;
+        let k = &cache.k;
+        let s = cache.s.as_ref().unwrap_or(k);
         let m = hadamard(w, s.as_ref());
         let sums = CrossSums::new(x1, x2, m.as_ref());
         if let Some(out) = out {

@@ -26,13 +26,13 @@
 //! and inducing-input gradients without per-hyperparameter `m × n`
 //! temporaries.
 
-use faer::{Accum, Mat, MatRef};
+use faer::{Accum, Mat};
 
 use super::params::Approximation;
-use crate::RegressorError;
 use crate::dense::gemm;
 use crate::exact_gp::cholesky::Cholesky;
-use crate::kernels::{GramCache, Kernel};
+use crate::kernels::{GradientTargets, GramCache};
+use crate::{RegressorError, SparseProblem};
 
 /// `log 2π`.
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
@@ -93,17 +93,16 @@ fn scale_columns(m: &Mat<f64>, w: &[f64]) -> Mat<f64> {
 }
 
 /// Builds the factors and the objective.
-pub(super) fn factorize(
-    kernel: &Kernel,
-    noise_variance: f64,
-    z: MatRef<'_, f64>,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
-    approximation: Approximation,
-    jitter: f64,
-) -> Result<Factors, RegressorError> {
+pub(super) fn factorize(problem: &SparseProblem<'_>) -> Result<Factors, RegressorError> {
+    let SparseProblem {
+        gp,
+        z,
+        approximation,
+        jitter,
+    } = *problem;
+    let (kernel, x, y) = (gp.kernel, gp.x, gp.y);
     let (n, m, p) = (x.nrows(), z.nrows(), y.ncols());
-    let s = noise_variance;
+    let s = gp.noise_variance;
     let cache_uu = kernel.gram_with_cache(z);
     let mut kuu = cache_uu.k.clone();
     for i in 0..m {
@@ -161,25 +160,18 @@ pub(super) fn factorize(
     })
 }
 
-/// Evaluates the objective, with the hyperparameter gradient when
-/// `with_gradient` and the inducing-input gradient when also
+/// Evaluates the objective of `problem`, with the hyperparameter gradient
+/// when `with_gradient` and the inducing-input gradient when also
 /// `with_inducing_gradient`.
 ///
 /// # Errors
 /// [`RegressorError::NotPositiveDefinite`] when `K_uu` cannot be factorised.
-#[allow(clippy::too_many_arguments)]
 pub fn sparse_objective(
-    kernel: &Kernel,
-    noise_variance: f64,
-    z: MatRef<'_, f64>,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
-    approximation: Approximation,
-    jitter: f64,
+    problem: SparseProblem<'_>,
     with_gradient: bool,
     with_inducing_gradient: bool,
 ) -> Result<BoundEvaluation, RegressorError> {
-    let f = factorize(kernel, noise_variance, z, x, y, approximation, jitter)?;
+    let f = factorize(&problem)?;
     let mut out = BoundEvaluation {
         value: f.value,
         gradient: None,
@@ -189,8 +181,15 @@ pub fn sparse_objective(
     if !with_gradient {
         return Ok(out);
     }
+    let SparseProblem {
+        gp,
+        z,
+        approximation,
+        ..
+    } = problem;
+    let (kernel, x, y) = (gp.kernel, gp.x, gp.y);
     let (n, m, p) = (x.nrows(), z.nrows(), y.ncols());
-    let (pf, s) = (p as f64, noise_variance);
+    let (pf, s) = (p as f64, gp.noise_variance);
     // γ = B⁻¹ A Λ^{-1/2} Y (β = L⁻ᵀγ), R = K_fu β = (L⁻¹K_uf)ᵀ γ.
     let gamma = f.lb.solve_upper(f.c.as_ref());
     let mut r = Mat::<f64>::zeros(n, p);
@@ -300,12 +299,20 @@ pub fn sparse_objective(
         x,
         &f.cache_uf,
         guf.as_ref(),
-        Some(&mut gradient[..k]),
-        dz.as_mut().map(|d| (d, 1.0)),
+        GradientTargets {
+            params: Some(&mut gradient[..k]),
+            inputs: dz.as_mut().map(|d| (d, 1.0)),
+        },
     );
     kernel.accumulate_diag_gradient(x, &g_kdiag, &mut gradient[..k]);
     if let Some(d) = dz.as_mut() {
-        kernel.accumulate_cross_gradient(z, z, &f.cache_uu, guu.as_ref(), None, Some((d, 2.0)));
+        kernel.accumulate_cross_gradient(
+            z,
+            z,
+            &f.cache_uu,
+            guu.as_ref(),
+            GradientTargets::inputs(d, 2.0),
+        );
     }
     gradient[k] = s * g_s;
     out.gradient = Some(gradient);

@@ -17,13 +17,13 @@ use super::bound::sparse_objective;
 use super::inducing::place_inducing;
 use super::params::{Approximation, SparseGpParams};
 use super::posterior::SparsePosterior;
-use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
 use crate::hyperopt::{HyperProblem, Objective, ProgressSink, SearchSpace, learn, starts};
 use crate::kernels::Kernel;
 use crate::scaling::{
     GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
 };
+use crate::{GpProblem, RegressorError, SparseProblem};
 
 /// Everything needed to predict with a trained sparse GP: `O(m²)` numbers,
 /// no training data.
@@ -116,17 +116,13 @@ impl SparseObjective<'_> {
 impl Objective for SparseObjective<'_> {
     fn evaluate(&self, coords: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
         let (kernel, noise, z) = self.unpack(coords);
-        let eval = sparse_objective(
-            &kernel,
-            noise,
-            z.as_ref(),
-            self.x,
-            self.y,
-            self.approximation,
-            self.jitter,
-            true,
-            self.learn_inducing,
-        )?;
+        let problem = SparseProblem {
+            gp: GpProblem::new(&kernel, noise, self.x, self.y),
+            z: z.as_ref(),
+            approximation: self.approximation,
+            jitter: self.jitter,
+        };
+        let eval = sparse_objective(problem, true, self.learn_inducing)?;
         let mut gradient = eval.gradient.unwrap_or_default();
         if let Some(dz) = eval.inducing_gradient {
             for i in 0..dz.nrows() {
@@ -235,15 +231,12 @@ impl SparseGp {
                 Learned::default(),
             )
         };
-        let posterior = SparsePosterior::new(
-            kernel,
-            noise,
-            z,
-            x.as_ref(),
-            y.as_ref(),
-            p.approximation,
-            p.jitter,
-        )?;
+        let posterior = SparsePosterior::new(SparseProblem {
+            gp: GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+            z: z.as_ref(),
+            approximation: p.approximation,
+            jitter: p.jitter,
+        })?;
         let report = FitReport {
             n_samples: data.len(),
             duration_secs: start.elapsed().as_secs_f64(),

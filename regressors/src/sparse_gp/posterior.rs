@@ -7,11 +7,10 @@
 use faer::{Accum, Mat, MatRef};
 
 use super::bound::factorize;
-use super::params::Approximation;
-use crate::RegressorError;
 use crate::dense::gemm;
 use crate::exact_gp::posterior::Moments;
 use crate::kernels::Kernel;
+use crate::{RegressorError, SparseProblem};
 
 /// A conditioned sparse GP.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,30 +32,14 @@ pub struct SparsePosterior {
 }
 
 impl SparsePosterior {
-    /// Conditions the sparse GP on `(x, y)`.
+    /// Conditions the sparse GP of `problem` on its data; the posterior
+    /// keeps copies of the kernel and the inducing inputs.
     ///
     /// # Errors
     /// [`RegressorError::NotPositiveDefinite`] when `K_uu` cannot be factorised.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        kernel: Kernel,
-        noise_variance: f64,
-        inducing: Mat<f64>,
-        x: MatRef<'_, f64>,
-        y: MatRef<'_, f64>,
-        approximation: Approximation,
-        jitter: f64,
-    ) -> Result<Self, RegressorError> {
-        let f = factorize(
-            &kernel,
-            noise_variance,
-            inducing.as_ref(),
-            x,
-            y,
-            approximation,
-            jitter,
-        )?;
-        let m = inducing.nrows();
+    pub fn new(problem: SparseProblem<'_>) -> Result<Self, RegressorError> {
+        let f = factorize(&problem)?;
+        let m = problem.n_inducing();
         let gamma = f.lb.solve_upper(f.c.as_ref());
         let weights = f.l.solve_upper(gamma.as_ref());
         // P = L⁻ᵀ (I − B⁻¹) L⁻¹.
@@ -68,9 +51,9 @@ impl SparsePosterior {
         let pt = f.l.solve_upper(t.transpose());
         let variance_matrix = Mat::from_fn(m, m, |a, b| 0.5 * (pt[(a, b)] + pt[(b, a)]));
         Ok(Self {
-            kernel,
-            noise_variance,
-            inducing,
+            kernel: problem.gp.kernel.clone(),
+            noise_variance: problem.gp.noise_variance,
+            inducing: problem.z.to_owned(),
             weights,
             variance_matrix,
             objective: f.value,

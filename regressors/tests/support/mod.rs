@@ -1,5 +1,6 @@
-//! Shared fixtures of the regressor tests: seeded random inputs, targets,
-//! hyperparameters and weight matrices.
+//! Shared fixtures of the regressor tests and benches: seeded random
+//! inputs, targets, hyperparameters and weight matrices. The benches load
+//! this same file (`#[path]`), so there is one copy.
 
 #![allow(dead_code)]
 
@@ -50,6 +51,18 @@ pub fn targets(rng: &mut ChaCha8Rng, x: &Mat<f64>, noise: f64) -> Mat<f64> {
         };
         v + noise * rng.random_range(-1.0..1.0)
     })
+}
+
+/// The benches' data: standardised-looking inputs and 3 smooth noisy
+/// outputs (`d ≥ 6`), from a fixed seed.
+pub fn bench_data(n: usize, d: usize) -> (Mat<f64>, Mat<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(2026);
+    let x = Mat::from_fn(n, d, |_, _| rng.random_range(-1.7..1.7));
+    let y = Mat::from_fn(n, 3, |i, c| {
+        let s: f64 = (0..4).map(|q| x[(i, (q + c) % d)]).sum();
+        (0.7 * s).sin() + 0.3 * x[(i, c)] * x[(i, 5)] + rng.random_range(-0.2..0.2)
+    });
+    (x, y)
 }
 
 /// Row-major copy of a faer matrix.

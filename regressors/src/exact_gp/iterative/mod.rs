@@ -32,10 +32,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::RegressorError;
 use crate::dense::{par, symmetric_times, trace};
 use crate::exact_gp::likelihood::LN_2PI;
-use crate::kernels::Kernel;
+use crate::{GpProblem, RegressorError};
 use mbcg::{batched_cg, lanczos_log_quadrature};
 use preconditioner::Preconditioner;
 
@@ -167,8 +166,8 @@ pub struct IterativeEvaluation {
     pub lml_standard_error: f64,
 }
 
-/// The log marginal likelihood of the exact GP with `kernel` and noise
-/// `noise_variance` on `(x, y)` by `solver`'s iterative solves, and its
+/// The log marginal likelihood of the exact GP `problem` (its kernel, noise
+/// variance and data) by `solver`'s iterative solves, and its
 /// gradient when asked. `stop` is asked before every CG iteration.
 ///
 /// # Errors
@@ -176,30 +175,18 @@ pub struct IterativeEvaluation {
 /// [`RegressorError::NotPositiveDefinite`] when the iteration breaks down;
 /// [`RegressorError::InvalidData`] when `solver` was made for another `n`.
 pub fn log_marginal_likelihood_iterative(
-    kernel: &Kernel,
-    noise_variance: f64,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
+    problem: GpProblem<'_>,
     with_gradient: bool,
     solver: &IterativeSolver,
     stop: impl Fn() -> bool,
 ) -> Result<IterativeEvaluation, RegressorError> {
     let clock = std::time::Instant::now();
-    let cache = kernel.gram_lower_with_cache(x);
+    let cache = problem.kernel.gram_lower_with_cache(problem.x);
     tracing::debug!(
         gram_secs = clock.elapsed().as_secs_f64(),
         "iterative exact-GP kernel matrix"
     );
-    let out = evaluate(
-        kernel,
-        &cache,
-        noise_variance,
-        x,
-        y,
-        with_gradient,
-        solver,
-        &stop,
-    );
+    let out = evaluate(problem, &cache, with_gradient, solver, &stop);
     cache.recycle();
     out.map(|(evaluation, _)| evaluation)
 }
@@ -218,65 +205,68 @@ pub struct IterativePosterior {
     pub evaluation: IterativeEvaluation,
 }
 
-/// Conditions the GP with `kernel` and `noise_variance` on `(x, y)` by
+/// Conditions the GP `problem` by
 /// `solver`'s iterative solves and a Krylov basis of `variance_rank`
 /// columns for the variances; the kernel matrix is formed once for both.
 ///
 /// # Errors
 /// As [`log_marginal_likelihood_iterative`].
 pub fn iterative_posterior(
-    kernel: &Kernel,
-    noise_variance: f64,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
+    problem: GpProblem<'_>,
     solver: &IterativeSolver,
     variance_rank: usize,
 ) -> Result<IterativePosterior, RegressorError> {
+    let GpProblem {
+        kernel,
+        noise_variance,
+        x,
+        ..
+    } = problem;
     let cache = kernel.gram_lower_with_cache(x);
-    let out = evaluate(kernel, &cache, noise_variance, x, y, false, solver, &|| {
-        false
-    })
-    .and_then(|(evaluation, alpha)| {
-        let k = cache.k.as_ref();
-        let clock = std::time::Instant::now();
-        let variance = love::KrylovVariance::new(
-            |v| {
-                let mut out = symmetric_times(k, v);
-                out += v * faer::Scale(noise_variance);
-                out
-            },
-            x.nrows(),
-            variance_rank,
-            solver.settings.seed,
-        )?;
-        tracing::debug!(
-            rank = variance.rank(),
-            secs = clock.elapsed().as_secs_f64(),
-            "iterative exact GP: the predictive variances' Krylov basis"
-        );
-        Ok(IterativePosterior {
-            alpha,
-            variance,
-            evaluation,
-        })
-    });
+    let out =
+        evaluate(problem, &cache, false, solver, &|| false).and_then(|(evaluation, alpha)| {
+            let k = cache.k.as_ref();
+            let clock = std::time::Instant::now();
+            let variance = love::KrylovVariance::new(
+                |v| {
+                    let mut out = symmetric_times(k, v);
+                    out += v * faer::Scale(noise_variance);
+                    out
+                },
+                x.nrows(),
+                variance_rank,
+                solver.settings.seed,
+            )?;
+            tracing::debug!(
+                rank = variance.rank(),
+                secs = clock.elapsed().as_secs_f64(),
+                "iterative exact GP: the predictive variances' Krylov basis"
+            );
+            Ok(IterativePosterior {
+                alpha,
+                variance,
+                evaluation,
+            })
+        });
     cache.recycle();
     out
 }
 
 /// [`log_marginal_likelihood_iterative`] on a kernel matrix already
 /// formed (`cache`, its lower triangle), with the weights `K_y⁻¹ Y`.
-#[allow(clippy::too_many_arguments)]
 fn evaluate(
-    kernel: &Kernel,
+    problem: GpProblem<'_>,
     cache: &crate::kernels::GramCache,
-    noise_variance: f64,
-    x: MatRef<'_, f64>,
-    y: MatRef<'_, f64>,
     with_gradient: bool,
     solver: &IterativeSolver,
     stop: &dyn Fn() -> bool,
 ) -> Result<(IterativeEvaluation, Mat<f64>), RegressorError> {
+    let GpProblem {
+        kernel,
+        noise_variance,
+        x,
+        y,
+    } = problem;
     let (n, p) = (y.nrows(), y.ncols());
     let settings = &solver.settings;
     if solver.draws.nrows() != n + settings.preconditioner_rank.min(n) {
