@@ -1,4 +1,4 @@
-//! The control rows of `paper.yaml` (issue: Table II as a sound
+//! The control rows of `paper.yaml` (what makes Table II a sound
 //! experiment) share everything with the row they control but the named
 //! difference, asserted from the resolved configuration.
 

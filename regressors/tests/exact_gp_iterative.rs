@@ -196,7 +196,7 @@ fn iterative(
 ) -> gpodo_regressors::exact_gp::iterative::IterativeEvaluation {
     let solver = IterativeSolver::new(x.nrows(), settings);
     log_marginal_likelihood_iterative(
-        GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+        GpProblem::new(kernel, noise, x.as_ref(), y.as_ref()),
         with_gradient,
         &solver,
         || false,
@@ -212,7 +212,7 @@ fn dense_and_iterative(
     settings: &IterativeSettings,
 ) -> (f64, Vec<f64>, f64, Vec<f64>, usize) {
     let dense =
-        log_marginal_likelihood(GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()), true)
+        log_marginal_likelihood(GpProblem::new(kernel, noise, x.as_ref(), y.as_ref()), true)
             .unwrap();
     let it = iterative(kernel, noise, x, y, *settings, true);
     (
@@ -453,8 +453,7 @@ fn on_exoter_inputs_the_estimate_is_within_half_a_nat_at_large_noise_and_knows_i
     // variance), where the iterative path is the one `auto` takes. Its
     // spread is Hutchinson's, `2‖log(P^{-1/2} K_y P^{-1/2})‖²_F / t`: from
     // the exact spectrum here, a standard error of 1.92 nats at the default
-    // rank 300 and 0.03 at rank 1000 (bench/README.md, "By iterative
-    // solves").
+    // rank 300 and 0.03 at rank 1000 (bench/iterative.md).
     let settings = IterativeSettings {
         preconditioner_rank: 1000,
         ..IterativeSettings::default()

@@ -44,7 +44,7 @@ fn objective_gradients_match_finite_differences() {
                 let at = |k: &gpodo_regressors::Kernel, s: f64, z: &Mat<f64>| {
                     sparse_objective(
                         SparseProblem {
-                            gp: GpProblem::new(&k, s, x.as_ref(), y.as_ref()),
+                            gp: GpProblem::new(k, s, x.as_ref(), y.as_ref()),
                             z: z.as_ref(),
                             approximation: method,
                             jitter: 1e-8,

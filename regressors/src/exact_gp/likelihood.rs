@@ -27,7 +27,7 @@ pub struct LmlEvaluation {
     /// `log p(Y | X, θ)`, summed over the outputs.
     pub lml: f64,
     /// `∂ log p/∂ log θ`: the kernel's hyperparameters in
-    /// [`Kernel::log_params`] order, then the noise variance.
+    /// [`crate::kernels::Kernel::log_params`] order, then the noise variance.
     pub gradient: Option<Vec<f64>>,
     /// Diagonal jitter the factorisation needed.
     pub jitter: f64,

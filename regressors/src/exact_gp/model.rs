@@ -189,8 +189,9 @@ impl ExactGp {
     /// alone (a warm start, as when refitting on a longer prefix of a
     /// stream), instead of racing the start policy's candidates. It is
     /// cheap, but it keeps to that optimum's basin: on the ExoTeR table's
-    /// prefixes a cold fit found optima 80–345 nats higher
-    /// (`bench/README.md`, "Prequential").
+    /// prefixes the warm start alone kept to a lower optimum on five of
+    /// eight refits, by 2.4 to 115.9 nats (`docs/results-log.md`, the
+    /// online track of 2026-11-26).
     ///
     /// # Errors
     /// [`RegressorError::InvalidSpec`] when `previous` was fitted with

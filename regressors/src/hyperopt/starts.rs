@@ -1,7 +1,8 @@
 //! The multi-start policy shared by the GP regressors: the log marginal
 //! likelihood in 20–30 lengthscales is multimodal, and a single start can
-//! land in an optimum hundreds of nats below another (`bench/README.md`
-//! compares the starts on the ExoTeR table). So a
+//! land in an optimum hundreds of nats below another
+//! (`bench/peers/README.md`, "From the same start", compares the starts on
+//! the ExoTeR table). So a
 //! handful of deterministic candidate starts — named base points and seeded
 //! perturbations of them — is scored by the objective alone (no gradient,
 //! one factorisation each), the optimiser runs from the best few, and the

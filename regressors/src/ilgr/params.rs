@@ -29,7 +29,7 @@ pub struct IlgrParams {
     /// was tuned on the prequential protocol over the simulated testbed's
     /// training stream (a grid over `w_gen`, this and `forgetting`): 2 beat
     /// 1 in RMSE and NLPD there, and on the held-out streams
-    /// (`bench/README.md`, "Online learning"). Smaller values give more, narrower
+    /// (the online track of 2026-11-26 in `docs/results-log.md`). Smaller values give more, narrower
     /// models; in 28 dimensions they overlap so much that their `29 M`
     /// weights exceed the forgetting memory `1/(1 − κ)` (a fit on 28
     /// isotropic inputs with 0.5 filled all 200 models and did no better
