@@ -11,6 +11,9 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DatasetError {
+    /// An image could not be read or addressed.
+    #[error(transparent)]
+    Image(#[from] gpodo_vision::VisionError),
     /// Opening, reading, writing or renaming a file failed.
     #[error("{}: {source}", path.display())]
     Io {

@@ -7,6 +7,7 @@
 pub mod bags;
 mod error;
 pub mod log;
+pub mod real_images;
 pub mod residuals;
 pub mod sim;
 pub mod speed_check;

@@ -1,0 +1,192 @@
+//! What a feature tracker sees on real ground images: the boxes of
+//! `../shared/data/images/` that the rendered soils are calibrated
+//! against, each named and chosen by looking at its image, and their
+//! measurements (FAST-9 corner density at ORB-SLAM2's two thresholds,
+//! grey-level spread).
+//!
+//! The thresholds are ExoTeR's ORB-SLAM2 settings (`iniThFAST: 20`, the
+//! first try in every cell, and `minThFAST: 7`, the retry in a cell where
+//! the first found nothing). Corners are detected on the whole image, with
+//! OpenCV's non-maximum suppression, and counted inside the box.
+
+use std::path::Path;
+
+use gpodo_vision::png_io::read_png_gray;
+use gpodo_vision::stats::{corner_density, grey_levels};
+use gpodo_vision::{GrayImage, PixelBox};
+
+use crate::DatasetError;
+
+/// ORB-SLAM2's FAST thresholds on ExoTeR: `iniThFAST`, then `minThFAST`.
+pub const FAST_THRESHOLDS: [u8; 2] = [20, 7];
+
+/// What a box of a real image shows, for the soil it is compared with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ground {
+    /// Loose sand (the PRL's, with boot prints; or Martian ripples).
+    Sand,
+    /// Rocks and flagstones: what the rendered gravel is compared with.
+    Rock,
+    /// Bedrock and rubble on Mars.
+    Bedrock,
+}
+
+/// A named box of a real image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RealBox {
+    /// Short name, used in tables.
+    pub name: &'static str,
+    /// The image, relative to `shared/data/images/`.
+    pub file: &'static str,
+    /// The pixels.
+    pub pixels: PixelBox,
+    /// What it shows.
+    pub ground: Ground,
+    /// Why this box: what it holds and what it leaves out.
+    pub why: &'static str,
+}
+
+const fn pixel_box(x: usize, y: usize, width: usize, height: usize) -> PixelBox {
+    PixelBox {
+        x,
+        y,
+        width,
+        height,
+    }
+}
+
+/// The boxes, chosen by looking at the images.
+pub const REAL_BOXES: [RealBox; 8] = [
+    RealBox {
+        name: "prl-sand-loccam",
+        file: "exoter-prl/Loccam_example1_image.png",
+        pixels: pixel_box(100, 250, 500, 400),
+        ground: Ground::Sand,
+        why: "loose sand with boot prints in the middle of the LocCam view; leaves out the sample tube (lower right), the arm (right) and the dark rover shadow (top)",
+    },
+    RealBox {
+        name: "prl-sand-navcam",
+        file: "exoter-prl/Navcam_example3_image.png",
+        pixels: pixel_box(620, 340, 360, 300),
+        ground: Ground::Sand,
+        why: "loose sand with boot prints as the mast camera sees it, right of the tube and below the flagstones and rocks",
+    },
+    RealBox {
+        name: "prl-flagstones",
+        file: "exoter-prl/Navcam_example3_image.png",
+        pixels: pixel_box(20, 150, 240, 150),
+        ground: Ground::Rock,
+        why: "the pale flagstones on the left, with their dark joints; leaves out the tripod's legs",
+    },
+    RealBox {
+        name: "prl-rock-large",
+        file: "exoter-prl/Navcam_example3_image.png",
+        pixels: pixel_box(445, 235, 120, 90),
+        ground: Ground::Rock,
+        why: "the face of the large basalt-like rock right of the tripod, inside its outline",
+    },
+    RealBox {
+        name: "prl-rock-left",
+        file: "exoter-prl/Navcam_example3_image.png",
+        pixels: pixel_box(160, 310, 120, 85),
+        ground: Ground::Rock,
+        why: "the face of the rock at the lower left of the flagstones, inside its outline",
+    },
+    RealBox {
+        name: "mars-ripples",
+        file: "curiosity-navcam/sol01371.png",
+        pixels: pixel_box(440, 300, 220, 250),
+        ground: Ground::Sand,
+        why: "the sand ripples between the bedrock slabs, clear of the slabs and of the rover's wheel",
+    },
+    RealBox {
+        name: "mars-bedrock",
+        file: "curiosity-navcam/sol01343.png",
+        pixels: pixel_box(600, 520, 180, 170),
+        ground: Ground::Bedrock,
+        why: "a fractured bedrock slab right of centre, with its cracks",
+    },
+    RealBox {
+        name: "mars-rubble",
+        file: "curiosity-navcam/sol01343.png",
+        pixels: pixel_box(150, 120, 250, 250),
+        ground: Ground::Bedrock,
+        why: "loose rocks and pebbles on sand at the upper left",
+    },
+];
+
+/// A box's measurements.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoxMeasurement {
+    /// The box.
+    pub region: RealBox,
+    /// FAST-9 corners per 10⁴ pixels at each of [`FAST_THRESHOLDS`].
+    pub corners_per_10k_px: [f64; 2],
+    /// Mean grey level.
+    pub grey_mean: f64,
+    /// Standard deviation of the grey levels.
+    pub grey_std: f64,
+}
+
+/// Measures `region` of `image` (the box's file, already read).
+///
+/// # Errors
+/// [`DatasetError::Image`] when the box leaves the image.
+pub fn measure_box(image: &GrayImage, region: RealBox) -> Result<BoxMeasurement, DatasetError> {
+    let levels = grey_levels(image, &region.pixels)?;
+    let mut corners_per_10k_px = [0.0; 2];
+    for (out, threshold) in corners_per_10k_px.iter_mut().zip(FAST_THRESHOLDS) {
+        *out = corner_density(image, &region.pixels, threshold)?;
+    }
+    Ok(BoxMeasurement {
+        region,
+        corners_per_10k_px,
+        grey_mean: levels.mean,
+        grey_std: levels.std,
+    })
+}
+
+/// Measures every box of [`REAL_BOXES`], reading the images under
+/// `images_dir` (`shared/data/images/`).
+///
+/// # Errors
+/// [`DatasetError::Image`] naming an image that cannot be read.
+pub fn measure_real_boxes(images_dir: &Path) -> Result<Vec<BoxMeasurement>, DatasetError> {
+    let mut out = Vec::with_capacity(REAL_BOXES.len());
+    let mut last: Option<(&str, GrayImage)> = None;
+    for region in REAL_BOXES {
+        let image = match last.take() {
+            Some((file, image)) if file == region.file => image,
+            _ => read_png_gray(&images_dir.join(region.file))?,
+        };
+        out.push(measure_box(&image, region)?);
+        last = Some((region.file, image));
+    }
+    Ok(out)
+}
+
+/// The measurements as a Markdown table (what `datasets/README.md` shows).
+pub fn markdown_table(measurements: &[BoxMeasurement]) -> String {
+    let mut s = String::from(
+        "| box | image | pixels (x, y, w × h) | ground | FAST corners / 10⁴ px at 20 | at 7 | grey mean | grey std |\n|---|---|---|---|---:|---:|---:|---:|\n",
+    );
+    for m in measurements {
+        let r = &m.region;
+        let p = r.pixels;
+        s.push_str(&format!(
+            "| {} | `{}` | ({}, {}, {} × {}) | {:?} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
+            r.name,
+            r.file,
+            p.x,
+            p.y,
+            p.width,
+            p.height,
+            r.ground,
+            m.corners_per_10k_px[0],
+            m.corners_per_10k_px[1],
+            m.grey_mean,
+            m.grey_std
+        ));
+    }
+    s
+}

@@ -1,0 +1,33 @@
+//! The real ground images of `../shared/data/images/` (which the camera's
+//! tests may read): every named box lies inside its image, and the table of
+//! their measurements in `datasets/README.md` is what the images give.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+
+use gpodo_datasets::real_images::{REAL_BOXES, markdown_table, measure_real_boxes};
+
+#[test]
+fn the_readme_table_of_real_image_boxes_is_what_the_images_give() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let measured = measure_real_boxes(&root.join("../../shared/data/images")).unwrap();
+    assert_eq!(measured.len(), REAL_BOXES.len());
+    // Sand has fewer corners than rock at either threshold, in the PRL.
+    let density = |name: &str, k: usize| {
+        measured
+            .iter()
+            .find(|m| m.region.name == name)
+            .map(|m| m.corners_per_10k_px[k])
+            .unwrap()
+    };
+    for k in 0..2 {
+        assert!(density("prl-sand-navcam", k) < density("prl-rock-large", k));
+    }
+    let table = markdown_table(&measured);
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(
+        readme.contains(&table),
+        "datasets/README.md should hold the table the images give:\n{table}"
+    );
+}
