@@ -412,21 +412,10 @@ mod synthetic {
 
     #[test]
     fn mcap_written_by_gpodo_is_decoded_by_mcap_ros2_support() {
-        let Some(python) = common::python() else {
+        let Some(python) = gpodo_testkit::python_with(&["mcap_ros2.decoder"], "mcap-ros2-support")
+        else {
             return;
         };
-        let has_reader = Command::new(&python)
-            .args(["-c", "import mcap_ros2.decoder"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-        if !has_reader {
-            assert!(
-                std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
-                "GPODO_REQUIRE_PYTHON is set but `{python}` has no mcap-ros2-support"
-            );
-            eprintln!("SKIPPED: `{python}` has no mcap-ros2-support");
-            return;
-        }
         let tmp = tempfile::tempdir().unwrap();
         simulate("mcap", &tmp.path().join("mcap"));
         simulate("csv", &tmp.path().join("csv"));

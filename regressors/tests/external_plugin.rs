@@ -22,20 +22,7 @@ fn root() -> PathBuf {
 /// The interpreter, or `None` (after saying why) when there is no Python
 /// with NumPy and CI did not ask for one.
 fn python() -> Option<String> {
-    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = std::process::Command::new(&python)
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if ok {
-        return Some(python);
-    }
-    assert!(
-        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
-        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import numpy"
-    );
-    eprintln!("SKIPPED: no `{python}` with NumPy (set GPODO_PYTHON to one)");
-    None
+    gpodo_testkit::python_with(&["numpy"], "NumPy")
 }
 
 fn plugin(python: &str, script: &Path, args: &[&str], timeout_secs: f64) -> ExternalRegressor {

@@ -112,23 +112,9 @@ fn real_images() -> Vec<PathBuf> {
     files
 }
 
-/// The Python with OpenCV (`GPODO_PYTHON`, else `python3`), or `None`
-/// after saying why, unless `GPODO_REQUIRE_PYTHON` is set (as CI sets it).
+/// The Python with OpenCV, or `None` after saying why (a failure in CI).
 fn python_with_opencv() -> Option<String> {
-    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = Command::new(&python)
-        .args(["-c", "import cv2"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if ok {
-        return Some(python);
-    }
-    assert!(
-        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
-        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import cv2 (opencv-python-headless)"
-    );
-    eprintln!("SKIPPED: no `{python}` with OpenCV (set GPODO_PYTHON to one)");
-    None
+    gpodo_testkit::python_with(&["cv2"], "OpenCV (opencv-python-headless)")
 }
 
 /// OpenCV's FAST-9 corners of `path` at `threshold`, with non-maximum

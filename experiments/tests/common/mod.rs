@@ -34,18 +34,5 @@ pub fn assert_succeeded(out: &Output, what: &str) {
 /// `python3`), or `None` after saying why, unless `GPODO_REQUIRE_PYTHON` is
 /// set (as CI sets it), which makes its absence a failure.
 pub fn python() -> Option<String> {
-    let python = std::env::var("GPODO_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = Command::new(&python)
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if ok {
-        return Some(python);
-    }
-    assert!(
-        std::env::var_os("GPODO_REQUIRE_PYTHON").is_none(),
-        "GPODO_REQUIRE_PYTHON is set but `{python}` cannot import numpy"
-    );
-    eprintln!("SKIPPED: no `{python}` with NumPy (set GPODO_PYTHON to one)");
-    None
+    gpodo_testkit::python_with(&["numpy"], "NumPy")
 }
