@@ -5,6 +5,7 @@
 //! ([`bags`]).
 
 pub mod bags;
+pub mod camera;
 mod error;
 pub mod log;
 pub mod real_images;

@@ -47,3 +47,12 @@ pub enum FrontendError {
     #[error("pose-graph optimisation failed: {0}")]
     Backend(String),
 }
+
+impl From<gpodo_traits::InvalidCameraField> for FrontendError {
+    fn from(e: gpodo_traits::InvalidCameraField) -> Self {
+        Self::InvalidConfig {
+            field: e.field,
+            expected: e.expected,
+        }
+    }
+}

@@ -16,8 +16,10 @@
 //!
 //! Beside the traits: [`SampleMatrix`] (rows of samples), [`ResidualDataset`]
 //! and [`Standardizer`], the one z-scoring of inputs and targets every crate
-//! uses.
+//! uses, and [`CameraParams`], the one camera that the rendered stereo pair
+//! and the front end's tracker share.
 
+pub mod camera;
 mod error;
 mod matrix;
 mod motion;
@@ -26,6 +28,7 @@ mod sample;
 mod selector;
 mod standardize;
 
+pub use camera::{CameraParams, InvalidCameraField};
 pub use error::Error;
 pub use matrix::SampleMatrix;
 pub use motion::{BodyTwist, MotionEstimate, MotionModel};

@@ -1,0 +1,320 @@
+//! The ground the camera sees, precomputed once per testbed on a square
+//! grid over the test area: its height (the simulator's terrain, plus each
+//! soil's micro-relief and the stones lying on it) and its radiance under
+//! the lab's lighting (albedo times ambient plus the key light's cosine,
+//! with cast shadows). Rendering a view then only marches rays over these
+//! maps. The wheels still roll on the simulator's terrain alone: the
+//! relief and the stones are seen, not felt.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::look::{SceneSpec, SoilLook};
+use super::noise::{mix, octaves};
+use crate::DatasetError;
+use crate::sim::soil::SoilMap;
+use crate::sim::terrain::Terrain;
+
+/// The random stream of the camera's scene (the stones), apart from the
+/// simulator's streams, so the runs are the same with or without a camera.
+const SCENE_STREAM: u64 = 1 << 41;
+
+/// A stone: a half-ellipsoid on the ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Stone {
+    x: f64,
+    y: f64,
+    radius: f64,
+    height: f64,
+    albedo: f64,
+}
+
+impl Stone {
+    /// Its height above the ground at `(x, y)`, or `None` outside it.
+    fn bump(&self, x: f64, y: f64) -> Option<f64> {
+        let d2 = ((x - self.x).powi(2) + (y - self.y).powi(2)) / (self.radius * self.radius);
+        (d2 < 1.0).then(|| self.height * (1.0 - d2).sqrt())
+    }
+}
+
+/// The stones, bucketed in square cells for lookup.
+struct StoneField {
+    stones: Vec<Stone>,
+    cell_m: f64,
+    cells_per_side: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl StoneField {
+    fn new(stones: Vec<Stone>, size_m: f64) -> Self {
+        let cell_m = 0.1;
+        let cells_per_side = (size_m / cell_m).ceil() as usize + 1;
+        let mut cells = vec![Vec::new(); cells_per_side * cells_per_side];
+        let index = |v: f64| ((v / cell_m).floor().max(0.0) as usize).min(cells_per_side - 1);
+        for (k, s) in stones.iter().enumerate() {
+            for cy in index(s.y - s.radius)..=index(s.y + s.radius) {
+                for cx in index(s.x - s.radius)..=index(s.x + s.radius) {
+                    cells[cy * cells_per_side + cx].push(k as u32);
+                }
+            }
+        }
+        Self {
+            stones,
+            cell_m,
+            cells_per_side,
+            cells,
+        }
+    }
+
+    /// The highest stone over `(x, y)`: its height above the ground and
+    /// its albedo.
+    fn at(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        let n = self.cells_per_side;
+        let index = |v: f64| ((v / self.cell_m).floor().max(0.0) as usize).min(n - 1);
+        self.cells[index(y) * n + index(x)]
+            .iter()
+            .filter_map(|&k| {
+                let s = &self.stones[k as usize];
+                s.bump(x, y).map(|h| (h, s.albedo))
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+    }
+}
+
+/// Draws every soil's stones: for each soil and size class, `per_m2 ·
+/// area` candidates uniform over the test area, kept where that soil is.
+/// Every candidate draws the same four numbers, kept or not.
+fn scatter_stones(spec: &SceneSpec, soils: &SoilMap, size_m: f64, seed: u64) -> Vec<Stone> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(SCENE_STREAM);
+    let mut stones = Vec::new();
+    for (name, look) in [
+        ("compact", &spec.compact),
+        ("loose_sand", &spec.loose_sand),
+        ("gravel", &spec.gravel),
+    ] {
+        for class in &look.stones {
+            let count = (class.per_m2 * size_m * size_m).round() as usize;
+            for _ in 0..count {
+                let (u, v, r, a): (f64, f64, f64, f64) =
+                    (rng.random(), rng.random(), rng.random(), rng.random());
+                let (x, y) = (u * size_m, v * size_m);
+                if soils.soil_at(x, y).name != name {
+                    continue;
+                }
+                let [r0, r1] = class.radius_m;
+                let radius = r0 + (r1 - r0) * r;
+                let [a0, a1] = class.albedo;
+                stones.push(Stone {
+                    x,
+                    y,
+                    radius,
+                    height: class.height_ratio * radius,
+                    albedo: a0 + (a1 - a0) * a,
+                });
+            }
+        }
+    }
+    stones
+}
+
+/// The precomputed height and radiance of the test area.
+pub struct GroundMaps {
+    size_m: f64,
+    cell_m: f64,
+    /// Samples per side (`size / cell + 1`).
+    n: usize,
+    height: Vec<f32>,
+    radiance: Vec<f32>,
+    /// The highest point of the area (m).
+    pub max_height_m: f64,
+    /// The lab floor's radiance beyond the area.
+    pub floor_radiance: f64,
+    /// The radiance of a ray that meets nothing.
+    pub background: f64,
+}
+
+impl GroundMaps {
+    /// Builds the maps of the testbed of `terrain` and `soils` as `spec`
+    /// says, its stones drawn from `seed`'s scene stream.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] naming a bad setting of `spec`, or
+    /// a soil with no look.
+    pub fn build(
+        terrain: &Terrain,
+        soils: &SoilMap,
+        spec: &SceneSpec,
+        seed: u64,
+    ) -> Result<Self, DatasetError> {
+        spec.validate("camera.scene")?;
+        let looks: Vec<&SoilLook> = soils
+            .soils()
+            .iter()
+            .map(|s| spec.look_of(s))
+            .collect::<Result<_, _>>()?;
+        let size_m = terrain.size_m();
+        let n = (size_m / spec.map_cell_m).round() as usize + 1;
+        let cell_m = size_m / (n - 1) as f64;
+        let stones = StoneField::new(scatter_stones(spec, soils, size_m, seed), size_m);
+        let key = mix(seed ^ SCENE_STREAM);
+        // Height and albedo, row by row.
+        let rows: Vec<(Vec<f32>, Vec<f32>)> = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let y = j as f64 * cell_m;
+                let mut heights = Vec::with_capacity(n);
+                let mut albedos = Vec::with_capacity(n);
+                for i in 0..n {
+                    let x = i as f64 * cell_m;
+                    let soil = soils.soil_index_at(x, y);
+                    let look = looks[soil];
+                    let soil_key = mix(key ^ soil as u64);
+                    let relief =
+                        octaves(soil_key, x, y, look.relief_cell_m, &look.relief_octaves_m);
+                    let ground = terrain.height(x, y) + relief;
+                    let texture = octaves(
+                        mix(soil_key ^ 1),
+                        x,
+                        y,
+                        look.albedo_cell_m,
+                        &look.albedo_octaves,
+                    );
+                    let (height, albedo) = match stones.at(x, y) {
+                        // Stones are mottled at the finest two octaves.
+                        Some((bump, albedo)) => {
+                            let mottle = octaves(mix(soil_key ^ 2), x, y, 0.01, &[0.08, 0.06]);
+                            (ground + bump, albedo + mottle)
+                        }
+                        None => (ground, look.albedo + texture),
+                    };
+                    heights.push(height as f32);
+                    albedos.push(albedo.clamp(0.0, 1.0) as f32);
+                }
+                (heights, albedos)
+            })
+            .collect();
+        let mut height = Vec::with_capacity(n * n);
+        let mut albedo = Vec::with_capacity(n * n);
+        for (h, a) in rows {
+            height.extend(h);
+            albedo.extend(a);
+        }
+        let max_height_m = height
+            .iter()
+            .fold(f64::NEG_INFINITY, |m, &h| m.max(f64::from(h)));
+        let mut maps = Self {
+            size_m,
+            cell_m,
+            n,
+            height,
+            radiance: Vec::new(),
+            max_height_m,
+            floor_radiance: spec.floor_albedo
+                * (spec.lighting.ambient
+                    + spec.lighting.key * spec.lighting.key_elevation_rad.sin()),
+            background: spec.background,
+        };
+        maps.radiance = maps.shade(&albedo, spec);
+        Ok(maps)
+    }
+
+    /// Radiance of every sample: `albedo · (ambient + key · max(0, n·l) ·
+    /// lit)`, the normal from central differences, `lit` from a march
+    /// towards the key light.
+    fn shade(&self, albedo: &[f32], spec: &SceneSpec) -> Vec<f32> {
+        let n = self.n;
+        let l = spec.lighting;
+        let towards = l.towards_key();
+        let rows: Vec<Vec<f32>> = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                (0..n)
+                    .map(|i| {
+                        let h = |i: usize, j: usize| f64::from(self.height[j * n + i]);
+                        let (i0, i1) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                        let (j0, j1) = (j.saturating_sub(1), (j + 1).min(n - 1));
+                        let dx = (h(i1, j) - h(i0, j)) / ((i1 - i0) as f64 * self.cell_m);
+                        let dy = (h(i, j1) - h(i, j0)) / ((j1 - j0) as f64 * self.cell_m);
+                        let normal = nalgebra::Vector3::new(-dx, -dy, 1.0).normalize();
+                        let cosine = normal.dot(&towards).max(0.0);
+                        let lit = if cosine > 0.0 && self.lit(i, j, &towards) {
+                            1.0
+                        } else {
+                            0.0
+                        };
+                        let a = f64::from(albedo[j * n + i]);
+                        (a * (l.ambient + l.key * cosine * lit)) as f32
+                    })
+                    .collect()
+            })
+            .collect();
+        rows.concat()
+    }
+
+    /// Whether the sample `(i, j)` sees the key light: a march towards it
+    /// until it rises above the highest ground.
+    fn lit(&self, i: usize, j: usize, towards: &nalgebra::Vector3<f64>) -> bool {
+        let (x0, y0) = (i as f64 * self.cell_m, j as f64 * self.cell_m);
+        let z0 = f64::from(self.height[j * self.n + i]) + 1e-4;
+        let horizontal = (towards.x.powi(2) + towards.y.powi(2)).sqrt();
+        if horizontal < 1e-9 {
+            return true;
+        }
+        let rise = towards.z / horizontal;
+        let mut s = 1.5 * self.cell_m;
+        while s < 3.0 {
+            let z = z0 + rise * s;
+            if z > self.max_height_m {
+                return true;
+            }
+            let (x, y) = (
+                x0 + towards.x / horizontal * s,
+                y0 + towards.y / horizontal * s,
+            );
+            match self.height_in(x, y) {
+                Some(h) if h > z => return false,
+                Some(h) => s += ((z - h) / (rise + 1.5)).max(self.cell_m),
+                None => return true,
+            }
+        }
+        true
+    }
+
+    fn bilinear(&self, data: &[f32], x: f64, y: f64) -> Option<f64> {
+        if !(x >= 0.0 && y >= 0.0 && x <= self.size_m && y <= self.size_m) {
+            return None;
+        }
+        let (u, v) = (x / self.cell_m, y / self.cell_m);
+        let last = self.n - 2;
+        let (i, j) = ((u as usize).min(last), (v as usize).min(last));
+        let (tx, ty) = (u - i as f64, v - j as f64);
+        let at = |i: usize, j: usize| f64::from(data[j * self.n + i]);
+        let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
+        let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
+        Some(top + (bottom - top) * ty)
+    }
+
+    /// The ground's height at `(x, y)` inside the test area.
+    pub fn height_in(&self, x: f64, y: f64) -> Option<f64> {
+        self.bilinear(&self.height, x, y)
+    }
+
+    /// The ground's height at `(x, y)`: the map's inside the area, the
+    /// lab floor's (0) outside.
+    pub fn height(&self, x: f64, y: f64) -> f64 {
+        self.height_in(x, y).unwrap_or(0.0)
+    }
+
+    /// The radiance of the ground at `(x, y)`.
+    pub fn radiance(&self, x: f64, y: f64) -> f64 {
+        self.bilinear(&self.radiance, x, y)
+            .unwrap_or(self.floor_radiance)
+    }
+
+    /// The side of the test area (m).
+    pub fn size_m(&self) -> f64 {
+        self.size_m
+    }
+}

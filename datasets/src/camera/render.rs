@@ -1,0 +1,327 @@
+//! A rectified stereo pair rendered from the precomputed ground: one ray
+//! per pixel marched over the height map (bisected to the surface), the
+//! radiance there, the depth along the left camera's optical axis, the
+//! motion blur of the exposure, then the sensor's shot and read noise and
+//! 8-bit quantisation.
+
+use gpodo_traits::CameraParams;
+use gpodo_vision::GrayImage;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::ground::GroundMaps;
+use super::noise::mix;
+use crate::DatasetError;
+
+/// Rays longer than this meet nothing (m).
+const MAX_RANGE_M: f64 = 30.0;
+
+/// The image sensor: radiance to grey levels with shot and read noise.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SensorSpec {
+    /// Grey level per unit radiance (default 300: ground of albedo 0.45
+    /// lit at 50° reads about 110, as the PRL's sand does).
+    pub gain_dn: f64,
+    /// Electrons per grey level (default 40, a 10 000 e⁻ full well over
+    /// 255 levels): shot noise has variance `level / electrons_per_dn`.
+    pub electrons_per_dn: f64,
+    /// Read noise (grey levels, standard deviation; default 0.8).
+    pub read_noise_dn: f64,
+}
+
+impl Default for SensorSpec {
+    fn default() -> Self {
+        Self {
+            gain_dn: 300.0,
+            electrons_per_dn: 40.0,
+            read_noise_dn: 0.8,
+        }
+    }
+}
+
+impl SensorSpec {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] naming the field (under `prefix`).
+    pub fn validate(&self, prefix: &str) -> Result<(), DatasetError> {
+        for (name, v, lo) in [
+            ("gain_dn", self.gain_dn, f64::MIN_POSITIVE),
+            ("electrons_per_dn", self.electrons_per_dn, f64::MIN_POSITIVE),
+            ("read_noise_dn", self.read_noise_dn, 0.0),
+        ] {
+            if !(v.is_finite() && v >= lo) {
+                return Err(DatasetError::InvalidConfig {
+                    field: format!("{prefix}.{name}"),
+                    expected: "a finite non-negative number (positive for the gain and electrons)"
+                        .into(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One rendered stereo frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StereoFrame {
+    /// The left image.
+    pub left: GrayImage,
+    /// The right image.
+    pub right: GrayImage,
+    /// Depth along the left camera's optical axis per left pixel (m;
+    /// infinite where the ray met nothing), row-major.
+    pub depth_m: Vec<f32>,
+}
+
+/// One view before the sensor: radiance and depth per pixel.
+struct View {
+    width: usize,
+    height: usize,
+    radiance: Vec<f32>,
+    depth_m: Vec<f32>,
+}
+
+/// Renders stereo frames of a testbed's ground through one camera.
+pub struct StereoRenderer<'a> {
+    camera: CameraParams,
+    ground: &'a GroundMaps,
+    sensor: SensorSpec,
+    seed: u64,
+}
+
+impl<'a> StereoRenderer<'a> {
+    /// A renderer of `ground` through `camera`, its image noise drawn from
+    /// `seed` and the frame's index.
+    ///
+    /// # Errors
+    /// [`DatasetError::InvalidConfig`] naming a bad camera or sensor field.
+    pub fn new(
+        camera: CameraParams,
+        ground: &'a GroundMaps,
+        sensor: SensorSpec,
+        seed: u64,
+    ) -> Result<Self, DatasetError> {
+        camera
+            .validate("camera")
+            .map_err(|e| DatasetError::InvalidConfig {
+                field: e.field,
+                expected: e.expected,
+            })?;
+        sensor.validate("camera.sensor")?;
+        Ok(Self {
+            camera,
+            ground,
+            sensor,
+            seed,
+        })
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &CameraParams {
+        &self.camera
+    }
+
+    /// The pair seen from the body pose `world_from_body` at the middle of
+    /// the exposure, the body moving by `exposure_motion`
+    /// (`body_start_from_body_end`, identity for none) while the shutter
+    /// is open; `frame` seeds its noise.
+    pub fn render(
+        &self,
+        world_from_body: &Isometry3<f64>,
+        exposure_motion: &Isometry3<f64>,
+        frame: u64,
+    ) -> StereoFrame {
+        let body_from_left = self.camera.body_from_camera();
+        let body_from_right = self.camera.body_from_right_camera();
+        let (half_back, half_forward) = halves(exposure_motion);
+        let mut images = [body_from_left, body_from_right].map(|body_from_camera| {
+            let world_from_camera = world_from_body * body_from_camera;
+            let mut view = self.trace_view(&world_from_camera);
+            let start = world_from_body * half_back * body_from_camera;
+            let end = world_from_body * half_forward * body_from_camera;
+            if exposure_motion.translation.vector.norm() > 0.0
+                || exposure_motion.rotation.angle() > 0.0
+            {
+                view.radiance = self.blur(&view, &world_from_camera, &start, &end);
+            }
+            view
+        });
+        let [left, right] = [0u64, 1].map(|camera| {
+            let view = &images[camera as usize];
+            self.expose(view, mix(self.seed ^ mix(frame) ^ camera))
+        });
+        let depth_m = std::mem::take(&mut images[0].depth_m);
+        StereoFrame {
+            left,
+            right,
+            depth_m,
+        }
+    }
+
+    /// Radiance and depth of every pixel of the camera at
+    /// `world_from_camera`, row by row in parallel (each pixel is its own
+    /// computation, so the result does not depend on the threads).
+    fn trace_view(&self, world_from_camera: &Isometry3<f64>) -> View {
+        let [w, h] = self.camera.image_size_px.map(|n| n as usize);
+        let origin = Point3::from(world_from_camera.translation.vector);
+        let rows: Vec<(Vec<f32>, Vec<f32>)> = (0..h)
+            .into_par_iter()
+            .map(|v| {
+                let mut radiance = Vec::with_capacity(w);
+                let mut depth = Vec::with_capacity(w);
+                for u in 0..w {
+                    let ray = self.camera.pixel_ray(u as f64, v as f64);
+                    let dir = world_from_camera.rotation * ray.normalize();
+                    match self.trace(&origin, &dir) {
+                        Some((t, p)) => {
+                            radiance.push(self.ground.radiance(p.x, p.y) as f32);
+                            depth.push((t / ray.norm()) as f32);
+                        }
+                        None => {
+                            radiance.push(self.ground.background as f32);
+                            depth.push(f32::INFINITY);
+                        }
+                    }
+                }
+                (radiance, depth)
+            })
+            .collect();
+        let mut view = View {
+            width: w,
+            height: h,
+            radiance: Vec::with_capacity(w * h),
+            depth_m: Vec::with_capacity(w * h),
+        };
+        for (r, d) in rows {
+            view.radiance.extend(r);
+            view.depth_m.extend(d);
+        }
+        view
+    }
+
+    /// Where the ray from `origin` along the unit `dir` first meets the
+    /// ground: its length and the point. Marched with steps that cannot
+    /// pass a slope of 1.5 from above, then bisected to the surface.
+    fn trace(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<(f64, Point3<f64>)> {
+        let ground = self.ground;
+        let gap = |t: f64| {
+            let p = origin + dir * t;
+            p.z - ground.height(p.x, p.y)
+        };
+        let horizontal = (dir.x * dir.x + dir.y * dir.y).sqrt();
+        let closing = (-dir.z).max(0.0) + 1.5 * horizontal;
+        let min_step = 0.0005;
+        let top = ground.max_height_m.max(0.0) + 0.01;
+        let (mut t0, mut t) = (0.0, 0.01);
+        while t < MAX_RANGE_M {
+            let p = origin + dir * t;
+            if p.z > top && dir.z >= 0.0 {
+                return None;
+            }
+            let g = gap(t);
+            if g <= 0.0 {
+                for _ in 0..12 {
+                    let mid = 0.5 * (t0 + t);
+                    if gap(mid) > 0.0 {
+                        t0 = mid;
+                    } else {
+                        t = mid;
+                    }
+                }
+                let t = 0.5 * (t0 + t);
+                return Some((t, origin + dir * t));
+            }
+            t0 = t;
+            t += (g / closing).clamp(min_step, 1.0);
+        }
+        None
+    }
+
+    /// The radiance integrated over the exposure: each pixel's ground
+    /// point (from its depth; far away for the background) seen from the
+    /// start to the end pose, sampled along that image segment (a static
+    /// scene's blur; occlusions during the exposure are ignored).
+    fn blur(
+        &self,
+        view: &View,
+        world_from_camera: &Isometry3<f64>,
+        start: &Isometry3<f64>,
+        end: &Isometry3<f64>,
+    ) -> Vec<f32> {
+        let (w, h) = (view.width, view.height);
+        let (start_inv, end_inv) = (start.inverse(), end.inverse());
+        let sample = |x: f64, y: f64| -> f64 {
+            let x = x.clamp(0.0, (w - 1) as f64);
+            let y = y.clamp(0.0, (h - 1) as f64);
+            let (i, j) = ((x as usize).min(w - 2), (y as usize).min(h - 2));
+            let (tx, ty) = (x - i as f64, y - j as f64);
+            let at = |i: usize, j: usize| f64::from(view.radiance[j * w + i]);
+            let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
+            let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
+            top + (bottom - top) * ty
+        };
+        (0..h)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                let sample = &sample;
+                let (start_inv, end_inv) = (&start_inv, &end_inv);
+                (0..w).map(move |u| {
+                    let depth = f64::from(view.depth_m[v * w + u]).min(1e3);
+                    let p_cam = Point3::from(self.camera.pixel_ray(u as f64, v as f64) * depth);
+                    let p_world = world_from_camera * p_cam;
+                    let from = self.camera.project(&(start_inv * p_world));
+                    let to = self.camera.project(&(end_inv * p_world));
+                    let (Some([u0, v0]), Some([u1, v1])) = (from, to) else {
+                        return view.radiance[v * w + u];
+                    };
+                    let length = ((u1 - u0).powi(2) + (v1 - v0).powi(2)).sqrt();
+                    let n = (length.ceil() as usize).clamp(1, 64) + 1;
+                    let sum: f64 = (0..n)
+                        .map(|k| {
+                            let s = k as f64 / (n - 1) as f64;
+                            sample(u0 + (u1 - u0) * s, v0 + (v1 - v0) * s)
+                        })
+                        .sum();
+                    (sum / n as f64) as f32
+                })
+            })
+            .collect()
+    }
+
+    /// Grey levels with shot and read noise, quantised to 8 bits; the
+    /// noise is drawn in pixel order from `stream`.
+    fn expose(&self, view: &View, stream: u64) -> GrayImage {
+        let mut rng = ChaCha8Rng::seed_from_u64(stream);
+        let s = self.sensor;
+        let pixels = view
+            .radiance
+            .iter()
+            .map(|&r| {
+                let level = (f64::from(r) * s.gain_dn).max(0.0);
+                let shot: f64 = StandardNormal.sample(&mut rng);
+                let read: f64 = StandardNormal.sample(&mut rng);
+                let noisy =
+                    level + shot * (level / s.electrons_per_dn).sqrt() + read * s.read_noise_dn;
+                noisy.round().clamp(0.0, 255.0) as u8
+            })
+            .collect();
+        GrayImage::from_pixels(view.width, view.height, pixels)
+            .unwrap_or_else(|_| GrayImage::filled(view.width, view.height, 0))
+    }
+}
+
+/// The half motions back to the exposure's start and on to its end, from
+/// its middle: `(body_mid_from_body_start, body_mid_from_body_end)`.
+fn halves(body_start_from_body_end: &Isometry3<f64>) -> (Isometry3<f64>, Isometry3<f64>) {
+    let half = Isometry3::from_parts(
+        Translation3::from(body_start_from_body_end.translation.vector * 0.5),
+        UnitQuaternion::from_scaled_axis(body_start_from_body_end.rotation.scaled_axis() * 0.5),
+    );
+    (half.inverse(), half)
+}
