@@ -31,3 +31,27 @@ fn the_readme_table_of_real_image_boxes_is_what_the_images_give() {
         "datasets/README.md should hold the table the images give:\n{table}"
     );
 }
+
+#[test]
+fn each_rendered_soil_is_within_a_factor_one_and_a_half_of_its_real_counterpart() {
+    use gpodo_datasets::camera::calibration::{compare_soils, comparison_table};
+    use gpodo_datasets::camera::{SceneSpec, SensorSpec};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let real = measure_real_boxes(&root.join("../../shared/data/images")).unwrap();
+    let comparisons = compare_soils(&real, &SceneSpec::default(), SensorSpec::default()).unwrap();
+    let table = comparison_table(&comparisons);
+    for c in &comparisons {
+        for ratio in c.ratios() {
+            assert!(
+                (1.0 / 1.5..=1.5).contains(&ratio),
+                "{} off by {ratio}:\n{table}",
+                c.rendered.soil
+            );
+        }
+    }
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(
+        readme.contains(&table),
+        "datasets/README.md should hold the comparison the renders give:\n{table}"
+    );
+}

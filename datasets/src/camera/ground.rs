@@ -84,17 +84,20 @@ impl StoneField {
 
 /// Draws every soil's stones: for each soil and size class, `per_m2 ·
 /// area` candidates uniform over the test area, kept where that soil is.
-/// Every candidate draws the same four numbers, kept or not.
+/// Each (soil, class) draws from a stream of its own, and every candidate
+/// draws the same four numbers, kept or not, so one class's settings never
+/// move another's stones.
 fn scatter_stones(spec: &SceneSpec, soils: &SoilMap, size_m: f64, seed: u64) -> Vec<Stone> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(SCENE_STREAM);
     let mut stones = Vec::new();
-    for (name, look) in [
+    let looks = [
         ("compact", &spec.compact),
         ("loose_sand", &spec.loose_sand),
         ("gravel", &spec.gravel),
-    ] {
-        for class in &look.stones {
+    ];
+    for (soil, (name, look)) in looks.into_iter().enumerate() {
+        for (k, class) in look.stones.iter().enumerate() {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(SCENE_STREAM + (soil as u64) * 256 + k as u64);
             let count = (class.per_m2 * size_m * size_m).round() as usize;
             for _ in 0..count {
                 let (u, v, r, a): (f64, f64, f64, f64) =

@@ -104,53 +104,64 @@ pub struct SceneSpec {
 }
 
 impl Default for SceneSpec {
+    /// The looks calibrated against the real images
+    /// (`datasets/README.md`, "Real ground images"): each soil's FAST
+    /// corner densities at thresholds 20 and 7 within a factor 1.5 of its
+    /// real counterpart's. Rocks (stones of 3 cm and more) are a setting
+    /// of their own, not calibrated.
     fn default() -> Self {
+        let pebbles = |per_m2: f64| StoneSize {
+            per_m2,
+            radius_m: [0.004, 0.012],
+            height_ratio: 0.6,
+            albedo: [0.2, 0.35],
+        };
+        let rocks = |per_m2: f64, albedo: [f64; 2]| StoneSize {
+            per_m2,
+            radius_m: [0.04, 0.12],
+            height_ratio: 0.7,
+            albedo,
+        };
         Self {
             compact: SoilLook {
-                albedo: 0.42,
-                albedo_octaves: vec![0.10, 0.08, 0.06, 0.05, 0.04, 0.03],
+                albedo: 0.4,
+                albedo_octaves: vec![0.05, 0.04, 0.03, 0.02, 0.02, 0.025, 0.025, 0.025],
                 albedo_cell_m: 0.4,
-                relief_octaves_m: vec![0.006, 0.003, 0.0015, 0.0008],
+                relief_octaves_m: vec![0.004, 0.002, 0.0018, 0.0015, 0.0012, 0.0012],
                 relief_cell_m: 0.2,
-                stones: vec![StoneSize {
-                    per_m2: 20.0,
-                    radius_m: [0.005, 0.02],
-                    height_ratio: 0.6,
-                    albedo: [0.2, 0.5],
-                }],
+                stones: vec![pebbles(16.0)],
             },
             loose_sand: SoilLook {
-                albedo: 0.45,
-                albedo_octaves: vec![0.04, 0.03, 0.02, 0.02, 0.015],
+                albedo: 0.42,
+                albedo_octaves: vec![0.04, 0.03, 0.02, 0.012, 0.012, 0.014, 0.018, 0.018],
                 albedo_cell_m: 0.5,
-                relief_octaves_m: vec![0.01, 0.004, 0.002, 0.001, 0.0005],
-                relief_cell_m: 0.25,
-                stones: vec![StoneSize {
-                    per_m2: 0.5,
-                    radius_m: [0.03, 0.12],
-                    height_ratio: 0.7,
-                    albedo: [0.15, 0.3],
-                }],
+                relief_octaves_m: vec![0.005, 0.0025, 0.002, 0.002, 0.0015, 0.0012],
+                relief_cell_m: 0.2,
+                stones: vec![
+                    StoneSize {
+                        radius_m: [0.004, 0.01],
+                        ..pebbles(15.0)
+                    },
+                    StoneSize {
+                        radius_m: [0.03, 0.12],
+                        ..rocks(0.5, [0.15, 0.3])
+                    },
+                ],
             },
             gravel: SoilLook {
                 albedo: 0.38,
-                albedo_octaves: vec![0.08, 0.08, 0.08, 0.08, 0.06],
+                albedo_octaves: vec![0.06, 0.05, 0.05, 0.05, 0.06, 0.07, 0.07],
                 albedo_cell_m: 0.2,
-                relief_octaves_m: vec![0.004, 0.002, 0.001],
+                relief_octaves_m: vec![0.004, 0.002, 0.0015, 0.0015, 0.0012],
                 relief_cell_m: 0.1,
                 stones: vec![
                     StoneSize {
-                        per_m2: 600.0,
+                        per_m2: 300.0,
                         radius_m: [0.006, 0.02],
                         height_ratio: 0.6,
-                        albedo: [0.15, 0.6],
+                        albedo: [0.25, 0.5],
                     },
-                    StoneSize {
-                        per_m2: 6.0,
-                        radius_m: [0.04, 0.12],
-                        height_ratio: 0.7,
-                        albedo: [0.15, 0.45],
-                    },
+                    rocks(6.0, [0.15, 0.45]),
                 ],
             },
             lighting: Lighting::default(),

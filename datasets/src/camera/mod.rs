@@ -18,6 +18,7 @@
 //! simulator's streams, and the wheels roll on the simulator's terrain
 //! alone (the stones are seen, not felt).
 
+pub mod calibration;
 pub mod ground;
 pub mod look;
 mod noise;
