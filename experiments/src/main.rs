@@ -127,9 +127,11 @@ enum Command {
         command: BagCommand,
     },
     /// Simulate the testbed and write every run as a rover-log CSV or as a
-    /// ROS 2 MCAP bag (with the topic map that imports it back).
+    /// ROS 2 MCAP bag (with the topic map that imports it back); with
+    /// `--camera`, ExoTeR's rendered stereo camera too.
     Simulate {
-        /// `csv` (rover-log CSV) or `mcap` (ROS 2 bag).
+        /// `csv` (rover-log CSV), `mcap` (ROS 2 bag) or `png` (rover-log
+        /// CSV and a folder of PNG stereo pairs per run; needs `--camera`).
         #[arg(long, value_enum, default_value_t = SimulateFormat::Csv)]
         format: SimulateFormat,
         /// Simulator preset.
@@ -147,6 +149,9 @@ enum Command {
         /// Override the training run duration (s).
         #[arg(long)]
         training_run_secs: Option<f64>,
+        /// Cut the test traverse after this many seconds.
+        #[arg(long)]
+        test_max_secs: Option<f64>,
         /// MCAP only: record wheel positions in encoder ticks, this many
         /// per motor turn (default: the wheel's rad).
         #[arg(long)]
@@ -162,6 +167,16 @@ enum Command {
         /// no IMU columns in a log.
         #[arg(long)]
         no_imu: bool,
+        /// Render ExoTeR's mast stereo camera (rectified mono8 pairs with
+        /// their CameraInfo in a bag, or PNG pairs with `camera_info` YAML).
+        #[arg(long)]
+        camera: bool,
+        /// With `--camera`: the fraction of the Bumblebee2's 1024 × 768.
+        #[arg(long, default_value_t = 0.5)]
+        camera_scale: f64,
+        /// With `--camera`: frames per second.
+        #[arg(long, default_value_t = 2.5)]
+        camera_fps: f64,
     },
 }
 
@@ -183,6 +198,8 @@ enum SimulateFormat {
     Csv,
     /// ROS 2 MCAP bags (the `bags` dataset) and `topics.yaml`.
     Mcap,
+    /// Rover-log CSV and PNG stereo pairs (with `--camera`).
+    Png,
 }
 
 #[derive(Subcommand)]
@@ -534,10 +551,14 @@ fn main() -> anyhow::Result<()> {
             out,
             training_runs,
             training_run_secs,
+            test_max_secs,
             wheel_ticks_per_turn,
             wheel_gear_ratio,
             wheel_rate,
             no_imu,
+            camera,
+            camera_scale,
+            camera_fps,
         } => {
             use gpodo_datasets::bags::write::{WheelRate, WheelUnits};
             let rate = match wheel_rate {
@@ -546,22 +567,42 @@ fn main() -> anyhow::Result<()> {
                 WheelRateArg::RadPerMin => WheelRate::MotorRadPerMin,
             };
             let units = WheelUnits::encoders(wheel_ticks_per_turn, wheel_gear_ratio, rate);
-            if format == SimulateFormat::Csv && units != WheelUnits::default() {
+            if format != SimulateFormat::Mcap && units != WheelUnits::default() {
                 anyhow::bail!(
                     "--wheel-ticks-per-turn and --wheel-rate apply to `--format mcap`; a rover-log CSV is in rad and rad/s"
                 );
+            }
+            if format == SimulateFormat::Png && !camera {
+                anyhow::bail!("`--format png` writes the camera's frames: add `--camera`");
+            }
+            if format == SimulateFormat::Csv && camera {
+                anyhow::bail!(
+                    "--camera writes into `--format mcap` (Image and CameraInfo messages) or `--format png`; a rover-log CSV has no images"
+                );
+            }
+            if !(camera_scale.is_finite() && camera_scale > 0.0 && camera_scale <= 1.0) {
+                anyhow::bail!("--camera-scale {camera_scale}: expected a fraction in (0, 1]");
+            }
+            if !(camera_fps.is_finite() && camera_fps > 0.0 && camera_fps <= 30.0) {
+                anyhow::bail!("--camera-fps {camera_fps}: expected a rate in (0, 30] Hz");
             }
             let options = SimulateOptions {
                 preset,
                 seed,
                 training_runs,
                 training_run_secs,
+                test_max_secs,
                 format: match format {
                     SimulateFormat::Csv => gpodo_experiments::simulate::SimulateFormat::Csv,
                     SimulateFormat::Mcap => gpodo_experiments::simulate::SimulateFormat::Mcap,
+                    SimulateFormat::Png => gpodo_experiments::simulate::SimulateFormat::Png,
                 },
                 units,
                 imu: !no_imu,
+                camera: camera.then_some(gpodo_experiments::simulate::CameraOutput {
+                    scale: camera_scale,
+                    fps: camera_fps,
+                }),
             };
             simulate(&options, &out)
         }

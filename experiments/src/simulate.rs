@@ -1,11 +1,18 @@
 //! `gpodo simulate`: a seeded testbed of a preset written as rover-log CSV
-//! files or as ROS 2 MCAP bags with the topic map that imports them.
+//! files or as ROS 2 MCAP bags with the topic map that imports them; with
+//! a camera, the rendered stereo pairs go into the bags (`Image` and
+//! `CameraInfo` messages) or, as PNG, into a folder per log.
 
 use std::path::{Path, PathBuf};
 
-use gpodo_datasets::bags::write::{WheelUnits, write_mcap_with, written_topic_map_in};
+use gpodo_datasets::bags::write::{WheelUnits, write_mcap_with_camera, written_topic_map_in};
+use gpodo_datasets::bags::write_camera::projection;
+use gpodo_datasets::camera::traverse::camera_stream;
+use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_datasets::log::{RoverLog, write_log_csv};
 use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_traits::CameraParams;
+use gpodo_vision::png_io::write_png_gray;
 
 use crate::error::PipelineError;
 
@@ -16,6 +23,18 @@ pub enum SimulateFormat {
     Csv,
     /// ROS 2 MCAP bags (the `bags` dataset) and `topics.yaml`.
     Mcap,
+    /// Rover-log CSV and, per log, a folder of the camera's PNG pairs with
+    /// their times and calibration (needs a camera).
+    Png,
+}
+
+/// The rendered camera's settings for `gpodo simulate --camera`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraOutput {
+    /// Fraction of ExoTeR's Bumblebee2 resolution (1024 × 768).
+    pub scale: f64,
+    /// Frames per second.
+    pub fps: f64,
 }
 
 /// The settings of one `gpodo simulate`.
@@ -29,12 +48,17 @@ pub struct SimulateOptions {
     pub training_runs: Option<usize>,
     /// Seconds per training run instead of the preset's.
     pub training_run_secs: Option<f64>,
+    /// The test traverse cut after this many seconds (default: the
+    /// preset's whole route).
+    pub test_max_secs: Option<f64>,
     /// The file format.
     pub format: SimulateFormat,
     /// The units of the bags' wheel rates (MCAP only).
     pub units: WheelUnits,
     /// Whether the logs keep their IMU samples (off: a robot without one).
     pub imu: bool,
+    /// The rendered stereo camera, when asked for (MCAP and PNG).
+    pub camera: Option<CameraOutput>,
 }
 
 /// One file `gpodo simulate` wrote.
@@ -66,6 +90,15 @@ pub enum Written {
     TopicMap {
         /// The YAML file.
         path: PathBuf,
+    },
+    /// A folder of a log's rendered stereo pairs.
+    Frames {
+        /// The folder.
+        dir: PathBuf,
+        /// Stereo pairs in it.
+        pairs: usize,
+        /// Its size (bytes).
+        bytes: u64,
     },
 }
 
@@ -101,6 +134,12 @@ impl std::fmt::Display for Written {
                     path.display()
                 )
             }
+            Self::Frames { dir, pairs, bytes } => write!(
+                f,
+                "wrote {} ({pairs} stereo pairs, {:.1} MB, with times.csv, left.yaml and right.yaml)",
+                dir.display(),
+                *bytes as f64 / 1e6
+            ),
         }
     }
 }
@@ -132,6 +171,9 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
     if let Some(s) = options.training_run_secs {
         config.training_run_secs = s;
     }
+    if let Some(s) = options.test_max_secs {
+        config.test_max_secs = s;
+    }
     let mut testbed = config.simulate()?;
     if !options.imu {
         for log in testbed.train.iter_mut().chain(testbed.test.iter_mut()) {
@@ -140,14 +182,33 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
             }
         }
     }
-    std::fs::create_dir_all(out).map_err(|source| PipelineError::Io {
-        path: out.to_path_buf(),
-        source,
-    })?;
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| PipelineError::Io { path, source }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let ground = match options.camera {
+        Some(_) => Some(GroundMaps::build(
+            &testbed.terrain,
+            &testbed.soils,
+            &SceneSpec::default(),
+            options.seed,
+        )?),
+        None => None,
+    };
+    let renderer = match (options.camera, &ground) {
+        (Some(c), Some(ground)) => Some(StereoRenderer::new(
+            CameraParams::exoter_bumblebee2().scaled(c.scale),
+            ground,
+            SensorSpec::default(),
+            options.seed,
+        )?),
+        _ => None,
+    };
     let logs: Vec<&RoverLog> = testbed.train.iter().chain(&testbed.test).collect();
     let mut written = Vec::new();
     match options.format {
-        SimulateFormat::Csv => {
+        SimulateFormat::Csv | SimulateFormat::Png => {
             for log in logs {
                 let (csv, camera) = write_log_csv(log, out)?;
                 written.push(Written::Log {
@@ -156,11 +217,21 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
                     samples: log.samples.len(),
                     path_length_m: log.path_length_m(),
                 });
+                if let (SimulateFormat::Png, Some(renderer), Some(c)) =
+                    (options.format, &renderer, options.camera)
+                {
+                    let dir = out.join(format!("{}.frames", log.name));
+                    written.push(write_frames(renderer, log, c.fps, &dir)?);
+                }
             }
         }
         SimulateFormat::Mcap => {
             for log in &logs {
-                let bag = write_mcap_with(log, out, &[], options.units)?;
+                let mut stream = match (&renderer, options.camera) {
+                    (Some(renderer), Some(c)) => Some(camera_stream(renderer, log, c.fps)),
+                    _ => None,
+                };
+                let bag = write_mcap_with_camera(log, out, &[], options.units, stream.as_mut())?;
                 written.push(Written::Bag {
                     path: bag.path,
                     messages: bag.messages,
@@ -176,13 +247,81 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
                     path: path.clone(),
                     source: std::io::Error::other(e.to_string()),
                 })?;
-                std::fs::write(&path, text).map_err(|source| PipelineError::Io {
-                    path: path.clone(),
-                    source,
-                })?;
+                std::fs::write(&path, text).map_err(io(&path))?;
                 written.push(Written::TopicMap { path });
             }
         }
     }
     Ok(written)
+}
+
+/// A camera's calibration in ROS's `camera_info` YAML (what
+/// `camera_calibration_parsers` reads): rectified, no distortion, the
+/// right camera's projection carrying `−f b`.
+pub fn camera_info_yaml(camera: &CameraParams, index: usize) -> String {
+    let f = camera.focal_px;
+    let [cx, cy] = camera.principal_point();
+    let [width, height] = camera.image_size_px;
+    let p = projection(camera, index);
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    format!(
+        "image_width: {width}\nimage_height: {height}\ncamera_name: {}\n\
+         camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
+         distortion_model: plumb_bob\n\
+         distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n\
+         rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
+         projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{}]\n",
+        ["left", "right"][index.min(1)],
+        list(&[f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0]),
+        list(&p),
+    )
+}
+
+/// Writes `log`'s frames at `fps` into `dir`: `left/NNNNNN.png`,
+/// `right/NNNNNN.png`, `times.csv` (frame, time on the log's clock) and
+/// each camera's `camera_info` YAML.
+fn write_frames(
+    renderer: &StereoRenderer<'_>,
+    log: &RoverLog,
+    fps: f64,
+    dir: &Path,
+) -> Result<Written, PipelineError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| PipelineError::Io { path, source }
+    };
+    let mut stream = camera_stream(renderer, log, fps);
+    let mut bytes = 0;
+    let mut times = String::from("frame,time_s\n");
+    for side in ["left", "right"] {
+        std::fs::create_dir_all(dir.join(side)).map_err(io(&dir.join(side)))?;
+    }
+    let frame_times = stream.times_secs.clone();
+    for (k, &t) in frame_times.iter().enumerate() {
+        let (left, right) = (stream.frames)(k, t)?;
+        for (side, image) in [("left", &left), ("right", &right)] {
+            let path = dir.join(side).join(format!("{k:06}.png"));
+            write_png_gray(&path, image).map_err(gpodo_datasets::DatasetError::from)?;
+            bytes += std::fs::metadata(&path).map_err(io(&path))?.len();
+        }
+        times.push_str(&format!("{k},{t}\n"));
+    }
+    let camera = renderer.camera();
+    for (path, text) in [
+        (dir.join("times.csv"), times),
+        (dir.join("left.yaml"), camera_info_yaml(camera, 0)),
+        (dir.join("right.yaml"), camera_info_yaml(camera, 1)),
+    ] {
+        std::fs::write(&path, text).map_err(io(&path))?;
+    }
+    Ok(Written::Frames {
+        dir: dir.to_path_buf(),
+        pairs: frame_times.len(),
+        bytes,
+    })
 }

@@ -13,7 +13,7 @@ use gpodo_datasets::sim::preset::Preset;
 use gpodo_experiments::error::{ConfigError, PipelineError};
 use gpodo_experiments::import::{import_bags, read_topic_map, unit_check};
 use gpodo_experiments::simulate::{
-    SimulateFormat, SimulateOptions, Written, median_rate_hz, simulate_to,
+    CameraOutput, SimulateFormat, SimulateOptions, Written, median_rate_hz, simulate_to,
 };
 
 /// One 60-s training run and the test traverse of seed 3.
@@ -23,9 +23,11 @@ fn options(format: SimulateFormat, imu: bool) -> SimulateOptions {
         seed: 3,
         training_runs: Some(1),
         training_run_secs: Some(60.0),
+        test_max_secs: None,
         format,
         units: WheelUnits::default(),
         imu,
+        camera: None,
     }
 }
 
@@ -141,4 +143,103 @@ fn a_topic_map_that_cannot_be_read_or_parsed_is_named() {
     let missing = read_topic_map(&tmp.path().join("none.yaml")).unwrap_err();
     assert!(matches!(missing, ConfigError::Io { .. }), "{missing}");
     assert!(missing.to_string().contains("none.yaml"), "{missing}");
+}
+
+/// 8-s runs with the camera at an eighth of the Bumblebee2's resolution.
+fn with_camera(format: SimulateFormat) -> SimulateOptions {
+    SimulateOptions {
+        training_run_secs: Some(8.0),
+        test_max_secs: Some(8.0),
+        camera: Some(CameraOutput {
+            scale: 0.125,
+            fps: 2.5,
+        }),
+        ..options(format, true)
+    }
+}
+
+#[test]
+fn the_camera_leaves_the_logs_as_they_are_and_writes_pngs_with_times_and_calibration() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plain = SimulateOptions {
+        training_run_secs: Some(8.0),
+        test_max_secs: Some(8.0),
+        ..options(SimulateFormat::Csv, true)
+    };
+    let csv = simulate_to(&plain, &tmp.path().join("csv")).unwrap();
+    let png = simulate_to(&with_camera(SimulateFormat::Png), &tmp.path().join("png")).unwrap();
+    // Every log is the same bytes with or without the camera.
+    let logs = |written: &[Written]| -> Vec<Vec<u8>> {
+        written
+            .iter()
+            .filter_map(|w| match w {
+                Written::Log { csv, .. } => Some(std::fs::read(csv).unwrap()),
+                _ => None,
+            })
+            .collect()
+    };
+    assert_eq!(logs(&csv), logs(&png));
+    let frames: Vec<_> = png
+        .iter()
+        .filter_map(|w| match w {
+            Written::Frames { dir, pairs, .. } => Some((dir.clone(), *pairs)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(frames.len(), 2, "{png:?}");
+    for (dir, pairs) in frames {
+        // 8 s at 2.5 fps from the first sample.
+        assert_eq!(pairs, 20, "{}", dir.display());
+        let times = std::fs::read_to_string(dir.join("times.csv")).unwrap();
+        assert_eq!(times.lines().count(), pairs + 1);
+        let left = gpodo_vision::png_io::read_png_gray(&dir.join("left/000019.png")).unwrap();
+        assert_eq!((left.width(), left.height()), (128, 96));
+        // The right camera's projection carries −f b (f = 838/8 px).
+        let right: serde_json::Value =
+            serde_saphyr::from_str(&std::fs::read_to_string(dir.join("right.yaml")).unwrap())
+                .unwrap();
+        let p = &right["projection_matrix"]["data"];
+        let tx = p[3].as_f64().unwrap();
+        assert!((tx + 104.75 * 0.12043).abs() < 1e-9, "{tx}");
+        assert_eq!(right["image_width"].as_u64(), Some(128));
+    }
+}
+
+#[test]
+fn a_bag_with_the_camera_decodes_in_the_ros_reader() {
+    let Some(python) = gpodo_testkit::python_with(&["mcap_ros2.reader"], "mcap-ros2-support")
+    else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let written = simulate_to(&with_camera(SimulateFormat::Mcap), tmp.path()).unwrap();
+    let bag = bags(&written).pop().unwrap();
+    let script = "import sys, collections\n\
+        from mcap_ros2.reader import read_ros2_messages\n\
+        n = collections.Counter()\n\
+        for m in read_ros2_messages(sys.argv[1]):\n\
+        \x20   t, r = m.channel.topic, m.ros_msg\n\
+        \x20   n[t] += 1\n\
+        \x20   if t == '/camera/right/image_raw':\n\
+        \x20       assert (r.width, r.height, r.encoding, len(r.data)) == (128, 96, 'mono8', 128 * 96), r\n\
+        \x20   if t == '/camera/right/camera_info':\n\
+        \x20       tx = r.p[3]\n\
+        print(n['/camera/left/image_raw'], n['/camera/right/image_raw'], n['/camera/right/camera_info'], tx)\n";
+    let out = std::process::Command::new(python)
+        .args(["-c", script])
+        .arg(&bag)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let fields: Vec<f64> = text
+        .split_whitespace()
+        .map(|f| f.parse().unwrap())
+        .collect();
+    assert_eq!(&fields[..3], &[20.0, 20.0, 20.0], "{text}");
+    assert!((fields[3] + 104.75 * 0.12043).abs() < 1e-9, "{text}");
 }

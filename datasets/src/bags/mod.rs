@@ -17,6 +17,7 @@ pub mod tf;
 pub mod topic;
 pub mod wire;
 pub mod write;
+pub mod write_camera;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -36,8 +36,8 @@ pub const EPOCH_NS: u64 = 1_700_000_000_000_000_000;
 const SEPARATOR: &str =
     "================================================================================\n";
 
-const TIME: &str = "int32 sec\nuint32 nanosec\n";
-const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
+pub(super) const TIME: &str = "int32 sec\nuint32 nanosec\n";
+pub(super) const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
 const VECTOR3: &str = "float64 x\nfloat64 y\nfloat64 z\n";
 const POINT: &str = "float64 x\nfloat64 y\nfloat64 z\n";
 const QUATERNION: &str = "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n";
@@ -47,7 +47,7 @@ const TWIST: &str = "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular
 
 /// A `ros2msg` schema: the type's own definition, then each dependency
 /// under `MSG: <name>`.
-fn schema(definition: &str, dependencies: &[(&str, &str)]) -> String {
+pub(super) fn schema(definition: &str, dependencies: &[(&str, &str)]) -> String {
     let mut text = definition.to_string();
     for (name, body) in dependencies {
         text.push_str(SEPARATOR);
@@ -137,20 +137,20 @@ fn odometry_schema() -> String {
 
 /// Little-endian CDR after the 4-byte encapsulation header; alignment
 /// counts from after that header.
-struct Cdr(Vec<u8>);
+pub(super) struct Cdr(pub(super) Vec<u8>);
 
 impl Cdr {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self(vec![0, 1, 0, 0])
     }
 
-    fn align(&mut self, n: usize) {
+    pub(super) fn align(&mut self, n: usize) {
         while !(self.0.len() - 4).is_multiple_of(n) {
             self.0.push(0);
         }
     }
 
-    fn u32(&mut self, v: u32) {
+    pub(super) fn u32(&mut self, v: u32) {
         self.align(4);
         self.0.extend(v.to_le_bytes());
     }
@@ -160,25 +160,25 @@ impl Cdr {
         self.0.extend(v.to_le_bytes());
     }
 
-    fn f64s(&mut self, v: &[f64]) {
+    pub(super) fn f64s(&mut self, v: &[f64]) {
         for x in v {
             self.align(8);
             self.0.extend(x.to_le_bytes());
         }
     }
 
-    fn sequence(&mut self, v: &[f64]) {
+    pub(super) fn sequence(&mut self, v: &[f64]) {
         self.u32(v.len() as u32);
         self.f64s(v);
     }
 
-    fn string(&mut self, s: &str) {
+    pub(super) fn string(&mut self, s: &str) {
         self.u32(s.len() as u32 + 1);
         self.0.extend(s.as_bytes());
         self.0.push(0);
     }
 
-    fn header(&mut self, stamp_ns: u64, frame: &str) {
+    pub(super) fn header(&mut self, stamp_ns: u64, frame: &str) {
         // `sec` is an int32: fine until 2038.
         self.i32((stamp_ns / 1_000_000_000) as i32);
         self.u32((stamp_ns % 1_000_000_000) as u32);
@@ -197,7 +197,7 @@ fn pose_stamped(stamp_ns: u64, frame: &str, pose: &nalgebra::Isometry3<f64>) -> 
 }
 
 /// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
-fn stamp_ns(time_secs: f64) -> u64 {
+pub(super) fn stamp_ns(time_secs: f64) -> u64 {
     EPOCH_NS.saturating_add_signed((time_secs * 1e9).round() as i64)
 }
 
@@ -368,6 +368,24 @@ pub fn write_mcap_with(
     vo: &[(f64, nalgebra::Isometry3<f64>)],
     units: WheelUnits,
 ) -> Result<WrittenBag, DatasetError> {
+    write_mcap_with_camera(log, dir, vo, units, None)
+}
+
+/// [`write_mcap_with`], plus a stereo camera's frames: each pair as two
+/// `sensor_msgs/msg/Image` (mono8) on `/camera/left/image_raw` and
+/// `/camera/right/image_raw` with their `sensor_msgs/msg/CameraInfo` on
+/// `/camera/{left,right}/camera_info`, written in time order among the
+/// other messages and rendered one pair at a time.
+///
+/// # Errors
+/// As [`write_mcap`], and the camera's errors.
+pub fn write_mcap_with_camera(
+    log: &RoverLog,
+    dir: &Path,
+    vo: &[(f64, nalgebra::Isometry3<f64>)],
+    units: WheelUnits,
+    mut camera: Option<&mut super::write_camera::CameraStream<'_>>,
+) -> Result<WrittenBag, DatasetError> {
     if !(units.position_scale.is_finite()
         && units.position_scale > 0.0
         && units.rate_scale.is_finite()
@@ -435,9 +453,14 @@ pub fn write_mcap_with(
             "/vo/pose",
         )?)
     };
+    let camera_channels = match camera.as_ref() {
+        Some(_) => Some(super::write_camera::CameraChannels::add(&mut channel)?),
+        None => None,
+    };
     let names = joint_names(log);
     let mut messages = 0u64;
     let mut vo_next = 0;
+    let mut frame_next = 0;
     for (k, (s, p)) in log.samples.iter().zip(&log.ground_truth).enumerate() {
         let t = stamp_ns(s.time_secs);
         let mut m = Cdr::new();
@@ -500,6 +523,16 @@ pub fn write_mcap_with(
                 vo_next += 1;
             }
         }
+        if let (Some(stream), Some(channels)) = (camera.as_deref_mut(), camera_channels) {
+            while let Some(&time) = stream
+                .times_secs
+                .get(frame_next)
+                .filter(|&&c| c <= s.time_secs)
+            {
+                out.extend(channels.frame(stream, frame_next, time)?);
+                frame_next += 1;
+            }
+        }
         out.push((joints, m.0, t));
         if let (Some(channel), Some(message)) = (imu, imu_message) {
             out.push((channel, message, t));
@@ -530,7 +563,25 @@ pub fn write_mcap_with(
             messages += 1;
         }
     }
-    // VO poses after the last sample close the file, in order.
+    // Camera frames and VO poses after the last sample close the file, in
+    // order.
+    if let (Some(stream), Some(channels)) = (camera, camera_channels) {
+        while let Some(&time) = stream.times_secs.get(frame_next) {
+            for (channel_id, data, at) in channels.frame(stream, frame_next, time)? {
+                let header = mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: frame_next as u32,
+                    log_time: at,
+                    publish_time: at,
+                };
+                writer
+                    .write_to_known_channel(&header, &data)
+                    .map_err(mcap_error)?;
+                messages += 1;
+            }
+            frame_next += 1;
+        }
+    }
     if let Some(channel_id) = vo_channel {
         for (k, (time, p)) in vo.iter().enumerate().skip(vo_next) {
             let at = stamp_ns(*time);

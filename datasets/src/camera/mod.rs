@@ -23,6 +23,7 @@ pub mod ground;
 pub mod look;
 mod noise;
 pub mod render;
+pub mod traverse;
 
 pub use ground::GroundMaps;
 pub use look::{Lighting, SceneSpec, SoilLook, StoneSize};
