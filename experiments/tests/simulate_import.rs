@@ -225,17 +225,7 @@ fn a_bag_with_the_camera_decodes_in_the_ros_reader() {
         \x20   if t == '/camera/right/camera_info':\n\
         \x20       tx = r.p[3]\n\
         print(n['/camera/left/image_raw'], n['/camera/right/image_raw'], n['/camera/right/camera_info'], tx)\n";
-    let out = std::process::Command::new(python)
-        .args(["-c", script])
-        .arg(&bag)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = gpodo_testkit::run_python(&python, script, &[bag.as_os_str()]);
     let fields: Vec<f64> = text
         .split_whitespace()
         .map(|f| f.parse().unwrap())

@@ -29,3 +29,23 @@ pub fn python_with(modules: &[&str], what: &str) -> Option<String> {
     eprintln!("SKIPPED: no `{python}` with {what} (set GPODO_PYTHON to one)");
     None
 }
+
+/// Runs `script` (Python source) in `python` with `args` as `sys.argv[1:]`
+/// and returns what it printed.
+///
+/// # Panics
+/// When the interpreter cannot start, the script fails (its standard
+/// error is the message), or it prints anything but UTF-8.
+pub fn run_python(python: &str, script: &str, args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new(python)
+        .args(["-c", script])
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot start `{python}`: {e}"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap_or_else(|e| panic!("`{python}` printed non-UTF-8: {e}"))
+}

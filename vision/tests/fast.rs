@@ -6,7 +6,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use gpodo_vision::fast::{CIRCLE, detect, score_at};
 use gpodo_vision::png_io::{read_png_gray, write_png_gray};
@@ -125,19 +124,9 @@ fn opencv_corners(python: &str, path: &Path, threshold: u8) -> Vec<(usize, usize
         fast = cv2.FastFeatureDetector_create(threshold=int(sys.argv[2]), nonmaxSuppression=True)\n\
         for k in fast.detect(image, None):\n\
         \x20   print(int(k.pt[0]), int(k.pt[1]), int(k.response))\n";
-    let out = Command::new(python)
-        .args(["-c", script])
-        .arg(path)
-        .arg(threshold.to_string())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let mut corners: Vec<(usize, usize, u8)> = String::from_utf8(out.stdout)
-        .unwrap()
+    let threshold = threshold.to_string();
+    let text = gpodo_testkit::run_python(python, script, &[path.as_os_str(), threshold.as_ref()]);
+    let mut corners: Vec<(usize, usize, u8)> = text
         .lines()
         .map(|line| {
             let v: Vec<usize> = line.split(' ').map(|f| f.parse().unwrap()).collect();

@@ -316,6 +316,24 @@ pub fn written_topic_map_in(log: &RoverLog, rate_hz: f64, units: WheelUnits) -> 
     }
 }
 
+/// Writes one message on `channel_id`, logged and published at `time`
+/// (ns).
+fn put(
+    writer: &mut mcap::Writer<Cursor<Vec<u8>>>,
+    channel_id: u16,
+    sequence: u32,
+    time: u64,
+    data: &[u8],
+) -> Result<(), mcap::McapError> {
+    let header = mcap::records::MessageHeader {
+        channel_id,
+        sequence,
+        log_time: time,
+        publish_time: time,
+    };
+    writer.write_to_known_channel(&header, data)
+}
+
 /// What [`write_mcap`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WrittenBag {
@@ -551,15 +569,7 @@ pub fn write_mcap_with_camera(
             out.push((channel, o.0, t));
         }
         for (channel_id, data, time) in out {
-            let header = mcap::records::MessageHeader {
-                channel_id,
-                sequence: k as u32,
-                log_time: time,
-                publish_time: time,
-            };
-            writer
-                .write_to_known_channel(&header, &data)
-                .map_err(mcap_error)?;
+            put(&mut writer, channel_id, k as u32, time, &data).map_err(mcap_error)?;
             messages += 1;
         }
     }
@@ -568,15 +578,7 @@ pub fn write_mcap_with_camera(
     if let (Some(stream), Some(channels)) = (camera, camera_channels) {
         while let Some(&time) = stream.times_secs.get(frame_next) {
             for (channel_id, data, at) in channels.frame(stream, frame_next, time)? {
-                let header = mcap::records::MessageHeader {
-                    channel_id,
-                    sequence: frame_next as u32,
-                    log_time: at,
-                    publish_time: at,
-                };
-                writer
-                    .write_to_known_channel(&header, &data)
-                    .map_err(mcap_error)?;
+                put(&mut writer, channel_id, frame_next as u32, at, &data).map_err(mcap_error)?;
                 messages += 1;
             }
             frame_next += 1;
@@ -585,15 +587,14 @@ pub fn write_mcap_with_camera(
     if let Some(channel_id) = vo_channel {
         for (k, (time, p)) in vo.iter().enumerate().skip(vo_next) {
             let at = stamp_ns(*time);
-            let header = mcap::records::MessageHeader {
+            put(
+                &mut writer,
                 channel_id,
-                sequence: k as u32,
-                log_time: at,
-                publish_time: at,
-            };
-            writer
-                .write_to_known_channel(&header, &pose_stamped(at, "vo", p))
-                .map_err(mcap_error)?;
+                k as u32,
+                at,
+                &pose_stamped(at, "vo", p),
+            )
+            .map_err(mcap_error)?;
             messages += 1;
         }
     }
