@@ -572,20 +572,6 @@ fn main() -> anyhow::Result<()> {
                     "--wheel-ticks-per-turn and --wheel-rate apply to `--format mcap`; a rover-log CSV is in rad and rad/s"
                 );
             }
-            if format == SimulateFormat::Png && !camera {
-                anyhow::bail!("`--format png` writes the camera's frames: add `--camera`");
-            }
-            if format == SimulateFormat::Csv && camera {
-                anyhow::bail!(
-                    "--camera writes into `--format mcap` (Image and CameraInfo messages) or `--format png`; a rover-log CSV has no images"
-                );
-            }
-            if !(camera_scale.is_finite() && camera_scale > 0.0 && camera_scale <= 1.0) {
-                anyhow::bail!("--camera-scale {camera_scale}: expected a fraction in (0, 1]");
-            }
-            if !(camera_fps.is_finite() && camera_fps > 0.0 && camera_fps <= 30.0) {
-                anyhow::bail!("--camera-fps {camera_fps}: expected a rate in (0, 30] Hz");
-            }
             let options = SimulateOptions {
                 preset,
                 seed,

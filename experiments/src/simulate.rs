@@ -156,14 +156,38 @@ pub fn median_rate_hz(log: &RoverLog) -> Option<f64> {
     dts.get(dts.len() / 2).map(|dt| (1e6 / dt).round() / 1e6)
 }
 
+/// Whether the camera's settings fit the format: PNG needs the camera, a
+/// CSV log has no images, and the scale and rate are in range.
+///
+/// # Errors
+/// [`PipelineError::Inconsistent`] naming the setting.
+fn check_camera(options: &SimulateOptions) -> Result<(), PipelineError> {
+    let wrong = |m: String| Err(PipelineError::Inconsistent(m));
+    match (options.format, options.camera) {
+        (SimulateFormat::Png, None) => wrong("format png writes the camera's frames: ask for the camera (`--camera`)".into()),
+        (SimulateFormat::Csv, Some(_)) => wrong(
+            "a camera writes into format mcap (Image and CameraInfo messages) or png; a rover-log CSV has no images".into(),
+        ),
+        (_, Some(c)) if !(c.scale.is_finite() && c.scale > 0.0 && c.scale <= 1.0) => {
+            wrong(format!("camera scale {}: expected a fraction in (0, 1]", c.scale))
+        }
+        (_, Some(c)) if !(c.fps.is_finite() && c.fps > 0.0 && c.fps <= 30.0) => {
+            wrong(format!("camera fps {}: expected a rate in (0, 30] Hz", c.fps))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Simulates the testbed of `options` and writes its training runs, then
 /// its test runs, into `out` (created if missing). Returns what it wrote,
 /// in order.
 ///
 /// # Errors
-/// [`PipelineError::Dataset`] when the simulation or a log fails,
+/// [`PipelineError::Inconsistent`] when the camera does not fit the
+/// format; [`PipelineError::Dataset`] when the simulation or a log fails;
 /// [`PipelineError::Io`] naming the file that could not be written.
 pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>, PipelineError> {
+    check_camera(options)?;
     let mut config = SimulatorConfig::preset(options.preset, options.seed);
     if let Some(n) = options.training_runs {
         config.training_runs = n;

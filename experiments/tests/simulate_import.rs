@@ -233,3 +233,37 @@ fn a_bag_with_the_camera_decodes_in_the_ros_reader() {
     assert_eq!(&fields[..3], &[20.0, 20.0, 20.0], "{text}");
     assert!((fields[3] + 104.75 * 0.12043).abs() < 1e-9, "{text}");
 }
+
+#[test]
+fn a_camera_that_does_not_fit_the_format_is_refused_before_anything_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let cases = [
+        (
+            SimulateOptions {
+                camera: None,
+                ..with_camera(SimulateFormat::Png)
+            },
+            "png",
+        ),
+        (with_camera(SimulateFormat::Csv), "CSV"),
+        (
+            SimulateOptions {
+                camera: Some(CameraOutput {
+                    scale: 1.5,
+                    fps: 2.5,
+                }),
+                ..with_camera(SimulateFormat::Mcap)
+            },
+            "scale",
+        ),
+    ];
+    for (options, named) in cases {
+        let err = simulate_to(&options, &out).unwrap_err();
+        assert!(
+            matches!(&err, PipelineError::Inconsistent(m) if m.contains(named)),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}
