@@ -197,3 +197,12 @@ pub(crate) fn require(ok: bool, field: &str, expected: &str) -> Result<(), Datas
         })
     }
 }
+
+impl From<gpodo_traits::InvalidCameraField> for DatasetError {
+    fn from(e: gpodo_traits::InvalidCameraField) -> Self {
+        Self::InvalidConfig {
+            field: e.field,
+            expected: e.expected,
+        }
+    }
+}

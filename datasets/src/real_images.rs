@@ -55,6 +55,10 @@ const fn pixel_box(x: usize, y: usize, width: usize, height: usize) -> PixelBox 
     }
 }
 
+/// `prl-sand-navcam`'s pixels: the PRL's sand as the mast camera sees it,
+/// the box rendered soils are measured in too.
+pub const PRL_SAND_NAVCAM: PixelBox = pixel_box(620, 340, 360, 300);
+
 /// The boxes, chosen by looking at the images.
 pub const REAL_BOXES: [RealBox; 8] = [
     RealBox {
@@ -67,7 +71,7 @@ pub const REAL_BOXES: [RealBox; 8] = [
     RealBox {
         name: "prl-sand-navcam",
         file: "exoter-prl/Navcam_example3_image.png",
-        pixels: pixel_box(620, 340, 360, 300),
+        pixels: PRL_SAND_NAVCAM,
         ground: Ground::Sand,
         why: "loose sand with boot prints as the mast camera sees it, right of the tube and below the flagstones and rocks",
     },

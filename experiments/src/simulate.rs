@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use gpodo_datasets::bags::write::{WheelUnits, write_mcap_with_camera, written_topic_map_in};
-use gpodo_datasets::bags::write_camera::projection;
+use gpodo_datasets::bags::write_camera::{intrinsics, projection};
 use gpodo_datasets::camera::traverse::camera_stream;
 use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_datasets::log::{RoverLog, write_log_csv};
@@ -156,6 +156,12 @@ pub fn median_rate_hz(log: &RoverLog) -> Option<f64> {
     dts.get(dts.len() / 2).map(|dt| (1e6 / dt).round() / 1e6)
 }
 
+/// The error of an I/O failure on `path`, for `map_err`.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> PipelineError {
+    let path = path.to_path_buf();
+    move |source| PipelineError::Io { path, source }
+}
+
 /// Whether the camera's settings fit the format: PNG needs the camera, a
 /// CSV log has no images, and the scale and rate are in range.
 ///
@@ -206,10 +212,6 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
             }
         }
     }
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| PipelineError::Io { path, source }
-    };
     std::fs::create_dir_all(out).map_err(io(out))?;
     let ground = match options.camera {
         Some(_) => Some(GroundMaps::build(
@@ -283,8 +285,6 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
 /// `camera_calibration_parsers` reads): rectified, no distortion, the
 /// right camera's projection carrying `−f b`.
 pub fn camera_info_yaml(camera: &CameraParams, index: usize) -> String {
-    let f = camera.focal_px;
-    let [cx, cy] = camera.principal_point();
     let [width, height] = camera.image_size_px;
     let p = projection(camera, index);
     let list = |v: &[f64]| {
@@ -301,7 +301,7 @@ pub fn camera_info_yaml(camera: &CameraParams, index: usize) -> String {
          rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
          projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{}]\n",
         ["left", "right"][index.min(1)],
-        list(&[f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0]),
+        list(&intrinsics(camera)),
         list(&p),
     )
 }
@@ -315,10 +315,6 @@ fn write_frames(
     fps: f64,
     dir: &Path,
 ) -> Result<Written, PipelineError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| PipelineError::Io { path, source }
-    };
     let mut stream = camera_stream(renderer, log, fps);
     let mut bytes = 0;
     let mut times = String::from("frame,time_s\n");

@@ -67,6 +67,13 @@ fn image_message(stamp_ns: u64, frame: &str, image: &GrayImage) -> Vec<u8> {
     m.0
 }
 
+/// The rectified intrinsic matrix `K` both cameras share, row-major.
+pub fn intrinsics(camera: &CameraParams) -> [f64; 9] {
+    let f = camera.focal_px;
+    let [cx, cy] = camera.principal_point();
+    [f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0]
+}
+
 /// The rectified projection `P` of camera `index` (0 left, 1 right):
 /// `[f 0 c_x T_x; 0 f c_y 0; 0 0 1 0]`, `T_x = −f b` for the right.
 pub fn projection(camera: &CameraParams, index: usize) -> [f64; 12] {
@@ -83,8 +90,6 @@ pub fn projection(camera: &CameraParams, index: usize) -> [f64; 12] {
 /// `sensor_msgs/msg/CameraInfo` of camera `index` of `camera`: rectified,
 /// no distortion (`plumb_bob`, zeros), identity `R`.
 fn camera_info_message(stamp_ns: u64, camera: &CameraParams, index: usize) -> Vec<u8> {
-    let f = camera.focal_px;
-    let [cx, cy] = camera.principal_point();
     let [width, height] = camera.image_size_px;
     let mut m = Cdr::new();
     m.header(stamp_ns, FRAMES[index]);
@@ -92,7 +97,7 @@ fn camera_info_message(stamp_ns: u64, camera: &CameraParams, index: usize) -> Ve
     m.u32(width);
     m.string("plumb_bob");
     m.sequence(&[0.0; 5]);
-    m.f64s(&[f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0]);
+    m.f64s(&intrinsics(camera));
     m.f64s(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
     m.f64s(&projection(camera, index));
     m.u32(0);

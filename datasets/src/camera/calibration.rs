@@ -8,13 +8,13 @@
 //! the surface.
 
 use gpodo_traits::CameraParams;
+use gpodo_vision::GrayImage;
 use gpodo_vision::stats::{corner_density, grey_levels};
-use gpodo_vision::{GrayImage, PixelBox};
 use nalgebra::{Isometry3, Vector3};
 
 use super::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use crate::DatasetError;
-use crate::real_images::{FAST_THRESHOLDS, REAL_BOXES};
+use crate::real_images::{FAST_THRESHOLDS, PRL_SAND_NAVCAM};
 use crate::sim::soil::{Soil, SoilMap};
 use crate::sim::terrain::Terrain;
 
@@ -42,26 +42,10 @@ pub struct RenderedSoil {
     pub image: GrayImage,
 }
 
-/// The box rendered images are measured in: `prl-sand-navcam`'s.
-pub fn measurement_box() -> PixelBox {
-    REAL_BOXES
-        .iter()
-        .find(|b| b.name == "prl-sand-navcam")
-        .map_or(
-            PixelBox {
-                x: 620,
-                y: 340,
-                width: 360,
-                height: 300,
-            },
-            |b| b.pixels,
-        )
-}
-
 /// Renders `soil` alone, without its rocks, on a flat 6 × 6 m patch as
 /// `spec` and `sensor` say, from ExoTeR's Bumblebee2 on a body 0.25 m up
 /// near one edge, looking across the patch, once per seed of
-/// [`CALIBRATION_SEEDS`], and measures [`measurement_box`]: the means over
+/// [`CALIBRATION_SEEDS`], and measures [`PRL_SAND_NAVCAM`]'s box: the means over
 /// the seeds, and the first seed's image.
 ///
 /// # Errors
@@ -80,7 +64,7 @@ pub fn render_soil(
     let soils = SoilMap::uniform(soil, 6.0)?;
     let camera = CameraParams::exoter_bumblebee2();
     let body = Isometry3::new(Vector3::new(1.0, 3.0, 0.25), Vector3::zeros());
-    let region = measurement_box();
+    let region = PRL_SAND_NAVCAM;
     let mut sums = [0.0; 4];
     let mut first = None;
     for seed in CALIBRATION_SEEDS {
@@ -127,7 +111,7 @@ impl SoilComparison {
 }
 
 /// Compares each soil, rendered as `spec` and `sensor` say, with its real
-/// counterpart among `real` (the measured [`REAL_BOXES`]): loose sand with
+/// counterpart among `real` (the measured [`crate::real_images::REAL_BOXES`]): loose sand with
 /// the PRL's sand seen by the mast camera (`prl-sand-navcam`, the same
 /// view as the render's); gravel with the PRL's rocks and flagstones;
 /// compact soil with the real box nearest to it in grey-level spread.

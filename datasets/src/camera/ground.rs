@@ -50,29 +50,32 @@ impl StoneField {
     fn new(stones: Vec<Stone>, size_m: f64) -> Self {
         let cell_m = 0.1;
         let cells_per_side = (size_m / cell_m).ceil() as usize + 1;
-        let mut cells = vec![Vec::new(); cells_per_side * cells_per_side];
-        let index = |v: f64| ((v / cell_m).floor().max(0.0) as usize).min(cells_per_side - 1);
+        let mut field = Self {
+            stones: Vec::new(),
+            cell_m,
+            cells_per_side,
+            cells: vec![Vec::new(); cells_per_side * cells_per_side],
+        };
         for (k, s) in stones.iter().enumerate() {
-            for cy in index(s.y - s.radius)..=index(s.y + s.radius) {
-                for cx in index(s.x - s.radius)..=index(s.x + s.radius) {
-                    cells[cy * cells_per_side + cx].push(k as u32);
+            for cy in field.index(s.y - s.radius)..=field.index(s.y + s.radius) {
+                for cx in field.index(s.x - s.radius)..=field.index(s.x + s.radius) {
+                    field.cells[cy * cells_per_side + cx].push(k as u32);
                 }
             }
         }
-        Self {
-            stones,
-            cell_m,
-            cells_per_side,
-            cells,
-        }
+        field.stones = stones;
+        field
+    }
+
+    /// The cell along one axis of the coordinate `v` (m), clamped.
+    fn index(&self, v: f64) -> usize {
+        ((v / self.cell_m).floor().max(0.0) as usize).min(self.cells_per_side - 1)
     }
 
     /// The highest stone over `(x, y)`: its height above the ground and
     /// its albedo.
     fn at(&self, x: f64, y: f64) -> Option<(f64, f64)> {
-        let n = self.cells_per_side;
-        let index = |v: f64| ((v / self.cell_m).floor().max(0.0) as usize).min(n - 1);
-        self.cells[index(y) * n + index(x)]
+        self.cells[self.index(y) * self.cells_per_side + self.index(x)]
             .iter()
             .filter_map(|&k| {
                 let s = &self.stones[k as usize];

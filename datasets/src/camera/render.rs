@@ -107,12 +107,7 @@ impl<'a> StereoRenderer<'a> {
         sensor: SensorSpec,
         seed: u64,
     ) -> Result<Self, DatasetError> {
-        camera
-            .validate("camera")
-            .map_err(|e| DatasetError::InvalidConfig {
-                field: e.field,
-                expected: e.expected,
-            })?;
+        camera.validate("camera")?;
         sensor.validate("camera.sensor")?;
         Ok(Self {
             camera,

@@ -17,7 +17,7 @@ use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::code_version;
 use crate::execute::data::prepare_model_rows;
-pub use crate::execute::latency::Latency;
+use crate::execute::latency::Latency;
 use crate::execute::results::{DatasetSummary, ModelRows};
 
 /// One point of a learning curve.

@@ -4,7 +4,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::execute::bench::{BenchResults, BenchRow, Latency};
+use crate::execute::bench::{BenchResults, BenchRow};
+use crate::execute::latency::Latency;
 use crate::execute::prequential::FitRecord;
 use crate::output::write_file;
 use crate::report::table::{Align, Table};
