@@ -2,15 +2,19 @@
 //! `../shared/data/images/` that the rendered soils are calibrated
 //! against, each named and chosen by looking at its image, and their
 //! measurements (FAST-9 corner density at ORB-SLAM2's two thresholds,
-//! grey-level spread).
+//! ORB keypoint density, grey-level spread).
 //!
 //! The thresholds are ExoTeR's ORB-SLAM2 settings (`iniThFAST: 20`, the
 //! first try in every cell, and `minThFAST: 7`, the retry in a cell where
 //! the first found nothing). Corners are detected on the whole image, with
-//! OpenCV's non-maximum suppression, and counted inside the box.
+//! OpenCV's non-maximum suppression, and counted inside the box. ORB
+//! keypoints are extracted from the whole image with ExoTeR's ORB-SLAM2
+//! settings for its size ([`OrbParams::exoter_for_size`]: 3000 at
+//! 1024 × 768), so a box holds the share of the budget its texture wins.
 
 use std::path::Path;
 
+use gpodo_vision::orb::{Features, OrbParams, extract};
 use gpodo_vision::png_io::read_png_gray;
 use gpodo_vision::stats::{corner_density, grey_levels};
 use gpodo_vision::{GrayImage, PixelBox};
@@ -126,17 +130,46 @@ pub struct BoxMeasurement {
     pub region: RealBox,
     /// FAST-9 corners per 10⁴ pixels at each of [`FAST_THRESHOLDS`].
     pub corners_per_10k_px: [f64; 2],
+    /// ORB keypoints per 10⁴ pixels, of the whole image's.
+    pub orb_per_10k_px: f64,
     /// Mean grey level.
     pub grey_mean: f64,
     /// Standard deviation of the grey levels.
     pub grey_std: f64,
 }
 
-/// Measures `region` of `image` (the box's file, already read).
+/// The ORB features of `image` with ExoTeR's ORB-SLAM2 settings for its
+/// size.
+///
+/// # Errors
+/// [`DatasetError::Image`] for an image too small to hold a pyramid.
+pub fn orb_features(image: &GrayImage) -> Result<Features, DatasetError> {
+    Ok(extract(
+        image,
+        &OrbParams::exoter_for_size(image.width(), image.height()),
+    )?)
+}
+
+/// Keypoints of `features` inside `region`, per 10⁴ of its pixels.
+pub fn orb_density(features: &Features, region: &PixelBox) -> f64 {
+    let inside = features
+        .keypoints
+        .iter()
+        .filter(|k| region.contains(k.x.round() as usize, k.y.round() as usize))
+        .count();
+    inside as f64 * 1e4 / region.area() as f64
+}
+
+/// Measures `region` of `image` (the box's file, already read), whose ORB
+/// features are `features`.
 ///
 /// # Errors
 /// [`DatasetError::Image`] when the box leaves the image.
-pub fn measure_box(image: &GrayImage, region: RealBox) -> Result<BoxMeasurement, DatasetError> {
+pub fn measure_box(
+    image: &GrayImage,
+    features: &Features,
+    region: RealBox,
+) -> Result<BoxMeasurement, DatasetError> {
     let levels = grey_levels(image, &region.pixels)?;
     let mut corners_per_10k_px = [0.0; 2];
     for (out, threshold) in corners_per_10k_px.iter_mut().zip(FAST_THRESHOLDS) {
@@ -145,6 +178,7 @@ pub fn measure_box(image: &GrayImage, region: RealBox) -> Result<BoxMeasurement,
     Ok(BoxMeasurement {
         region,
         corners_per_10k_px,
+        orb_per_10k_px: orb_density(features, &region.pixels),
         grey_mean: levels.mean,
         grey_std: levels.std,
     })
@@ -157,28 +191,58 @@ pub fn measure_box(image: &GrayImage, region: RealBox) -> Result<BoxMeasurement,
 /// [`DatasetError::Image`] naming an image that cannot be read.
 pub fn measure_real_boxes(images_dir: &Path) -> Result<Vec<BoxMeasurement>, DatasetError> {
     let mut out = Vec::with_capacity(REAL_BOXES.len());
-    let mut last: Option<(&str, GrayImage)> = None;
+    let mut last: Option<(&str, GrayImage, Features)> = None;
     for region in REAL_BOXES {
-        let image = match last.take() {
-            Some((file, image)) if file == region.file => image,
-            _ => read_png_gray(&images_dir.join(region.file))?,
+        let (image, features) = match last.take() {
+            Some((file, image, features)) if file == region.file => (image, features),
+            _ => {
+                let image = read_png_gray(&images_dir.join(region.file))?;
+                let features = orb_features(&image)?;
+                (image, features)
+            }
         };
-        out.push(measure_box(&image, region)?);
-        last = Some((region.file, image));
+        out.push(measure_box(&image, &features, region)?);
+        last = Some((region.file, image, features));
     }
     Ok(out)
+}
+
+/// ORB keypoints of each image of [`REAL_BOXES`] under `images_dir`, as a
+/// Markdown table: image, size, keypoints (against the settings' cap) and
+/// levels.
+///
+/// # Errors
+/// [`DatasetError::Image`] naming an image that cannot be read.
+pub fn orb_image_table(images_dir: &Path) -> Result<String, DatasetError> {
+    let mut s =
+        String::from("| image | size | ORB keypoints | cap | levels |\n|---|---|---:|---:|---:|\n");
+    let mut files: Vec<&str> = REAL_BOXES.iter().map(|b| b.file).collect();
+    files.dedup();
+    for file in files {
+        let image = read_png_gray(&images_dir.join(file))?;
+        let (w, h) = (image.width(), image.height());
+        let params = OrbParams::exoter_for_size(w, h);
+        let features = extract(&image, &params)?;
+        s.push_str(&format!(
+            "| `{file}` | {w} × {h} | {} | {} | {} |\n",
+            features.keypoints.len(),
+            params.features,
+            params.levels
+        ));
+    }
+    Ok(s)
 }
 
 /// The measurements as a Markdown table (what `datasets/README.md` shows).
 pub fn markdown_table(measurements: &[BoxMeasurement]) -> String {
     let mut s = String::from(
-        "| box | image | pixels (x, y, w × h) | ground | FAST corners / 10⁴ px at 20 | at 7 | grey mean | grey std |\n|---|---|---|---|---:|---:|---:|---:|\n",
+        "| box | image | pixels (x, y, w × h) | ground | FAST corners / 10⁴ px at 20 | at 7 | ORB keypoints / 10⁴ px | grey mean | grey std |\n|---|---|---|---|---:|---:|---:|---:|---:|\n",
     );
     for m in measurements {
         let r = &m.region;
         let p = r.pixels;
         s.push_str(&format!(
-            "| {} | `{}` | ({}, {}, {} × {}) | {:?} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
+            "| {} | `{}` | ({}, {}, {} × {}) | {:?} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
             r.name,
             r.file,
             p.x,
@@ -188,6 +252,7 @@ pub fn markdown_table(measurements: &[BoxMeasurement]) -> String {
             r.ground,
             m.corners_per_10k_px[0],
             m.corners_per_10k_px[1],
+            m.orb_per_10k_px,
             m.grey_mean,
             m.grey_std
         ));

@@ -6,7 +6,9 @@
 
 use std::path::Path;
 
-use gpodo_datasets::real_images::{REAL_BOXES, markdown_table, measure_real_boxes};
+use gpodo_datasets::real_images::{
+    REAL_BOXES, markdown_table, measure_real_boxes, orb_image_table,
+};
 
 #[test]
 fn the_readme_table_of_real_image_boxes_is_what_the_images_give() {
@@ -29,6 +31,11 @@ fn the_readme_table_of_real_image_boxes_is_what_the_images_give() {
     assert!(
         readme.contains(&table),
         "datasets/README.md should hold the table the images give:\n{table}"
+    );
+    let orb = orb_image_table(&root.join("../../shared/data/images")).unwrap();
+    assert!(
+        readme.contains(&orb),
+        "datasets/README.md should hold the ORB counts the images give:\n{orb}"
     );
 }
 

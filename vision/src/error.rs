@@ -30,4 +30,12 @@ pub enum VisionError {
         /// What did not fit.
         detail: String,
     },
+    /// A setting out of its range.
+    #[error("{field}: expected {expected}")]
+    InvalidParameter {
+        /// The setting.
+        field: &'static str,
+        /// What it must be.
+        expected: &'static str,
+    },
 }

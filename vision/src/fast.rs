@@ -96,8 +96,20 @@ pub fn score_at(image: &GrayImage, x: usize, y: usize, threshold: u8) -> Option<
     if x < 3 || y < 3 || x + 3 >= image.width() || y + 3 >= image.height() {
         return None;
     }
-    let d = differences(image, x, y);
     let t = i16::from(threshold);
+    // Any 9 contiguous circle pixels hold 2 of the 4 compass pixels (0, 4,
+    // 8, 12): without 2 of them on one side there is no corner.
+    let centre = i16::from(image.get(x, y));
+    let (mut dark, mut bright) = (0, 0);
+    for (dx, dy) in [CIRCLE[0], CIRCLE[4], CIRCLE[8], CIRCLE[12]] {
+        let v = centre - i16::from(image.get(x.wrapping_add_signed(dx), y.wrapping_add_signed(dy)));
+        dark += usize::from(v > t);
+        bright += usize::from(v < -t);
+    }
+    if dark < 2 && bright < 2 {
+        return None;
+    }
+    let d = differences(image, x, y);
     // A dark neighbour has a positive difference.
     let corner = has_arc(&d, |v| v > t) || has_arc(&d, |v| v < -t);
     corner.then(|| corner_score(&d, threshold))
@@ -127,6 +139,24 @@ pub fn detect(image: &GrayImage, threshold: u8, nonmax: bool) -> Vec<Corner> {
             .all(|y| (c.x - 1..=c.x + 1).all(|x| (x == c.x && y == c.y) || c.score > at(x, y)))
     });
     found
+}
+
+/// The FAST score of every pixel at `threshold`, row-major: the corner's
+/// score (at least `threshold`), or 0 where there is no corner. A corner's
+/// score does not depend on the threshold it was found at, so one map at
+/// the lower of two thresholds answers both: a pixel is a corner at
+/// `t ≥ threshold` exactly when its score is at least `t`.
+pub fn score_map(image: &GrayImage, threshold: u8) -> Vec<u8> {
+    let (width, height) = (image.width(), image.height());
+    let mut scores = vec![0u8; width * height];
+    for y in 3..height.saturating_sub(3) {
+        for x in 3..width.saturating_sub(3) {
+            if let Some(score) = score_at(image, x, y, threshold) {
+                scores[y * width + x] = score;
+            }
+        }
+    }
+    scores
 }
 
 /// The corners of `corners` inside `region`.

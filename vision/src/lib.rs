@@ -1,7 +1,8 @@
 //! Image primitives for gpodo's camera: 8-bit grey images ([`GrayImage`]),
 //! PNG reading and writing ([`png_io`]), the FAST corner detector as
-//! ORB-SLAM and OpenCV run it ([`fast`]), and the statistics a rendered
-//! soil is calibrated by ([`stats`]).
+//! ORB-SLAM and OpenCV run it ([`fast`]), scale pyramids and blur
+//! ([`pyramid`]), ORB features as ORB-SLAM2 extracts them ([`orb`]), and
+//! the statistics a rendered soil is calibrated by ([`stats`]).
 //!
 //! The crate depends on nothing of gpodo's, so the simulator (which
 //! renders and calibrates images) and the front end (which tracks
@@ -10,7 +11,9 @@
 mod error;
 pub mod fast;
 mod image;
+pub mod orb;
 pub mod png_io;
+pub mod pyramid;
 pub mod stats;
 
 pub use error::VisionError;

@@ -14,7 +14,7 @@ use nalgebra::{Isometry3, Vector3};
 
 use super::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use crate::DatasetError;
-use crate::real_images::{FAST_THRESHOLDS, PRL_SAND_NAVCAM};
+use crate::real_images::{FAST_THRESHOLDS, PRL_SAND_NAVCAM, orb_density, orb_features};
 use crate::sim::soil::{Soil, SoilMap};
 use crate::sim::terrain::Terrain;
 
@@ -34,6 +34,9 @@ pub struct RenderedSoil {
     pub soil: String,
     /// FAST-9 corners per 10⁴ pixels at each of [`FAST_THRESHOLDS`].
     pub corners_per_10k_px: [f64; 2],
+    /// ORB keypoints per 10⁴ pixels, of the whole image's
+    /// ([`crate::real_images::orb_features`]).
+    pub orb_per_10k_px: f64,
     /// Mean grey level.
     pub grey_mean: f64,
     /// Standard deviation of the grey levels.
@@ -65,7 +68,7 @@ pub fn render_soil(
     let camera = CameraParams::exoter_bumblebee2();
     let body = Isometry3::new(Vector3::new(1.0, 3.0, 0.25), Vector3::zeros());
     let region = PRL_SAND_NAVCAM;
-    let mut sums = [0.0; 4];
+    let mut sums = [0.0; 5];
     let mut first = None;
     for seed in CALIBRATION_SEEDS {
         let ground = GroundMaps::build(&terrain, &soils, &spec, seed)?;
@@ -76,6 +79,7 @@ pub fn render_soil(
         sums[1] += corner_density(&image, &region, FAST_THRESHOLDS[1])?;
         sums[2] += levels.mean;
         sums[3] += levels.std;
+        sums[4] += orb_density(&orb_features(&image)?, &region);
         first.get_or_insert(image);
     }
     let n = CALIBRATION_SEEDS.len() as f64;
@@ -85,6 +89,7 @@ pub fn render_soil(
         corners_per_10k_px: [sums[0] / n, sums[1] / n],
         grey_mean: sums[2] / n,
         grey_std: sums[3] / n,
+        orb_per_10k_px: sums[4] / n,
         image,
     })
 }
@@ -99,6 +104,8 @@ pub struct SoilComparison {
     pub real_boxes: Vec<&'static str>,
     /// Their mean FAST densities at [`FAST_THRESHOLDS`].
     pub real_corners_per_10k_px: [f64; 2],
+    /// Their mean ORB keypoint density.
+    pub real_orb_per_10k_px: f64,
     /// Their mean grey-level spread.
     pub real_grey_std: f64,
 }
@@ -143,6 +150,7 @@ pub fn compare_soils(
                 mean(&|b| b.corners_per_10k_px[0]),
                 mean(&|b| b.corners_per_10k_px[1]),
             ],
+            real_orb_per_10k_px: mean(&|b| b.orb_per_10k_px),
             real_grey_std: mean(&|b| b.grey_std),
             rendered,
             real_boxes: names,
@@ -175,12 +183,12 @@ pub fn compare_soils(
 /// The comparison as a Markdown table (what `datasets/README.md` shows).
 pub fn comparison_table(comparisons: &[SoilComparison]) -> String {
     let mut s = String::from(
-        "| soil | real counterpart | FAST / 10⁴ px at 20: real | rendered | ratio | at 7: real | rendered | ratio | grey std: real | rendered |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| soil | real counterpart | FAST / 10⁴ px at 20: real | rendered | ratio | at 7: real | rendered | ratio | ORB / 10⁴ px: real | rendered | grey std: real | rendered |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for c in comparisons {
         let [r20, r7] = c.ratios();
         s.push_str(&format!(
-            "| {} | {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} |\n",
+            "| {} | {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
             c.rendered.soil,
             c.real_boxes
                 .iter()
@@ -193,6 +201,8 @@ pub fn comparison_table(comparisons: &[SoilComparison]) -> String {
             c.real_corners_per_10k_px[1],
             c.rendered.corners_per_10k_px[1],
             r7,
+            c.real_orb_per_10k_px,
+            c.rendered.orb_per_10k_px,
             c.real_grey_std,
             c.rendered.grey_std,
         ));

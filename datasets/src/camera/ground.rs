@@ -11,7 +11,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::look::{SceneSpec, SoilLook};
+use super::max_mips::MaxMips;
 use super::noise::{mix, octaves};
+use super::tiled::TiledGrid;
 use crate::DatasetError;
 use crate::sim::soil::SoilMap;
 use crate::sim::terrain::Terrain;
@@ -131,8 +133,10 @@ pub struct GroundMaps {
     cell_m: f64,
     /// Samples per side (`size / cell + 1`).
     n: usize,
-    height: Vec<f32>,
-    radiance: Vec<f32>,
+    height: TiledGrid,
+    /// The height map's maximum mipmap, for casting rays.
+    mips: MaxMips,
+    radiance: TiledGrid,
     /// The highest point of the area (m).
     pub max_height_m: f64,
     /// The lab floor's radiance beyond the area.
@@ -210,19 +214,22 @@ impl GroundMaps {
         let max_height_m = height
             .iter()
             .fold(f64::NEG_INFINITY, |m, &h| m.max(f64::from(h)));
+        let height = TiledGrid::from_row_major(n, &height);
+        let mips = MaxMips::build(&height);
         let mut maps = Self {
             size_m,
             cell_m,
             n,
             height,
-            radiance: Vec::new(),
+            mips,
+            radiance: TiledGrid::from_row_major(0, &[]),
             max_height_m,
             floor_radiance: spec.floor_albedo
                 * (spec.lighting.ambient
                     + spec.lighting.key * spec.lighting.key_elevation_rad.sin()),
             background: spec.background,
         };
-        maps.radiance = maps.shade(&albedo, spec);
+        maps.radiance = TiledGrid::from_row_major(n, &maps.shade(&albedo, spec));
         Ok(maps)
     }
 
@@ -238,7 +245,7 @@ impl GroundMaps {
             .map(|j| {
                 (0..n)
                     .map(|i| {
-                        let h = |i: usize, j: usize| f64::from(self.height[j * n + i]);
+                        let h = |i: usize, j: usize| f64::from(self.height.at(i, j));
                         let (i0, i1) = (i.saturating_sub(1), (i + 1).min(n - 1));
                         let (j0, j1) = (j.saturating_sub(1), (j + 1).min(n - 1));
                         let dx = (h(i1, j) - h(i0, j)) / ((i1 - i0) as f64 * self.cell_m);
@@ -263,7 +270,7 @@ impl GroundMaps {
     /// until it rises above the highest ground.
     fn lit(&self, i: usize, j: usize, towards: &nalgebra::Vector3<f64>) -> bool {
         let (x0, y0) = (i as f64 * self.cell_m, j as f64 * self.cell_m);
-        let z0 = f64::from(self.height[j * self.n + i]) + 1e-4;
+        let z0 = f64::from(self.height.at(i, j)) + 1e-4;
         let horizontal = (towards.x.powi(2) + towards.y.powi(2)).sqrt();
         if horizontal < 1e-9 {
             return true;
@@ -288,7 +295,7 @@ impl GroundMaps {
         true
     }
 
-    fn bilinear(&self, data: &[f32], x: f64, y: f64) -> Option<f64> {
+    fn bilinear(&self, data: &TiledGrid, x: f64, y: f64) -> Option<f64> {
         if !(x >= 0.0 && y >= 0.0 && x <= self.size_m && y <= self.size_m) {
             return None;
         }
@@ -296,7 +303,7 @@ impl GroundMaps {
         let last = self.n - 2;
         let (i, j) = ((u as usize).min(last), (v as usize).min(last));
         let (tx, ty) = (u - i as f64, v - j as f64);
-        let at = |i: usize, j: usize| f64::from(data[j * self.n + i]);
+        let at = |i: usize, j: usize| f64::from(data.at(i, j));
         let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
         let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
         Some(top + (bottom - top) * ty)
@@ -317,6 +324,61 @@ impl GroundMaps {
     pub fn radiance(&self, x: f64, y: f64) -> f64 {
         self.bilinear(&self.radiance, x, y)
             .unwrap_or(self.floor_radiance)
+    }
+
+    /// The first length `t` in `[t_start, t_end]` (m) at which the ray
+    /// from `origin` along the unit `dir` meets the ground: the map's
+    /// bilinear surface inside the area, the lab floor (height 0) outside.
+    pub fn first_hit(
+        &self,
+        origin: &nalgebra::Point3<f64>,
+        dir: &nalgebra::Vector3<f64>,
+        t_start: f64,
+        t_end: f64,
+    ) -> Option<f64> {
+        // The span of the ray over the area, if any.
+        let mut span = (t_start, t_end);
+        for (o, d) in [(origin.x, dir.x), (origin.y, dir.y)] {
+            if d == 0.0 {
+                if !(0.0..=self.size_m).contains(&o) {
+                    span = (f64::INFINITY, f64::NEG_INFINITY);
+                }
+                continue;
+            }
+            let (a, b) = (-o / d, (self.size_m - o) / d);
+            span = (span.0.max(a.min(b)), span.1.min(a.max(b)));
+        }
+        let floor = (dir.z < 0.0)
+            .then(|| -origin.z / dir.z)
+            .filter(|t| (t_start..=t_end).contains(t));
+        if span.0 > span.1 {
+            return floor;
+        }
+        // The floor before the ray enters the area.
+        if let Some(t) = floor.filter(|&t| t < span.0) {
+            return Some(t);
+        }
+        // Nothing in the area is met above its highest point.
+        let below_top = if dir.z < 0.0 {
+            (origin.z - self.max_height_m) / -dir.z
+        } else if origin.z > self.max_height_m {
+            f64::INFINITY
+        } else {
+            span.0
+        };
+        let inside = (below_top.max(span.0) <= span.1)
+            .then(|| {
+                self.mips.first_hit(
+                    &self.height,
+                    self.cell_m,
+                    [origin.x, origin.y, origin.z],
+                    [dir.x, dir.y, dir.z],
+                    below_top.max(span.0),
+                    span.1,
+                )
+            })
+            .flatten();
+        inside.or(floor.filter(|&t| t > span.1))
     }
 
     /// The side of the test area (m).

@@ -21,8 +21,10 @@
 pub mod calibration;
 pub mod ground;
 pub mod look;
+mod max_mips;
 mod noise;
 pub mod render;
+mod tiled;
 pub mod traverse;
 
 pub use ground::GroundMaps;

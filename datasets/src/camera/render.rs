@@ -1,5 +1,5 @@
 //! A rectified stereo pair rendered from the precomputed ground: one ray
-//! per pixel marched over the height map (bisected to the surface), the
+//! per pixel cast over the height map's maximum mipmap to the surface, the
 //! radiance there, the depth along the left camera's optical axis, the
 //! motion blur of the exposure, then the sensor's shot and read noise and
 //! 8-bit quantisation.
@@ -201,41 +201,10 @@ impl<'a> StereoRenderer<'a> {
     }
 
     /// Where the ray from `origin` along the unit `dir` first meets the
-    /// ground: its length and the point. Marched with steps that cannot
-    /// pass a slope of 1.5 from above, then bisected to the surface.
+    /// ground within [`MAX_RANGE_M`]: its length and the point.
     fn trace(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<(f64, Point3<f64>)> {
-        let ground = self.ground;
-        let gap = |t: f64| {
-            let p = origin + dir * t;
-            p.z - ground.height(p.x, p.y)
-        };
-        let horizontal = (dir.x * dir.x + dir.y * dir.y).sqrt();
-        let closing = (-dir.z).max(0.0) + 1.5 * horizontal;
-        let min_step = 0.0005;
-        let top = ground.max_height_m.max(0.0) + 0.01;
-        let (mut t0, mut t) = (0.0, 0.01);
-        while t < MAX_RANGE_M {
-            let p = origin + dir * t;
-            if p.z > top && dir.z >= 0.0 {
-                return None;
-            }
-            let g = gap(t);
-            if g <= 0.0 {
-                for _ in 0..12 {
-                    let mid = 0.5 * (t0 + t);
-                    if gap(mid) > 0.0 {
-                        t0 = mid;
-                    } else {
-                        t = mid;
-                    }
-                }
-                let t = 0.5 * (t0 + t);
-                return Some((t, origin + dir * t));
-            }
-            t0 = t;
-            t += (g / closing).clamp(min_step, 1.0);
-        }
-        None
+        let t = self.ground.first_hit(origin, dir, 0.01, MAX_RANGE_M)?;
+        Some((t, origin + dir * t))
     }
 
     /// The radiance integrated over the exposure: each pixel's ground

@@ -1,0 +1,316 @@
+//! Rays cast over the ground's height map through its maximum mipmap
+//! (Tevs, Ihrke & Seidel, "Maximum mipmaps for fast, accurate, and
+//! scalable dynamic height field rendering", I3D 2008): level 0 holds the
+//! highest corner of each map cell, level `k` the highest of the `2^k ×
+//! 2^k` cells under it. A ray passes over a whole block in one step when it
+//! stays above the block's highest point, descends into the block
+//! otherwise, and in a single cell meets the bilinear surface exactly (a
+//! quadratic along the ray). The hit is the ray's first intersection with
+//! the same surface that [`super::GroundMaps::height`] interpolates.
+
+use rayon::prelude::*;
+
+use super::tiled::TiledGrid;
+
+/// The maximum mipmap of a square height map of `n × n` samples.
+pub(super) struct MaxMips {
+    /// Level `k`: the highest height of each block of `2^k × 2^k` cells,
+    /// `sides[k]` blocks per side.
+    levels: Vec<TiledGrid>,
+    sides: Vec<usize>,
+}
+
+/// A ray in map units: the horizontal position in cells, the height in
+/// metres, both affine in the ray's length `t` (m).
+#[derive(Clone, Copy)]
+struct MapRay {
+    u0: f64,
+    v0: f64,
+    z0: f64,
+    du: f64,
+    dv: f64,
+    dz: f64,
+    /// `1 / du` and `1 / dv` (infinite along an axis the ray keeps).
+    inv_du: f64,
+    inv_dv: f64,
+}
+
+impl MapRay {
+    fn z(&self, t: f64) -> f64 {
+        self.z0 + self.dz * t
+    }
+
+    /// Where the ray leaves the block `(i, j)` of side `size` cells, and
+    /// which of its two axes it leaves by (`(true, false)` across u, both
+    /// at a corner).
+    fn exit(&self, i: usize, j: usize, size: f64) -> (f64, bool, bool) {
+        let across = |o: f64, d: f64, inv: f64, k: usize| {
+            if d > 0.0 {
+                ((k + 1) as f64 * size - o) * inv
+            } else if d < 0.0 {
+                (k as f64 * size - o) * inv
+            } else {
+                f64::INFINITY
+            }
+        };
+        let (tu, tv) = (
+            across(self.u0, self.du, self.inv_du, i),
+            across(self.v0, self.dv, self.inv_dv, j),
+        );
+        (tu.min(tv), tu <= tv, tv <= tu)
+    }
+}
+
+/// The block along one axis that holds the coordinate `c ≥ 0` (cells) for
+/// a ray moving by `d` per metre: a coordinate on a boundary belongs to the
+/// block the ray is entering. (Truncation is the floor of a non-negative
+/// number, and cheaper than `floor` where the CPU has no rounding
+/// instruction.)
+fn block(c: f64, d: f64, size: f64, side: usize) -> usize {
+    // `size` is a power of two: its reciprocal is exact.
+    let q = (c * size.recip()).max(0.0);
+    let k = q as usize;
+    let k = if d < 0.0 && k as f64 == q {
+        k.saturating_sub(1)
+    } else {
+        k
+    };
+    k.min(side - 1)
+}
+
+/// One step to the next block along an axis; `None` past the map's edge.
+fn step(k: usize, d: f64, side: usize) -> Option<usize> {
+    if d > 0.0 {
+        (k + 1 < side).then_some(k + 1)
+    } else {
+        k.checked_sub(1)
+    }
+}
+
+impl MaxMips {
+    /// The mipmap of `height` (at least 2 × 2 samples).
+    pub(super) fn build(height: &TiledGrid) -> Self {
+        let cells = height.side() - 1;
+        let base: Vec<f32> = (0..cells)
+            .into_par_iter()
+            .flat_map_iter(|j| {
+                (0..cells).map(move |i| {
+                    let at = |i: usize, j: usize| height.at(i, j);
+                    at(i, j)
+                        .max(at(i + 1, j))
+                        .max(at(i, j + 1).max(at(i + 1, j + 1)))
+                })
+            })
+            .collect();
+        let mut levels = vec![TiledGrid::from_row_major(cells, &base)];
+        let mut sides = vec![cells];
+        let mut below = base;
+        while let Some(&side) = sides.last() {
+            if side <= 1 {
+                break;
+            }
+            let up = side.div_ceil(2);
+            let next: Vec<f32> = (0..up)
+                .into_par_iter()
+                .flat_map_iter(|j| {
+                    let below = &below;
+                    (0..up).map(move |i| {
+                        let mut m = f32::NEG_INFINITY;
+                        for jj in (2 * j)..(2 * j + 2).min(side) {
+                            for ii in (2 * i)..(2 * i + 2).min(side) {
+                                m = m.max(below[jj * side + ii]);
+                            }
+                        }
+                        m
+                    })
+                })
+                .collect();
+            levels.push(TiledGrid::from_row_major(up, &next));
+            sides.push(up);
+            below = next;
+        }
+        Self { levels, sides }
+    }
+
+    /// The first length `t` in `[t_start, t_end]` at which the ray from
+    /// `origin` along `dir` (both in metres, the map's origin at `(0, 0)`,
+    /// `cell_m` per cell) meets the bilinear surface of `height`, or
+    /// `None` if it stays above it (or outside the map) over that span.
+    pub(super) fn first_hit(
+        &self,
+        height: &TiledGrid,
+        cell_m: f64,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        t_start: f64,
+        t_end: f64,
+    ) -> Option<f64> {
+        let ray = MapRay {
+            u0: origin[0] / cell_m,
+            v0: origin[1] / cell_m,
+            z0: origin[2],
+            du: dir[0] / cell_m,
+            dv: dir[1] / cell_m,
+            dz: dir[2],
+            inv_du: cell_m / dir[0],
+            inv_dv: cell_m / dir[1],
+        };
+        let cells = self.sides[0];
+        // The span of the ray over the map.
+        let (mut t, mut t_end) = (t_start, t_end);
+        for (o, d) in [(ray.u0, ray.du), (ray.v0, ray.dv)] {
+            if d == 0.0 {
+                if !(0.0..=cells as f64).contains(&o) {
+                    return None;
+                }
+                continue;
+            }
+            let (a, b) = (-o / d, (cells as f64 - o) / d);
+            t = t.max(a.min(b));
+            t_end = t_end.min(a.max(b));
+        }
+        if t > t_end {
+            return None;
+        }
+        let top = self.levels.len() - 1;
+        let mut level = top.min(4);
+        let size = |level: usize| (1u64 << level) as f64;
+        let side = self.sides[level];
+        let (mut i, mut j) = (
+            block(ray.u0 + ray.du * t, ray.du, size(level), side),
+            block(ray.v0 + ray.dv * t, ray.dv, size(level), side),
+        );
+        loop {
+            let side = self.sides[level];
+            let (exit, across_u, across_v) = ray.exit(i, j, size(level));
+            let exit = exit.clamp(t, t_end);
+            let highest = f64::from(self.levels[level].at(i, j));
+            if level > 0 && ray.z(t).min(ray.z(exit)) <= highest {
+                // The ray may meet the ground in this block: look closer.
+                level -= 1;
+                let half = size(level);
+                let pick = |c: f64, d: f64, k: usize| {
+                    block(c, d, half, self.sides[level])
+                        .clamp(2 * k, (2 * k + 1).min(self.sides[level] - 1))
+                };
+                i = pick(ray.u0 + ray.du * t, ray.du, i);
+                j = pick(ray.v0 + ray.dv * t, ray.dv, j);
+                continue;
+            }
+            if level == 0
+                && ray.z(t).min(ray.z(exit)) <= highest
+                && let Some(hit) = cell_hit(height, &ray, i, j, t, exit)
+            {
+                return Some(hit);
+            }
+            // Over this block: on to the next one.
+            if exit >= t_end {
+                return None;
+            }
+            t = exit;
+            let (mut parent_crossed, mut inside) = (false, true);
+            if across_u {
+                match step(i, ray.du, side) {
+                    Some(next) => {
+                        parent_crossed |= next / 2 != i / 2;
+                        i = next;
+                    }
+                    None => inside = false,
+                }
+            }
+            if across_v {
+                match step(j, ray.dv, side) {
+                    Some(next) => {
+                        parent_crossed |= next / 2 != j / 2;
+                        j = next;
+                    }
+                    None => inside = false,
+                }
+            }
+            if !inside {
+                return None;
+            }
+            if parent_crossed && level < top {
+                level += 1;
+                i /= 2;
+                j /= 2;
+            }
+        }
+    }
+}
+
+/// The first `t` in `[t_in, t_out]` at which the ray meets the bilinear
+/// patch of the map cell `(i, j)`: along the ray the patch's height is a
+/// quadratic in `t`, so the gap `z − h` is one too.
+fn cell_hit(
+    height: &TiledGrid,
+    ray: &MapRay,
+    i: usize,
+    j: usize,
+    t_in: f64,
+    t_out: f64,
+) -> Option<f64> {
+    let at = |i: usize, j: usize| f64::from(height.at(i, j));
+    let h00 = at(i, j);
+    let (a, b) = (at(i + 1, j) - h00, at(i, j + 1) - h00);
+    let c = at(i + 1, j + 1) - at(i + 1, j) - at(i, j + 1) + h00;
+    let s0 = ray.u0 + ray.du * t_in - i as f64;
+    let r0 = ray.v0 + ray.dv * t_in - j as f64;
+    // gap(τ) = g0 + g1 τ + g2 τ², τ = t − t_in.
+    let g0 = ray.z(t_in) - (h00 + a * s0 + b * r0 + c * s0 * r0);
+    let g1 = ray.dz - a * ray.du - b * ray.dv - c * (s0 * ray.dv + r0 * ray.du);
+    let g2 = -c * ray.du * ray.dv;
+    if g0 <= 0.0 {
+        return Some(t_in);
+    }
+    let span = t_out - t_in;
+    let tau = smallest_root(g0, g1, g2)?;
+    (tau <= span).then_some(t_in + tau)
+}
+
+/// The smallest positive root of `g0 + g1 τ + g2 τ²` with `g0 > 0`, where
+/// the polynomial first turns non-positive.
+fn smallest_root(g0: f64, g1: f64, g2: f64) -> Option<f64> {
+    if g2.abs() <= 1e-12 * (g1.abs() + g0.abs()) {
+        return (g1 < 0.0).then(|| -g0 / g1);
+    }
+    let disc = g1 * g1 - 4.0 * g2 * g0;
+    if disc < 0.0 {
+        return None;
+    }
+    // The stable pair of roots: q = −(g1 + sign(g1) √disc) / 2.
+    let q = -0.5 * (g1 + g1.signum() * disc.sqrt());
+    let (r1, r2) = (q / g2, if q != 0.0 { g0 / q } else { f64::INFINITY });
+    [r1, r2]
+        .into_iter()
+        .filter(|r| *r > 0.0 && r.is_finite())
+        .min_by(f64::total_cmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_smallest_root_is_the_first_crossing() {
+        // (τ − 1)(τ − 3) = 3 − 4τ + τ².
+        assert!((smallest_root(3.0, -4.0, 1.0).unwrap() - 1.0).abs() < 1e-12);
+        // Linear: 2 − τ.
+        assert!((smallest_root(2.0, -1.0, 0.0).unwrap() - 2.0).abs() < 1e-12);
+        // Always positive: 1 + τ².
+        assert!(smallest_root(1.0, 0.0, 1.0).is_none());
+        // Opening downward: 1 + τ − τ² crosses at (1 + √5) / 2.
+        let r = smallest_root(1.0, 1.0, -1.0).unwrap();
+        assert!((r - 0.5 * (1.0 + 5f64.sqrt())).abs() < 1e-12);
+    }
+
+    #[test]
+    fn every_level_bounds_the_level_below() {
+        let n = 11;
+        let height: Vec<f32> = (0..n * n).map(|k| ((k * 37) % 17) as f32 * 0.01).collect();
+        let mips = MaxMips::build(&TiledGrid::from_row_major(n, &height));
+        assert_eq!(mips.sides, vec![10, 5, 3, 2, 1]);
+        let top = mips.levels.last().unwrap().at(0, 0);
+        assert_eq!(top, height.iter().copied().fold(f32::MIN, f32::max));
+    }
+}

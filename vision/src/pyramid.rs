@@ -1,0 +1,161 @@
+//! Scale pyramids and the filters ORB needs: bilinear resampling (the
+//! pixel-centre convention of OpenCV's `INTER_LINEAR`) and a separable
+//! Gaussian blur with mirrored borders (`BORDER_REFLECT_101`).
+
+use crate::GrayImage;
+
+/// An image at several scales: level `l` is the original shrunk by
+/// `scale_factor^l`, each level resampled from the one before.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pyramid {
+    /// The levels, from the original.
+    pub levels: Vec<GrayImage>,
+    /// Each level's scale: original pixels per level pixel.
+    pub scales: Vec<f64>,
+}
+
+impl Pyramid {
+    /// The pyramid of `image` with `levels` levels (at least 1), each
+    /// `scale_factor` (> 1) smaller than the one before, sizes rounded.
+    pub fn new(image: &GrayImage, levels: usize, scale_factor: f64) -> Self {
+        let mut out = Self {
+            levels: vec![image.clone()],
+            scales: vec![1.0],
+        };
+        for l in 1..levels.max(1) {
+            let scale = scale_factor.powi(l as i32);
+            let w = ((image.width() as f64 / scale).round() as usize).max(1);
+            let h = ((image.height() as f64 / scale).round() as usize).max(1);
+            let below = &out.levels[l - 1];
+            out.levels.push(resize_bilinear(below, w, h));
+            out.scales.push(scale);
+        }
+        out
+    }
+}
+
+/// `image` resampled to `width × height` by bilinear interpolation, the
+/// destination pixel `(x, y)` taken at `((x + ½) s_x − ½, (y + ½) s_y − ½)`
+/// of the source, clamped to its edge, rounded to the nearest grey level.
+pub fn resize_bilinear(image: &GrayImage, width: usize, height: usize) -> GrayImage {
+    let (sw, sh) = (image.width(), image.height());
+    let (sx, sy) = (sw as f64 / width as f64, sh as f64 / height as f64);
+    // Source index and weight of the right/lower neighbour, per column/row.
+    let taps = |n: usize, s: f64, limit: usize| -> Vec<(usize, usize, f32)> {
+        (0..n)
+            .map(|k| {
+                let c = ((k as f64 + 0.5) * s - 0.5).clamp(0.0, (limit - 1) as f64);
+                let i = c as usize;
+                let next = (i + 1).min(limit - 1);
+                (i, next, (c - i as f64) as f32)
+            })
+            .collect()
+    };
+    let (cols, rows) = (taps(width, sx, sw), taps(height, sy, sh));
+    let mut pixels = Vec::with_capacity(width * height);
+    for &(j0, j1, wy) in &rows {
+        let (r0, r1) = (image.row(j0), image.row(j1));
+        for &(i0, i1, wx) in &cols {
+            let top = f32::from(r0[i0]) + (f32::from(r0[i1]) - f32::from(r0[i0])) * wx;
+            let bottom = f32::from(r1[i0]) + (f32::from(r1[i1]) - f32::from(r1[i0])) * wx;
+            pixels.push((top + (bottom - top) * wy).round().clamp(0.0, 255.0) as u8);
+        }
+    }
+    GrayImage::from_pixels(width, height, pixels)
+        .unwrap_or_else(|_| GrayImage::filled(width, height, 0))
+}
+
+/// The index `k` reflected into `0..n` without repeating the edge
+/// (`BORDER_REFLECT_101`: `-1 → 1`, `n → n − 2`).
+fn reflect_101(k: isize, n: usize) -> usize {
+    let n = n as isize;
+    if n == 1 {
+        return 0;
+    }
+    let period = 2 * (n - 1);
+    let k = k.rem_euclid(period);
+    (if k < n { k } else { period - k }) as usize
+}
+
+/// `image` blurred by a Gaussian of standard deviation `sigma` over a
+/// `(2 radius + 1)²` window (normalised weights; rows, then columns),
+/// mirrored at the borders, rounded to the nearest grey level.
+pub fn gaussian_blur(image: &GrayImage, radius: usize, sigma: f64) -> GrayImage {
+    let (w, h) = (image.width(), image.height());
+    let r = radius as isize;
+    let mut weights: Vec<f32> = (-r..=r)
+        .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+        .collect();
+    let total: f32 = weights.iter().sum();
+    weights.iter_mut().for_each(|v| *v /= total);
+    let mut across = vec![0f32; w * h];
+    for y in 0..h {
+        let row = image.row(y);
+        for x in 0..w {
+            across[y * w + x] = weights
+                .iter()
+                .enumerate()
+                .map(|(k, wk)| wk * f32::from(row[reflect_101(x as isize + k as isize - r, w)]))
+                .sum();
+        }
+    }
+    let mut pixels = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let v: f32 = weights
+                .iter()
+                .enumerate()
+                .map(|(k, wk)| wk * across[reflect_101(y as isize + k as isize - r, h) * w + x])
+                .sum();
+            pixels.push(v.round().clamp(0.0, 255.0) as u8);
+        }
+    }
+    GrayImage::from_pixels(w, h, pixels).unwrap_or_else(|_| GrayImage::filled(w, h, 0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(w: usize, h: usize) -> GrayImage {
+        let pixels = (0..w * h).map(|k| ((k % w) * 2 + (k / w)) as u8).collect();
+        GrayImage::from_pixels(w, h, pixels).unwrap()
+    }
+
+    #[test]
+    fn reflection_does_not_repeat_the_edge() {
+        let got: Vec<usize> = (-3..8).map(|k| reflect_101(k, 5)).collect();
+        assert_eq!(got, vec![3, 2, 1, 0, 1, 2, 3, 4, 3, 2, 1]);
+    }
+
+    #[test]
+    fn a_ramp_survives_blur_and_halving_as_a_ramp() {
+        let image = ramp(40, 30);
+        // A linear ramp is a fixed point of a symmetric blur inside.
+        let blurred = gaussian_blur(&image, 3, 2.0);
+        for y in 3..27 {
+            for x in 3..37 {
+                assert_eq!(blurred.get(x, y), image.get(x, y));
+            }
+        }
+        // Halving takes each 2 × 2 block's centre: the ramp's value there.
+        let half = resize_bilinear(&image, 20, 15);
+        for y in 0..15 {
+            for x in 0..20 {
+                let expected = (2.0 * (2 * x) as f64 + 1.0 + (2 * y) as f64 + 0.5).round();
+                assert_eq!(f64::from(half.get(x, y)), expected, "({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn the_pyramid_shrinks_by_the_factor() {
+        let pyramid = Pyramid::new(&ramp(100, 60), 4, 1.2);
+        let sizes: Vec<(usize, usize)> = pyramid
+            .levels
+            .iter()
+            .map(|l| (l.width(), l.height()))
+            .collect();
+        assert_eq!(sizes, vec![(100, 60), (83, 50), (69, 42), (58, 35)]);
+    }
+}
