@@ -168,6 +168,12 @@ pub fn features_per_level(features: usize, levels: usize, scale_factor: f64) -> 
 pub fn extract(image: &GrayImage, params: &OrbParams) -> Result<Features, VisionError> {
     params.validate()?;
     let pyramid = Pyramid::new(image, params.levels, params.scale_factor);
+    Ok(extract_from_pyramid(&pyramid, params))
+}
+
+/// The ORB features of the image whose pyramid is `pyramid` (built with
+/// `params`' levels and scale factor; settings already checked).
+pub fn extract_from_pyramid(pyramid: &Pyramid, params: &OrbParams) -> Features {
     let budgets = features_per_level(params.features, params.levels, params.scale_factor);
     let mut features = Features {
         scales: pyramid.scales.clone(),
@@ -192,7 +198,7 @@ pub fn extract(image: &GrayImage, params: &OrbParams) -> Result<Features, Vision
             });
         }
     }
-    Ok(features)
+    features
 }
 
 /// The corners of each grid cell of `level`: at the first threshold, or

@@ -12,6 +12,7 @@
 pub mod camera;
 pub mod replay;
 pub mod simulated;
+pub mod stereo;
 
 use nalgebra::{Isometry3, Matrix6};
 use serde::{Deserialize, Serialize};
