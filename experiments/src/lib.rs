@@ -25,6 +25,7 @@ pub mod import;
 pub mod memory;
 pub mod output;
 pub mod plan;
+pub mod rendered_frames;
 pub mod report;
 pub mod runner;
 pub mod shard;

@@ -27,7 +27,8 @@
 //!
 //! Keypoints are at least 19 pixels from every edge of their level (the
 //! rotated pattern stays inside), their positions given in the original
-//! image's pixels.
+//! image's pixels with the pyramid's pixel-centre convention (ORB-SLAM2
+//! multiplies by the scale, which moves a top-level keypoint by 1.3 px).
 
 use std::sync::OnceLock;
 
@@ -190,8 +191,8 @@ pub fn extract_from_pyramid(pyramid: &Pyramid, params: &OrbParams) -> Features {
             let angle = centroid_angle(level, x, y);
             features.descriptors.push(describe(&blurred, x, y, angle));
             features.keypoints.push(KeyPoint {
-                x: x as f32 * scale,
-                y: y as f32 * scale,
+                x: to_original(x as f32, scale),
+                y: to_original(y as f32, scale),
                 level: l as u8,
                 angle,
                 score,
@@ -199,6 +200,17 @@ pub fn extract_from_pyramid(pyramid: &Pyramid, params: &OrbParams) -> Features {
         }
     }
     features
+}
+
+/// The original image's coordinate of a level's pixel coordinate `c`,
+/// pixel centres matched as the pyramid resamples them: `(c + ½) s − ½`.
+pub fn to_original(c: f32, scale: f32) -> f32 {
+    (c + 0.5) * scale - 0.5
+}
+
+/// A level's pixel coordinate of the original image's coordinate `c`.
+pub fn to_level(c: f32, scale: f32) -> f32 {
+    (c + 0.5) / scale - 0.5
 }
 
 /// The corners of each grid cell of `level`: at the first threshold, or

@@ -14,7 +14,7 @@
 //! 3. matches whose window distance exceeds `1.5 · 1.4 ·` the median
 //!    (`1.4` scaling the median to a standard deviation) are dropped.
 
-use crate::orb::{Features, OrbParams, extract_from_pyramid, hamming};
+use crate::orb::{Features, OrbParams, extract_from_pyramid, hamming, to_level, to_original};
 use crate::pyramid::Pyramid;
 use crate::{GrayImage, VisionError};
 
@@ -146,10 +146,10 @@ fn refine(kp: &crate::orb::KeyPoint, right_x: f32, pyramids: &[Pyramid; 2]) -> O
     let scale = pyramids[0].scales[level] as f32;
     let (left, right) = (&pyramids[0].levels[level], &pyramids[1].levels[level]);
     let (ul, vl) = (
-        (kp.x / scale).round() as isize,
-        (kp.y / scale).round() as isize,
+        to_level(kp.x, scale).round() as isize,
+        to_level(kp.y, scale).round() as isize,
     );
-    let ur = (right_x / scale).round() as isize;
+    let ur = to_level(right_x, scale).round() as isize;
     let (w, h) = (left.width() as isize, left.height() as isize);
     let inside = |u: isize| u - WINDOW >= 0 && u + WINDOW < w;
     if !(inside(ul) && inside(ur - SLIDE) && inside(ur + SLIDE))
@@ -197,7 +197,7 @@ fn refine(kp: &crate::orb::KeyPoint, right_x: f32, pyramids: &[Pyramid; 2]) -> O
     }
     let shift = (best as isize - SLIDE) as f64 + delta;
     Some((
-        ((ur as f64 + shift) * f64::from(scale)) as f32,
+        to_original((ur as f64 + shift) as f32, scale),
         best_distance,
     ))
 }

@@ -5,3 +5,6 @@
 
 pub mod p3p;
 pub mod pose;
+pub mod tracker;
+
+pub use tracker::{StereoFrameSource, StereoVo, StereoVoParams};

@@ -1,0 +1,484 @@
+//! [`StereoVo`]: ORB-SLAM2's stereo tracking behind [`VisualOdometry`].
+//!
+//! * **Features**, once per frame and shared by every request that names
+//!   the frame (a cache keyed by the frame's index): ORB on both images
+//!   with ExoTeR's ORB-SLAM2 settings for the image's size, matched along
+//!   the rows ([`gpodo_vision::stereo`]).
+//! * **Map points**: the reference frame's stereo-matched keypoints closer
+//!   than `max_depth_baselines` baselines (ORB-SLAM2's `ThDepth`, 40 on
+//!   ExoTeR), placed by their disparity.
+//! * **Matching**: each map point is projected into the current frame by
+//!   the prior and matched within `search_radius_px` times its level's
+//!   scale (ORB-SLAM2's `TrackWithMotionModel`, 7 px for stereo) to the
+//!   current keypoints of the neighbouring levels, by Hamming distance
+//!   below 100 (`TH_HIGH`) and a ratio test; without a prior, within
+//!   `wide_search_px`.
+//! * **Pose**: PnP with RANSAC seeded by the configuration's seed and the
+//!   two frames' indices, then the robust motion-only refinement
+//!   ([`super::pose`]); lost below `min_tracked_features` inliers
+//!   (ORB-SLAM2's 30).
+//! * **Overlap**: the share of the reference's map points found.
+//! * **Recognition**: by appearance only: the keyframes whose descriptors
+//!   match the current frame's (ratio test) at least
+//!   `min_tracked_features` times, most matches first.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use gpodo_vision::GrayImage;
+use gpodo_vision::orb::{Descriptor, OrbParams, hamming};
+use gpodo_vision::stereo::{StereoFeatures, stereo_features};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
+use serde::{Deserialize, Serialize};
+
+use super::pose::{Correspondence, StereoIntrinsics, ransac_pnp, refine_pose};
+use crate::vo::{
+    CameraParams, ErrorStructure, FrameRef, TrackOutcome, TrackRequest, VisualOdometry,
+    VoMeasurement,
+};
+
+/// Where the stereo VO gets its images: the rendered camera, or a
+/// recording's image topics.
+pub trait StereoFrameSource: Send + Sync {
+    /// The rectified grey pair (left, right) of `frame`.
+    ///
+    /// # Errors
+    /// A message naming the frame and what could not be had.
+    fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String>;
+}
+
+/// Settings of the stereo VO.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StereoVoParams {
+    /// Search radius around a map point's predicted pixel, per unit of its
+    /// level's scale (px; default 7, ORB-SLAM2's stereo
+    /// `TrackWithMotionModel`; 15 is its monocular one).
+    pub search_radius_px: f64,
+    /// Search radius without a prior (px at full resolution 1024 wide,
+    /// scaled with the image; default 120).
+    pub wide_search_px: f64,
+    /// Fewest inliers of a tracked frame (default 30, ORB-SLAM2's).
+    pub min_tracked_features: usize,
+    /// Largest Hamming distance of a match (default 100, `TH_HIGH`).
+    pub max_hamming: u32,
+    /// A match's distance must be below this share of the second best's
+    /// (default 0.9).
+    pub ratio: f64,
+    /// Map points farther than this many baselines are not used (default
+    /// 40, ExoTeR's `ThDepth`).
+    pub max_depth_baselines: f64,
+    /// RANSAC's most iterations (default 200).
+    pub ransac_iterations: usize,
+    /// Seed of RANSAC's draws.
+    pub seed: u64,
+}
+
+impl Default for StereoVoParams {
+    fn default() -> Self {
+        Self {
+            search_radius_px: 7.0,
+            wide_search_px: 120.0,
+            min_tracked_features: 30,
+            max_hamming: 100,
+            ratio: 0.9,
+            max_depth_baselines: 40.0,
+            ransac_iterations: 200,
+            seed: 0,
+        }
+    }
+}
+
+impl StereoVoParams {
+    /// Checks every field; errors name it under `vo.`.
+    ///
+    /// # Errors
+    /// [`crate::FrontendError::InvalidConfig`].
+    pub fn validate(&self) -> Result<(), crate::FrontendError> {
+        let bad = |field: &str, expected: &str| {
+            Err(crate::FrontendError::InvalidConfig {
+                field: format!("vo.{field}"),
+                expected: expected.into(),
+            })
+        };
+        for (field, v) in [
+            ("search_radius_px", self.search_radius_px),
+            ("wide_search_px", self.wide_search_px),
+            ("max_depth_baselines", self.max_depth_baselines),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(field, "a positive number");
+            }
+        }
+        if !(self.ratio > 0.0 && self.ratio <= 1.0) {
+            return bad("ratio", "a share in (0, 1]");
+        }
+        if self.min_tracked_features < 4 {
+            return bad("min_tracked_features", "at least 4");
+        }
+        if self.max_hamming == 0 || self.max_hamming > 256 {
+            return bad("max_hamming", "a distance in [1, 256]");
+        }
+        if self.ransac_iterations == 0 {
+            return bad("ransac_iterations", "at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// A frame's features, computed once.
+type Cached = Arc<Result<StereoFeatures, String>>;
+
+/// The stereo visual odometry (see the module).
+pub struct StereoVo {
+    params: StereoVoParams,
+    camera: CameraParams,
+    intrinsics: StereoIntrinsics,
+    orb: OrbParams,
+    source: Arc<dyn StereoFrameSource>,
+    cache: Mutex<HashMap<usize, Cached>>,
+}
+
+/// What tracking one request found, before it is a measurement.
+struct Tracked {
+    /// `camera_from_reference`, left cameras.
+    pose: Isometry3<f64>,
+    covariance: Matrix6<f64>,
+    inliers: usize,
+    map_points: usize,
+}
+
+impl StereoVo {
+    /// The VO over `source`'s frames, seen by `camera`.
+    ///
+    /// # Errors
+    /// [`crate::FrontendError::InvalidConfig`] naming a bad setting.
+    pub fn new(
+        params: StereoVoParams,
+        camera: CameraParams,
+        source: Arc<dyn StereoFrameSource>,
+    ) -> Result<Self, crate::FrontendError> {
+        params.validate()?;
+        camera
+            .validate("vo.camera")
+            .map_err(|e| crate::FrontendError::InvalidConfig {
+                field: e.field,
+                expected: e.expected,
+            })?;
+        let [w, h] = camera.image_size_px.map(|n| n as usize);
+        Ok(Self {
+            orb: OrbParams::exoter_for_size(w, h),
+            intrinsics: StereoIntrinsics {
+                focal_px: camera.focal_px,
+                principal_px: camera.principal_point(),
+                baseline_m: camera.baseline_m,
+            },
+            params,
+            camera,
+            source,
+            cache: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// The features of `frame`, from the cache or computed (and cached).
+    pub fn features(&self, frame: FrameRef) -> Cached {
+        if let Some(hit) = self.lock().get(&frame.index) {
+            return Arc::clone(hit);
+        }
+        let computed = self.source.pair(frame).and_then(|(left, right)| {
+            stereo_features(&left, &right, &self.orb, self.camera.focal_px)
+                .map_err(|e| format!("frame {}: {e}", frame.index))
+        });
+        let entry = Arc::new(computed);
+        self.lock().insert(frame.index, Arc::clone(&entry));
+        entry
+    }
+
+    /// How many map points `frame` makes as a reference (0 when its
+    /// images cannot be had).
+    pub fn map_point_count(&self, frame: FrameRef) -> usize {
+        match self.features(frame).as_ref() {
+            Ok(features) => self.map_points(features).len(),
+            Err(_) => 0,
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Cached>> {
+        // A poisoned cache only means a panic elsewhere; its entries are
+        // whole.
+        self.cache.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The map points of a reference frame: `(keypoint, point)` for each
+    /// stereo match within the depth limit.
+    fn map_points(&self, features: &StereoFeatures) -> Vec<(usize, Point3<f64>)> {
+        let (f, [cx, cy], b) = (
+            self.intrinsics.focal_px,
+            self.intrinsics.principal_px,
+            self.intrinsics.baseline_m,
+        );
+        let max_depth = self.params.max_depth_baselines * b;
+        (0..features.left.keypoints.len())
+            .filter_map(|k| {
+                let d = f64::from(features.disparity(k)?);
+                let z = f * b / d;
+                if !(d > 0.0 && z <= max_depth) {
+                    return None;
+                }
+                let kp = &features.left.keypoints[k];
+                let (u, v) = (f64::from(kp.x), f64::from(kp.y));
+                Some((k, Point3::new((u - cx) * z / f, (v - cy) * z / f, z)))
+            })
+            .collect()
+    }
+
+    /// `camera_from_reference` of the body motion `reference_from_current`.
+    fn camera_prior(&self, body: &Isometry3<f64>) -> Isometry3<f64> {
+        let b = self.camera.body_from_camera();
+        (b.inverse() * body * b).inverse()
+    }
+
+    /// Tracks `request` (see the module); `None` when lost.
+    fn track_request(&self, request: &TrackRequest) -> Option<Tracked> {
+        let reference = self.features(request.reference);
+        let current = self.features(request.current);
+        let (Ok(reference), Ok(current)) = (reference.as_ref(), current.as_ref()) else {
+            return None;
+        };
+        let points = self.map_points(reference);
+        let prior = request.prior.map(|p| self.camera_prior(&p));
+        let width = f64::from(self.camera.image_size_px[0]);
+        let wide = self.params.wide_search_px * width / 1024.0;
+        let grid = KeypointGrid::new(current);
+        let mut correspondences = Vec::new();
+        for (k, point) in &points {
+            let kp = &reference.left.keypoints[*k];
+            let scale = reference.left.scales[usize::from(kp.level)];
+            let (centre, radius) = match &prior {
+                Some(pose) => {
+                    let x = pose * point;
+                    if x.z <= 0.0 {
+                        continue;
+                    }
+                    let [u, v] = self.intrinsics_project(&x);
+                    (Some([u, v]), self.params.search_radius_px * scale)
+                }
+                None => (Some([f64::from(kp.x), f64::from(kp.y)]), wide),
+            };
+            let Some(centre) = centre else { continue };
+            let Some(found) = self.best_match(
+                &reference.left.descriptors[*k],
+                kp.level,
+                centre,
+                radius,
+                current,
+                &grid,
+            ) else {
+                continue;
+            };
+            let c = &current.left.keypoints[found];
+            correspondences.push(Correspondence {
+                point: *point,
+                left_px: [f64::from(c.x), f64::from(c.y)],
+                right_x: current.right_x[found].map(f64::from),
+                sigma_px: current.left.scales[usize::from(c.level)],
+            });
+        }
+        if correspondences.len() < self.params.min_tracked_features {
+            return None;
+        }
+        let seed = self.params.seed
+            ^ (request.reference.index as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            ^ (request.current.index as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
+        let (rough, count) = ransac_pnp(
+            &correspondences,
+            &self.intrinsics,
+            self.params.ransac_iterations,
+            seed,
+        )?;
+        if count < self.params.min_tracked_features {
+            return None;
+        }
+        let refined = refine_pose(&correspondences, &self.intrinsics, &rough)?;
+        (refined.inlier_count >= self.params.min_tracked_features).then_some(Tracked {
+            pose: refined.pose,
+            covariance: refined.covariance,
+            inliers: refined.inlier_count,
+            map_points: points.len(),
+        })
+    }
+
+    fn intrinsics_project(&self, x: &Point3<f64>) -> [f64; 2] {
+        let (f, [cx, cy]) = (self.intrinsics.focal_px, self.intrinsics.principal_px);
+        [f * x.x / x.z + cx, f * x.y / x.z + cy]
+    }
+
+    /// The current keypoint within `radius` of `centre`, at a level next to
+    /// `level`, nearest to `descriptor` in Hamming distance, if below the
+    /// limit and the ratio test.
+    fn best_match(
+        &self,
+        descriptor: &Descriptor,
+        level: u8,
+        centre: [f64; 2],
+        radius: f64,
+        current: &StereoFeatures,
+        grid: &KeypointGrid,
+    ) -> Option<usize> {
+        let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
+        for k in grid.within(centre, radius) {
+            let kp = &current.left.keypoints[k];
+            if kp.level.abs_diff(level) > 1 {
+                continue;
+            }
+            let (du, dv) = (f64::from(kp.x) - centre[0], f64::from(kp.y) - centre[1]);
+            if du * du + dv * dv > radius * radius {
+                continue;
+            }
+            let d = hamming(descriptor, &current.left.descriptors[k]);
+            if (d, k) < best {
+                second = second.min(best.0);
+                best = (d, k);
+            } else {
+                second = second.min(d);
+            }
+        }
+        let (d, k) = best;
+        (d <= self.params.max_hamming && f64::from(d) < self.params.ratio * f64::from(second))
+            .then_some(k)
+    }
+
+    /// The measurement of a tracked request: the body motion
+    /// `reference_from_current` and its covariance as a right
+    /// perturbation (the camera's left perturbation carried through the
+    /// mounting's adjoint).
+    fn measurement(&self, tracked: &Tracked) -> VoMeasurement {
+        let b = self.camera.body_from_camera();
+        let relative = b * tracked.pose.inverse() * b.inverse();
+        let r = b.rotation.to_rotation_matrix().into_inner();
+        let t = b.translation.vector;
+        let skew = Matrix3::new(0.0, -t.z, t.y, t.z, 0.0, -t.x, -t.y, t.x, 0.0);
+        let mut adjoint = Matrix6::zeros();
+        adjoint.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+        adjoint.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+        adjoint.fixed_view_mut::<3, 3>(3, 0).copy_from(&(skew * r));
+        VoMeasurement {
+            relative,
+            covariance: adjoint * tracked.covariance * adjoint.transpose(),
+            overlap: tracked.inliers as f64 / tracked.map_points.max(1) as f64,
+        }
+    }
+
+    /// How many of the current frame's descriptors find their match
+    /// among `other`'s by the ratio test (brute force).
+    fn appearance_matches(&self, current: &StereoFeatures, other: &StereoFeatures) -> usize {
+        current
+            .left
+            .descriptors
+            .iter()
+            .filter(|d| {
+                let (mut best, mut second) = (u32::MAX, u32::MAX);
+                for e in &other.left.descriptors {
+                    let h = hamming(d, e);
+                    if h < best {
+                        second = best;
+                        best = h;
+                    } else {
+                        second = second.min(h);
+                    }
+                }
+                best <= self.params.max_hamming / 2
+                    && f64::from(best) < self.params.ratio * f64::from(second)
+            })
+            .count()
+    }
+}
+
+/// The current frame's keypoints bucketed in square cells.
+struct KeypointGrid {
+    cell: f64,
+    columns: usize,
+    rows: usize,
+    cells: Vec<Vec<usize>>,
+}
+
+impl KeypointGrid {
+    fn new(features: &StereoFeatures) -> Self {
+        let cell = 16.0;
+        let (mut columns, mut rows) = (1, 1);
+        for kp in &features.left.keypoints {
+            columns = columns.max((f64::from(kp.x) / cell) as usize + 1);
+            rows = rows.max((f64::from(kp.y) / cell) as usize + 1);
+        }
+        let mut cells = vec![Vec::new(); columns * rows];
+        for (k, kp) in features.left.keypoints.iter().enumerate() {
+            let (i, j) = (
+                (f64::from(kp.x) / cell) as usize,
+                (f64::from(kp.y) / cell) as usize,
+            );
+            cells[j * columns + i].push(k);
+        }
+        Self {
+            cell,
+            columns,
+            rows,
+            cells,
+        }
+    }
+
+    /// The keypoints in the cells that `radius` around `centre` touches.
+    fn within(&self, centre: [f64; 2], radius: f64) -> impl Iterator<Item = usize> + '_ {
+        let span = |c: f64, n: usize| {
+            let lo = ((c - radius) / self.cell).floor().max(0.0) as usize;
+            let hi = (((c + radius) / self.cell).floor().max(-1.0) + 1.0) as usize;
+            lo.min(n)..hi.min(n)
+        };
+        let (columns, rows) = (span(centre[0], self.columns), span(centre[1], self.rows));
+        rows.flat_map(move |j| {
+            columns
+                .clone()
+                .flat_map(move |i| self.cells[j * self.columns + i].iter().copied())
+        })
+    }
+}
+
+impl VisualOdometry for StereoVo {
+    fn name(&self) -> &str {
+        "stereo"
+    }
+
+    fn error_structure(&self) -> ErrorStructure {
+        ErrorStructure::SharedPerKeyframe
+    }
+
+    fn track(&mut self, request: &TrackRequest) -> TrackOutcome {
+        match self.track_request(request) {
+            Some(tracked) => TrackOutcome::Tracked(self.measurement(&tracked)),
+            None => TrackOutcome::Lost,
+        }
+    }
+
+    /// The outcome of the same deterministic tracking: 1 or 0.
+    fn success_probability(&self, request: &TrackRequest) -> f64 {
+        f64::from(u8::from(self.track_request(request).is_some()))
+    }
+
+    fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef> {
+        let now = self.features(current);
+        let Ok(now) = now.as_ref() else {
+            return Vec::new();
+        };
+        let mut found: Vec<(usize, FrameRef)> = keyframes
+            .iter()
+            .filter_map(|kf| {
+                let other = self.features(*kf);
+                let other = other.as_ref().as_ref().ok()?;
+                let n = self.appearance_matches(now, other);
+                (n >= self.params.min_tracked_features).then_some((n, *kf))
+            })
+            .collect();
+        found.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.index.cmp(&b.1.index)));
+        found.truncate(3);
+        found.into_iter().map(|(_, kf)| kf).collect()
+    }
+}
