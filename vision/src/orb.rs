@@ -386,14 +386,20 @@ fn disc_reach(v: isize) -> isize {
     u
 }
 
+/// `x.round()` as an integer, by truncating `x ± ½` (no call to the C
+/// library's `round` where the CPU has no rounding instruction).
+fn round_half_away(x: f64) -> isize {
+    (x + 0.5f64.copysign(x)) as isize
+}
+
 /// The descriptor of `(x, y)` on the blurred level, the pattern rotated by
 /// `angle`.
 fn describe(blurred: &GrayImage, x: usize, y: usize, angle: f32) -> Descriptor {
     let (sin, cos) = f64::from(angle).sin_cos();
     let at = |(u, v): (i8, i8)| {
         let (u, v) = (f64::from(u), f64::from(v));
-        let ru = (u * cos - v * sin).round() as isize;
-        let rv = (u * sin + v * cos).round() as isize;
+        let ru = round_half_away(u * cos - v * sin);
+        let rv = round_half_away(u * sin + v * cos);
         blurred.get(x.wrapping_add_signed(ru), y.wrapping_add_signed(rv))
     };
     let mut out = [0u8; 32];

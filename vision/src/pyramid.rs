@@ -58,7 +58,9 @@ pub fn resize_bilinear(image: &GrayImage, width: usize, height: usize) -> GrayIm
         for &(i0, i1, wx) in &cols {
             let top = f32::from(r0[i0]) + (f32::from(r0[i1]) - f32::from(r0[i0])) * wx;
             let bottom = f32::from(r1[i0]) + (f32::from(r1[i1]) - f32::from(r1[i0])) * wx;
-            pixels.push((top + (bottom - top) * wy).round().clamp(0.0, 255.0) as u8);
+            // Truncating `v + ½` rounds a non-negative `v` as `round` does,
+            // without a call to the C library's `round`.
+            pixels.push((top + (bottom - top) * wy + 0.5).clamp(0.0, 255.0) as u8);
         }
     }
     GrayImage::from_pixels(width, height, pixels)
@@ -88,26 +90,38 @@ pub fn gaussian_blur(image: &GrayImage, radius: usize, sigma: f64) -> GrayImage 
         .collect();
     let total: f32 = weights.iter().sum();
     weights.iter_mut().for_each(|v| *v /= total);
+    // Each output index's source indices, mirrored at the borders.
+    let taps = |n: usize| -> Vec<usize> {
+        (0..n as isize)
+            .flat_map(|i| (-r..=r).map(move |k| reflect_101(i + k, n)))
+            .collect()
+    };
+    let (across_taps, down_taps) = (taps(w), taps(h));
+    let span = 2 * radius + 1;
     let mut across = vec![0f32; w * h];
     for y in 0..h {
         let row = image.row(y);
-        for x in 0..w {
-            across[y * w + x] = weights
+        for (x, out) in across[y * w..(y + 1) * w].iter_mut().enumerate() {
+            let sources = &across_taps[x * span..(x + 1) * span];
+            *out = weights
                 .iter()
-                .enumerate()
-                .map(|(k, wk)| wk * f32::from(row[reflect_101(x as isize + k as isize - r, w)]))
+                .zip(sources)
+                .map(|(wk, &i)| wk * f32::from(row[i]))
                 .sum();
         }
     }
-    let mut pixels = Vec::with_capacity(w * h);
+    let mut pixels = vec![0u8; w * h];
+    let mut column = vec![0f32; w];
     for y in 0..h {
-        for x in 0..w {
-            let v: f32 = weights
-                .iter()
-                .enumerate()
-                .map(|(k, wk)| wk * across[reflect_101(y as isize + k as isize - r, h) * w + x])
-                .sum();
-            pixels.push(v.round().clamp(0.0, 255.0) as u8);
+        column.iter_mut().for_each(|v| *v = 0.0);
+        let sources = &down_taps[y * span..(y + 1) * span];
+        for (wk, &j) in weights.iter().zip(sources) {
+            for (acc, v) in column.iter_mut().zip(&across[j * w..(j + 1) * w]) {
+                *acc += wk * v;
+            }
+        }
+        for (out, v) in pixels[y * w..(y + 1) * w].iter_mut().zip(&column) {
+            *out = (v + 0.5).clamp(0.0, 255.0) as u8;
         }
     }
     GrayImage::from_pixels(w, h, pixels).unwrap_or_else(|_| GrayImage::filled(w, h, 0))

@@ -1,0 +1,83 @@
+//! One processed stereo frame of the stereo VO at 512 × 384 on one core:
+//! ORB features of both images and their row matches, then tracking the
+//! frame against a reference keyframe whose features are cached; the pair
+//! is rendered (gravel, ExoTeR's mast camera) outside the timed closures.
+//!
+//! ```text
+//! cargo bench -p gpodo-experiments --bench stereo_vo
+//! ```
+
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
+use gpodo_datasets::sim::soil::{Soil, SoilMap};
+use gpodo_datasets::sim::terrain::Terrain;
+use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
+use gpodo_frontends::vo::stereo::{StereoVo, StereoVoParams};
+use gpodo_frontends::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
+use gpodo_traits::CameraParams;
+use gpodo_vision::orb::OrbParams;
+use gpodo_vision::stereo::stereo_features;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+
+fn stereo_frame(c: &mut Criterion) {
+    let ground = Arc::new(
+        GroundMaps::build(
+            &Terrain::flat(6.0).unwrap(),
+            &SoilMap::uniform(Soil::gravel(), 6.0).unwrap(),
+            &SceneSpec::default(),
+            7,
+        )
+        .unwrap(),
+    );
+    let camera = CameraParams::exoter_bumblebee2().scaled(0.5);
+    let poses: Vec<FramePose> = (0..2)
+        .map(|k| FramePose {
+            world_from_body: Isometry3::from_parts(
+                Translation3::new(1.0 + 0.012 * k as f64, 3.0, 0.25),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, 0.004 * k as f64),
+            ),
+            exposure_motion: Isometry3::identity(),
+        })
+        .collect();
+    let renderer = StereoRenderer::new(camera, &ground, SensorSpec::default(), 7).unwrap();
+    let pair = renderer.render(&poses[1].world_from_body, &Isometry3::identity(), 1);
+    let orb = OrbParams::exoter_for_size(512, 384);
+    let source = RenderedFrames::new(
+        Arc::clone(&ground),
+        camera,
+        SensorSpec::default(),
+        7,
+        poses.clone(),
+    );
+    let mut vo = StereoVo::new(StereoVoParams::default(), camera, Arc::new(source)).unwrap();
+    let frame = |k: usize| FrameRef {
+        index: k,
+        time_secs: k as f64 / 2.5,
+    };
+    let request = TrackRequest {
+        reference: frame(0),
+        current: frame(1),
+        prior: Some(poses[0].world_from_body.inverse() * poses[1].world_from_body),
+        purpose: TrackPurpose::Tracking,
+    };
+    // Both frames' features are cached by the first call.
+    vo.track(&request);
+
+    let mut group = c.benchmark_group("stereo_vo");
+    group
+        .sample_size(20)
+        .measurement_time(Duration::from_secs(8));
+    group.bench_function("features_512x384", |b| {
+        b.iter(|| stereo_features(&pair.left, &pair.right, &orb, camera.focal_px).unwrap())
+    });
+    group.bench_function("track_cached_512x384", |b| b.iter(|| vo.track(&request)));
+    group.finish();
+}
+
+criterion_group!(benches, stereo_frame);
+criterion_main!(benches);
