@@ -17,7 +17,7 @@ use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_datasets::sim::soil::{Soil, SoilMap};
 use gpodo_datasets::sim::terrain::Terrain;
 use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
-use gpodo_frontends::vo::stereo::{StereoVo, StereoVoParams};
+use gpodo_frontends::vo::stereo::{StereoFrames, StereoVo, StereoVoParams};
 use gpodo_frontends::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
 use gpodo_traits::CameraParams;
 use gpodo_vision::orb::OrbParams;
@@ -54,7 +54,11 @@ fn stereo_frame(c: &mut Criterion) {
         7,
         poses.clone(),
     );
-    let mut vo = StereoVo::new(StereoVoParams::default(), camera, Arc::new(source)).unwrap();
+    let mut vo = StereoVo::new(
+        StereoVoParams::default(),
+        Arc::new(StereoFrames::new(camera, Arc::new(source))),
+    )
+    .unwrap();
     let frame = |k: usize| FrameRef {
         index: k,
         time_secs: k as f64 / 2.5,

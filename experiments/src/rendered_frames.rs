@@ -5,6 +5,7 @@
 use std::sync::Arc;
 
 use gpodo_datasets::camera::{GroundMaps, SensorSpec, StereoRenderer};
+use gpodo_frontends::traverse::Traverse;
 use gpodo_frontends::vo::FrameRef;
 use gpodo_frontends::vo::stereo::StereoFrameSource;
 use gpodo_traits::CameraParams;
@@ -46,6 +47,31 @@ impl RenderedFrames {
             seed,
             poses,
         }
+    }
+}
+
+impl RenderedFrames {
+    /// The frames of `traverse`'s camera stream: each at the traverse's
+    /// ground truth at the frame's time, blurred by the motion over
+    /// `camera`'s exposure centred there.
+    pub fn from_traverse(
+        ground: Arc<GroundMaps>,
+        camera: CameraParams,
+        sensor: SensorSpec,
+        seed: u64,
+        traverse: &Traverse,
+    ) -> Self {
+        let half = 0.5 * camera.exposure_secs;
+        let poses = traverse
+            .camera_times_secs()
+            .iter()
+            .map(|&t| FramePose {
+                world_from_body: traverse.ground_truth_at(t),
+                exposure_motion: traverse.ground_truth_at(t - half).inverse()
+                    * traverse.ground_truth_at(t + half),
+            })
+            .collect();
+        Self::new(ground, camera, sensor, seed, poses)
     }
 }
 

@@ -13,7 +13,7 @@ use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
 use gpodo_datasets::sim::soil::{Soil, SoilMap};
 use gpodo_datasets::sim::terrain::Terrain;
 use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
-use gpodo_frontends::vo::stereo::{StereoVo, StereoVoParams};
+use gpodo_frontends::vo::stereo::{StereoFrames, StereoVo, StereoVoParams};
 use gpodo_frontends::vo::{
     FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry, VoMeasurement,
 };
@@ -61,7 +61,11 @@ fn vo(soil: Soil, poses: &[FramePose]) -> StereoVo {
         11,
         poses.to_vec(),
     );
-    StereoVo::new(StereoVoParams::default(), camera, Arc::new(source)).unwrap()
+    StereoVo::new(
+        StereoVoParams::default(),
+        Arc::new(StereoFrames::new(camera, Arc::new(source))),
+    )
+    .unwrap()
 }
 
 fn frame(k: usize) -> FrameRef {

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::FrontendError;
 use crate::backend::BackendParams;
 use crate::odometry::OdometryNoise;
+use crate::vo::stereo::StereoVoParams;
 use crate::vo::{ReplayVoParams, SimulatedVoParams};
 
 /// Which visual odometry.
@@ -16,6 +17,9 @@ pub enum VoSpec {
     Simulated(SimulatedVoParams),
     /// A VO log replayed.
     Replay(ReplayVoParams),
+    /// The stereo VO on the camera's images (the rendered camera of a
+    /// simulated testbed).
+    Stereo(StereoVoParams),
 }
 
 impl Default for VoSpec {
@@ -193,6 +197,7 @@ impl FrontendParams {
         match &self.vo {
             VoSpec::Simulated(p) => p.validate()?,
             VoSpec::Replay(p) => p.validate()?,
+            VoSpec::Stereo(p) => p.validate()?,
         }
         let k = &self.keyframes;
         if !(k.min_overlap.is_finite() && (0.0..=1.0).contains(&k.min_overlap)) {

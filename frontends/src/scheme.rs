@@ -5,6 +5,7 @@
 //! from VO), and [`run_frontend`] over the traverse. [`run_scheme`] is the
 //! one call an experiment runner makes per scheme and traverse.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use gpodo_traits::{FrameSelector, ResidualRegressor};
@@ -19,6 +20,7 @@ use crate::params::{FrontendParams, MotionPrior, VoSpec};
 use crate::prediction::{Precomputed, ResidualPrediction, ResidualSource};
 use crate::traverse::Traverse;
 use crate::tum::{StampedPose, parse_tum};
+use crate::vo::stereo::{StereoFrames, StereoVo};
 use crate::vo::{ReplayVo, SimulatedVo, VisualOdometry};
 use crate::{FrontendError, FrontendRun, SelectorSpec, run_frontend};
 
@@ -129,6 +131,9 @@ pub struct SchemeContext<'a> {
     /// The visual odometry recorded with this traverse (a bag's `vo`
     /// topic), which a replay without a `path` replays.
     pub recorded_vo: Option<&'a [StampedPose]>,
+    /// This traverse's camera frames and their cached features, which the
+    /// stereo VO reads (shared by every scheme on the traverse).
+    pub frames: Option<&'a Arc<StereoFrames>>,
 }
 
 impl VoSpec {
@@ -140,14 +145,25 @@ impl VoSpec {
     /// # Errors
     /// [`FrontendError::Parse`] naming a VO log that cannot be read or
     /// parsed; [`FrontendError::InvalidConfig`] for a replay without a
-    /// path on a traverse recorded without VO; what the VO's constructor
-    /// reports.
+    /// path on a traverse recorded without VO, or a stereo VO without
+    /// `frames`; what the VO's constructor reports.
     pub fn build(
         &self,
         traverse: &Traverse,
         recorded: Option<&[StampedPose]>,
+        frames: Option<&Arc<StereoFrames>>,
     ) -> Result<Box<dyn VisualOdometry>, FrontendError> {
         Ok(match self {
+            Self::Stereo(p) => {
+                let frames = frames.ok_or_else(|| FrontendError::InvalidConfig {
+                    field: "vo.kind".into(),
+                    expected: format!(
+                        "camera images for `stereo`: test run `{}` has none (the simulated testbed renders them; recordings' image topics are not read yet)",
+                        traverse.name()
+                    ),
+                })?;
+                Box::new(StereoVo::new(p.clone(), Arc::clone(frames))?)
+            }
             Self::Simulated(p) => Box::new(SimulatedVo::new(*p, traverse)?),
             Self::Replay(p) if p.path.as_os_str().is_empty() => {
                 let log = recorded.ok_or_else(|| FrontendError::InvalidConfig {
@@ -174,7 +190,7 @@ impl VoSpec {
 
     /// The same odometry with an independent set of random draws: a
     /// simulated tracker reseeded (the key [`FRESH_DRAWS_KEY`] added to
-    /// its seed); a replay, which draws nothing, unchanged. What a search
+    /// its seed); a replay or a stereo VO, which draw nothing, unchanged. What a search
     /// that saw one set of draws is scored on.
     pub fn with_fresh_draws(&self) -> Self {
         match self {
@@ -183,6 +199,7 @@ impl VoSpec {
                 ..*p
             }),
             Self::Replay(p) => Self::Replay(p.clone()),
+            Self::Stereo(p) => Self::Stereo(p.clone()),
         }
     }
 }
@@ -277,7 +294,7 @@ pub fn run_scheme(
                 selector = Box::new(RescaleKeyframes::new(selector, *rescale)?);
             }
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
-            let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
+            let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo, ctx.frames)?;
             let run = run_frontend(
                 traverse,
                 &frontend,
@@ -303,7 +320,7 @@ pub fn run_scheme(
                     "a trained regressor's predictions (an oracle cannot learn online)".into(),
                 ));
             };
-            let vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
+            let vo = ctx.params.vo.build(traverse, ctx.recorded_vo, ctx.frames)?;
             let corrections = predictions
                 .iter()
                 .map(|p| scheme.odometry.window(p).map(|w| w.correction))
@@ -327,7 +344,7 @@ pub fn run_scheme(
             let evaluate = |times: &[f64]| {
                 let mut selector = planned(times)?;
                 let mut source = Precomputed::new(label.clone(), predictions.clone());
-                let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo)?;
+                let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo, ctx.frames)?;
                 run_frontend(
                     traverse,
                     &frontend,
@@ -356,11 +373,11 @@ pub fn run_scheme(
                     // its score comes from an independent set.
                     let mut selector = planned(&found.times_secs)?;
                     let mut source = Precomputed::new(label.clone(), predictions.clone());
-                    let mut fresh_vo = ctx
-                        .params
-                        .vo
-                        .with_fresh_draws()
-                        .build(traverse, ctx.recorded_vo)?;
+                    let mut fresh_vo = ctx.params.vo.with_fresh_draws().build(
+                        traverse,
+                        ctx.recorded_vo,
+                        ctx.frames,
+                    )?;
                     let fresh = run_frontend(
                         traverse,
                         &frontend,

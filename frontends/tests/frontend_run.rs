@@ -377,6 +377,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
             matched_frames: None,
             matched_times: None,
             recorded_vo: None,
+            frames: None,
         };
         for budget_m2 in [2e-5, 1e-4] {
             let causal_spec = SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
@@ -407,6 +408,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
                     matched_frames: Some(causal.run.frames),
                     matched_times: Some(&times),
                     recorded_vo: None,
+                    frames: None,
                     ..ctx
                 },
             )
@@ -469,6 +471,7 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,
+        frames: None,
     };
     let n = t.windows().len();
     let gp = || SchemeResiduals::Trained {
@@ -531,6 +534,7 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
             matched_frames: Some(policy.run.frames),
             matched_times: Some(&times),
             recorded_vo: None,
+            frames: None,
             ..ctx
         },
     );
@@ -553,6 +557,7 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,
+        frames: None,
     };
     let residuals = || SchemeResiduals::Trained {
         label: "zero".into(),
@@ -652,6 +657,7 @@ fn the_odometry_mode_decides_correction_covariance_and_budget() {
         matched_frames: None,
         matched_times: None,
         recorded_vo: None,
+        frames: None,
     };
     let n = t.windows().len();
     let predictions = |absolute: bool| SchemeResiduals::Trained {

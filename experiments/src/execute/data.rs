@@ -152,6 +152,8 @@ pub(crate) struct PreparedData {
     /// Where each soil lies (a simulated testbed only), for the simulated
     /// tracker's feature supply.
     pub(crate) soils: Option<gpodo_datasets::sim::soil::SoilMap>,
+    /// The simulated testbed's terrain and seed, for the rendered camera.
+    pub(crate) terrain: Option<(gpodo_datasets::sim::terrain::Terrain, u64)>,
     /// The gyro bias the simulator drew from (rad/s), for the odometry's
     /// covariance when the experiment leaves it unset.
     pub(crate) gyro_bias_radps: Option<f64>,
@@ -298,6 +300,7 @@ fn from_logs(
         model: Some((model, radius)),
         recorded_vo: BTreeMap::new(),
         soils: None,
+        terrain: None,
         gyro_bias_radps: None,
     })
 }
@@ -338,6 +341,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                 Some(testbed.terrain.max_slope_deg()),
             )?;
             prepared.soils = Some(testbed.soils);
+            prepared.terrain = Some((testbed.terrain, *seed));
             prepared.gyro_bias_radps = Some(sim.sensors.gyro_bias_sigma_radps());
             Ok(prepared)
         }
@@ -451,6 +455,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                 model: None,
                 recorded_vo: BTreeMap::new(),
                 soils: None,
+                terrain: None,
                 gyro_bias_radps: None,
             })
         }

@@ -35,6 +35,8 @@ pub struct SchemeInputs<'a> {
     pub absolute_labels: &'a [String],
     /// Visual odometry recorded with the test runs, by run name.
     pub recorded_vo: &'a std::collections::BTreeMap<String, Vec<gpodo_frontends::tum::StampedPose>>,
+    /// Each test run's camera frames, for a VO that reads images.
+    pub frames: &'a [Option<std::sync::Arc<gpodo_frontends::vo::stereo::StereoFrames>>],
 }
 
 impl SchemeInputs<'_> {
@@ -133,6 +135,7 @@ impl SchemeInputs<'_> {
             matched_frames: matched.map(|r| r.run.frames),
             matched_times: matched_times.as_deref(),
             recorded_vo: self.recorded_vo.get(traverse.name()).map(Vec::as_slice),
+            frames: self.frames.get(t).and_then(Option::as_ref),
         };
         let spec = SchemeSpecRef {
             label: &scheme.label,

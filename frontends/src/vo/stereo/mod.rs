@@ -7,4 +7,4 @@ pub mod p3p;
 pub mod pose;
 pub mod tracker;
 
-pub use tracker::{StereoFrameSource, StereoVo, StereoVoParams};
+pub use tracker::{StereoFrameSource, StereoFrames, StereoVo, StereoVoParams};

@@ -72,6 +72,9 @@ pub struct StereoVoParams {
     pub ransac_iterations: usize,
     /// Seed of RANSAC's draws.
     pub seed: u64,
+    /// The rendered camera (default ExoTeR's Bumblebee2 at half
+    /// resolution, 512 × 384).
+    pub camera: CameraParams,
 }
 
 impl Default for StereoVoParams {
@@ -85,6 +88,7 @@ impl Default for StereoVoParams {
             max_depth_baselines: 40.0,
             ransac_iterations: 200,
             seed: 0,
+            camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
 }
@@ -129,55 +133,31 @@ impl StereoVoParams {
 /// A frame's features, computed once.
 type Cached = Arc<Result<StereoFeatures, String>>;
 
-/// The stereo visual odometry (see the module).
-pub struct StereoVo {
-    params: StereoVoParams,
+/// A camera's frames and their features, each computed once and shared by
+/// every VO (every scheme of a run) that holds this in an [`Arc`].
+pub struct StereoFrames {
     camera: CameraParams,
-    intrinsics: StereoIntrinsics,
     orb: OrbParams,
     source: Arc<dyn StereoFrameSource>,
     cache: Mutex<HashMap<usize, Cached>>,
 }
 
-/// What tracking one request found, before it is a measurement.
-struct Tracked {
-    /// `camera_from_reference`, left cameras.
-    pose: Isometry3<f64>,
-    covariance: Matrix6<f64>,
-    inliers: usize,
-    map_points: usize,
-}
-
-impl StereoVo {
-    /// The VO over `source`'s frames, seen by `camera`.
-    ///
-    /// # Errors
-    /// [`crate::FrontendError::InvalidConfig`] naming a bad setting.
-    pub fn new(
-        params: StereoVoParams,
-        camera: CameraParams,
-        source: Arc<dyn StereoFrameSource>,
-    ) -> Result<Self, crate::FrontendError> {
-        params.validate()?;
-        camera
-            .validate("vo.camera")
-            .map_err(|e| crate::FrontendError::InvalidConfig {
-                field: e.field,
-                expected: e.expected,
-            })?;
+impl StereoFrames {
+    /// The frames of `source`, seen by `camera`, their ORB settings
+    /// ExoTeR's for the camera's image size.
+    pub fn new(camera: CameraParams, source: Arc<dyn StereoFrameSource>) -> Self {
         let [w, h] = camera.image_size_px.map(|n| n as usize);
-        Ok(Self {
+        Self {
             orb: OrbParams::exoter_for_size(w, h),
-            intrinsics: StereoIntrinsics {
-                focal_px: camera.focal_px,
-                principal_px: camera.principal_point(),
-                baseline_m: camera.baseline_m,
-            },
-            params,
             camera,
             source,
             cache: Mutex::new(HashMap::new()),
-        })
+        }
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &CameraParams {
+        &self.camera
     }
 
     /// The features of `frame`, from the cache or computed (and cached).
@@ -194,6 +174,69 @@ impl StereoVo {
         entry
     }
 
+    /// How many frames' features are cached.
+    pub fn cached(&self) -> usize {
+        self.lock().len()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Cached>> {
+        // A poisoned cache only means a panic elsewhere; its entries are
+        // whole.
+        self.cache.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// The stereo visual odometry (see the module).
+pub struct StereoVo {
+    params: StereoVoParams,
+    camera: CameraParams,
+    intrinsics: StereoIntrinsics,
+    frames: Arc<StereoFrames>,
+}
+
+/// What tracking one request found, before it is a measurement.
+struct Tracked {
+    /// `camera_from_reference`, left cameras.
+    pose: Isometry3<f64>,
+    covariance: Matrix6<f64>,
+    inliers: usize,
+    map_points: usize,
+}
+
+impl StereoVo {
+    /// The VO over `frames` (whose camera it uses).
+    ///
+    /// # Errors
+    /// [`crate::FrontendError::InvalidConfig`] naming a bad setting.
+    pub fn new(
+        params: StereoVoParams,
+        frames: Arc<StereoFrames>,
+    ) -> Result<Self, crate::FrontendError> {
+        params.validate()?;
+        let camera = *frames.camera();
+        camera
+            .validate("vo.camera")
+            .map_err(|e| crate::FrontendError::InvalidConfig {
+                field: e.field,
+                expected: e.expected,
+            })?;
+        Ok(Self {
+            intrinsics: StereoIntrinsics {
+                focal_px: camera.focal_px,
+                principal_px: camera.principal_point(),
+                baseline_m: camera.baseline_m,
+            },
+            params,
+            camera,
+            frames,
+        })
+    }
+
+    /// The features of `frame` (shared through the frames' cache).
+    pub fn features(&self, frame: FrameRef) -> Cached {
+        self.frames.features(frame)
+    }
+
     /// How many map points `frame` makes as a reference (0 when its
     /// images cannot be had).
     pub fn map_point_count(&self, frame: FrameRef) -> usize {
@@ -201,12 +244,6 @@ impl StereoVo {
             Ok(features) => self.map_points(features).len(),
             Err(_) => 0,
         }
-    }
-
-    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Cached>> {
-        // A poisoned cache only means a panic elsewhere; its entries are
-        // whole.
-        self.cache.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// The map points of a reference frame: `(keypoint, point)` for each

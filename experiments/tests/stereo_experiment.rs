@@ -1,0 +1,99 @@
+//! `frontend.vo: {kind: stereo}` through `gpodo run`: Table II's fixed
+//! rates on a short simulated test traverse, tracked by the stereo VO on
+//! the rendered camera's images; and a dataset without a camera refused
+//! with the field named.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
+use common::{assert_succeeded, gpodo_on};
+
+const EXPERIMENT: &str = "\
+name: stereo-smoke
+dataset:
+  kind: simulated
+  preset: exoter-prl
+  seed: 7
+  training_runs: 1
+  training_run_secs: 60
+  test_max_secs: 16
+motion_model:
+  kind: weighted_jacobian
+residuals:
+  window_secs: 1.0
+regressors:
+  - kind: zero
+frontend:
+  vo: { kind: stereo }
+schemes:
+  - label: ORB-SLAM 2.5 fps
+    selector: { kind: fixed_rate, fps: 2.5 }
+  - label: ORB-SLAM 0.5 fps
+    selector: { kind: fixed_rate, fps: 0.5 }
+";
+
+#[test]
+fn the_stereo_vo_tracks_the_fixed_rates_on_the_rendered_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("stereo.yaml");
+    std::fs::write(&file, EXPERIMENT).unwrap();
+    let out = dir.path().join("out");
+    assert_succeeded(&gpodo_on("run", &file, &out, &[]), "gpodo run: ");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    let schemes = metrics["schemes"].as_array().unwrap();
+    assert_eq!(schemes.len(), 2);
+    let frames: Vec<u64> = schemes
+        .iter()
+        .map(|s| s["run"]["frames"].as_u64().unwrap())
+        .collect();
+    // 16 s at 2.5 and 0.5 fps.
+    assert!(frames[0] >= 38 && frames[1] >= 7, "{frames:?}");
+    for s in schemes {
+        assert_eq!(
+            s["run"]["tracking_losses"].as_u64(),
+            Some(0),
+            "{}",
+            s["label"]
+        );
+        let rmse = s["run"]["metrics"]["rmse_m"].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            rmse.is_finite() && rmse < 0.05,
+            "{}: RMSE {rmse}",
+            s["label"]
+        );
+    }
+    let config = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(config.contains("ORB-SLAM 0.5 fps"));
+}
+
+#[test]
+fn a_dataset_without_a_camera_is_refused_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let logs = dir.path().join("logs");
+    let sim = std::process::Command::new(common::GPODO)
+        .args(["-q", "simulate", "--out"])
+        .arg(&logs)
+        .args([
+            "--training-runs",
+            "1",
+            "--training-run-secs",
+            "30",
+            "--test-max-secs",
+            "10",
+        ])
+        .output()
+        .unwrap();
+    assert_succeeded(&sim, "gpodo simulate: ");
+    let text = EXPERIMENT.replace(
+        "dataset:\n  kind: simulated\n  preset: exoter-prl\n  seed: 7\n  training_runs: 1\n  training_run_secs: 60\n  test_max_secs: 16\n",
+        "dataset: {kind: logs, train: [logs/train_01.csv], test: [logs/test.csv]}\n",
+    );
+    let file = dir.path().join("stereo.yaml");
+    std::fs::write(&file, text).unwrap();
+    let out = gpodo_on("run", &file, &dir.path().join("out"), &[]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("frontend.vo.kind"), "{stderr}");
+}
