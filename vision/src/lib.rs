@@ -9,6 +9,7 @@
 //! renders and calibrates images) and the front end (which tracks
 //! features in them) share one implementation.
 
+mod brief;
 mod error;
 pub mod fast;
 mod image;

@@ -11,6 +11,7 @@
 
 pub mod bench;
 pub mod calibration;
+pub(crate) mod camera;
 pub mod data;
 pub mod feature_supply;
 pub mod fit;

@@ -13,7 +13,6 @@ use std::time::Instant;
 
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::traverse::Traverse;
-use gpodo_frontends::vo::stereo::StereoFrames;
 use gpodo_traits::Standardizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -21,6 +20,7 @@ use rayon::prelude::*;
 use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::calibration::{ResidualStatistics, residual_statistics};
+use crate::execute::camera::{GroundCell, camera_frames};
 use crate::execute::code_version;
 use crate::execute::data::{PreparedData, model_rows, prepare, reference_statistics};
 use crate::execute::feature_supply::feature_supply;
@@ -28,7 +28,6 @@ use crate::execute::fit::fit_and_score;
 use crate::execute::results::{ExperimentResults, ModelRows, RegressorResult};
 use crate::execute::schemes::{SchemeInputs, run_schemes};
 use crate::execute::traverses::{build_traverse, window_predictions};
-use crate::rendered_frames::RenderedFrames;
 
 /// A dataset, ready for every run that uses it.
 pub struct Prepared {
@@ -39,7 +38,7 @@ pub struct Prepared {
     traverses: Arc<Vec<Traverse>>,
     /// The simulated testbed's ground as the camera sees it, built the
     /// first time a run's stereo VO asks for it.
-    ground: std::sync::OnceLock<Result<Arc<gpodo_datasets::camera::GroundMaps>, String>>,
+    ground: GroundCell,
 }
 
 /// A trained regressor's scores and its window predictions on the
@@ -344,7 +343,7 @@ impl SharedWork {
                 "running Table II"
             );
             let traverses = with_feature_supply(config, p)?;
-            let frames = camera_frames(config, p, &traverses)?;
+            let frames = camera_frames(config, &p.data, &p.ground, &traverses)?;
             let config = &with_derived_odometry(config, p);
             run_schemes(&SchemeInputs {
                 config,
@@ -438,64 +437,6 @@ fn with_feature_supply<'a>(
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(std::borrow::Cow::Owned(traverses))
-}
-
-/// Each test traverse's camera frames, rendered on demand from its ground
-/// truth through the stereo VO's camera, for a run whose VO reads images
-/// (none otherwise). The testbed's ground maps are built once per
-/// dataset; each traverse's features are cached once per run, shared by
-/// its schemes.
-fn camera_frames(
-    config: &ExperimentConfig,
-    p: &Prepared,
-    traverses: &[Traverse],
-) -> Result<Vec<Option<Arc<StereoFrames>>>, PipelineError> {
-    use gpodo_frontends::params::VoSpec;
-    let VoSpec::Stereo(vo) = &config.frontend.vo else {
-        return Ok(vec![None; traverses.len()]);
-    };
-    let (Some((terrain, seed)), Some(soils)) = (&p.data.terrain, &p.data.soils) else {
-        return Err(gpodo_frontends::FrontendError::InvalidConfig {
-            field: "frontend.vo.kind".into(),
-            expected: "a VO without images for this dataset: `stereo` reads camera images, which only a simulated dataset renders (recordings' image topics are not read yet)".into(),
-        }
-        .into());
-    };
-    let ground: Arc<gpodo_datasets::camera::GroundMaps> = p
-        .ground
-        .get_or_init(|| {
-            let start = Instant::now();
-            let maps = gpodo_datasets::camera::GroundMaps::build(
-                terrain,
-                soils,
-                &gpodo_datasets::camera::SceneSpec::default(),
-                *seed,
-            )
-            .map(Arc::new)
-            .map_err(|e| e.to_string());
-            tracing::info!(
-                secs = start.elapsed().as_secs_f64(),
-                "camera's ground maps built"
-            );
-            maps
-        })
-        .clone()
-        .map_err(|detail| {
-            PipelineError::Inconsistent(format!("the camera's ground maps: {detail}"))
-        })?;
-    Ok(traverses
-        .iter()
-        .map(|t| {
-            let source = RenderedFrames::from_traverse(
-                Arc::clone(&ground),
-                vo.camera,
-                gpodo_datasets::camera::SensorSpec::default(),
-                *seed,
-                t,
-            );
-            Some(Arc::new(StereoFrames::new(vo.camera, Arc::new(source))))
-        })
-        .collect())
 }
 
 /// The run's configuration with what the dataset tells of its odometry:

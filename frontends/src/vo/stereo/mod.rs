@@ -3,8 +3,11 @@
 //! PnP with RANSAC from a minimal solver ([`p3p`]) and a robust
 //! motion-only refinement ([`pose`]).
 
+pub mod frames;
+mod grid;
 pub mod p3p;
 pub mod pose;
 pub mod tracker;
 
-pub use tracker::{StereoFrameSource, StereoFrames, StereoVo, StereoVoParams};
+pub use frames::{StereoFrameSource, StereoFrames};
+pub use tracker::{StereoVo, StereoVoParams};

@@ -22,30 +22,20 @@
 //!   match the current frame's (ratio test) at least
 //!   `min_tracked_features` times, most matches first.
 
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
-use gpodo_vision::GrayImage;
-use gpodo_vision::orb::{Descriptor, OrbParams, hamming};
-use gpodo_vision::stereo::{StereoFeatures, stereo_features};
+use gpodo_vision::orb::{Descriptor, hamming};
+use gpodo_vision::stereo::StereoFeatures;
 use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
 
+use super::frames::{Cached, StereoFrames};
+use super::grid::KeypointGrid;
 use super::pose::{Correspondence, StereoIntrinsics, ransac_pnp, refine_pose};
 use crate::vo::{
     CameraParams, ErrorStructure, FrameRef, TrackOutcome, TrackRequest, VisualOdometry,
     VoMeasurement,
 };
-
-/// Where the stereo VO gets its images: the rendered camera, or a
-/// recording's image topics.
-pub trait StereoFrameSource: Send + Sync {
-    /// The rectified grey pair (left, right) of `frame`.
-    ///
-    /// # Errors
-    /// A message naming the frame and what could not be had.
-    fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String>;
-}
 
 /// Settings of the stereo VO.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -127,62 +117,6 @@ impl StereoVoParams {
             return bad("ransac_iterations", "at least 1");
         }
         Ok(())
-    }
-}
-
-/// A frame's features, computed once.
-type Cached = Arc<Result<StereoFeatures, String>>;
-
-/// A camera's frames and their features, each computed once and shared by
-/// every VO (every scheme of a run) that holds this in an [`Arc`].
-pub struct StereoFrames {
-    camera: CameraParams,
-    orb: OrbParams,
-    source: Arc<dyn StereoFrameSource>,
-    cache: Mutex<HashMap<usize, Cached>>,
-}
-
-impl StereoFrames {
-    /// The frames of `source`, seen by `camera`, their ORB settings
-    /// ExoTeR's for the camera's image size.
-    pub fn new(camera: CameraParams, source: Arc<dyn StereoFrameSource>) -> Self {
-        let [w, h] = camera.image_size_px.map(|n| n as usize);
-        Self {
-            orb: OrbParams::exoter_for_size(w, h),
-            camera,
-            source,
-            cache: Mutex::new(HashMap::new()),
-        }
-    }
-
-    /// The camera.
-    pub fn camera(&self) -> &CameraParams {
-        &self.camera
-    }
-
-    /// The features of `frame`, from the cache or computed (and cached).
-    pub fn features(&self, frame: FrameRef) -> Cached {
-        if let Some(hit) = self.lock().get(&frame.index) {
-            return Arc::clone(hit);
-        }
-        let computed = self.source.pair(frame).and_then(|(left, right)| {
-            stereo_features(&left, &right, &self.orb, self.camera.focal_px)
-                .map_err(|e| format!("frame {}: {e}", frame.index))
-        });
-        let entry = Arc::new(computed);
-        self.lock().insert(frame.index, Arc::clone(&entry));
-        entry
-    }
-
-    /// How many frames' features are cached.
-    pub fn cached(&self) -> usize {
-        self.lock().len()
-    }
-
-    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Cached>> {
-        // A poisoned cache only means a panic elsewhere; its entries are
-        // whole.
-        self.cache.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
@@ -428,54 +362,6 @@ impl StereoVo {
                     && f64::from(best) < self.params.ratio * f64::from(second)
             })
             .count()
-    }
-}
-
-/// The current frame's keypoints bucketed in square cells.
-struct KeypointGrid {
-    cell: f64,
-    columns: usize,
-    rows: usize,
-    cells: Vec<Vec<usize>>,
-}
-
-impl KeypointGrid {
-    fn new(features: &StereoFeatures) -> Self {
-        let cell = 16.0;
-        let (mut columns, mut rows) = (1, 1);
-        for kp in &features.left.keypoints {
-            columns = columns.max((f64::from(kp.x) / cell) as usize + 1);
-            rows = rows.max((f64::from(kp.y) / cell) as usize + 1);
-        }
-        let mut cells = vec![Vec::new(); columns * rows];
-        for (k, kp) in features.left.keypoints.iter().enumerate() {
-            let (i, j) = (
-                (f64::from(kp.x) / cell) as usize,
-                (f64::from(kp.y) / cell) as usize,
-            );
-            cells[j * columns + i].push(k);
-        }
-        Self {
-            cell,
-            columns,
-            rows,
-            cells,
-        }
-    }
-
-    /// The keypoints in the cells that `radius` around `centre` touches.
-    fn within(&self, centre: [f64; 2], radius: f64) -> impl Iterator<Item = usize> + '_ {
-        let span = |c: f64, n: usize| {
-            let lo = ((c - radius) / self.cell).floor().max(0.0) as usize;
-            let hi = (((c + radius) / self.cell).floor().max(-1.0) + 1.0) as usize;
-            lo.min(n)..hi.min(n)
-        };
-        let (columns, rows) = (span(centre[0], self.columns), span(centre[1], self.rows));
-        rows.flat_map(move |j| {
-            columns
-                .clone()
-                .flat_map(move |i| self.cells[j * self.columns + i].iter().copied())
-        })
     }
 }
 

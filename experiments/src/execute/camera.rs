@@ -1,0 +1,71 @@
+//! The camera a run's stereo VO reads: each test traverse's frames
+//! rendered from its ground truth over the simulated testbed's ground.
+
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
+
+use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
+use gpodo_frontends::traverse::Traverse;
+use gpodo_frontends::vo::stereo::StereoFrames;
+
+use crate::config::ExperimentConfig;
+use crate::error::PipelineError;
+use crate::execute::data::PreparedData;
+use crate::rendered_frames::RenderedFrames;
+
+/// A dataset's ground maps, built the first time a run asks for them (or
+/// why they could not be).
+pub(crate) type GroundCell = OnceLock<Result<Arc<GroundMaps>, String>>;
+
+/// Each test traverse's camera frames, rendered on demand from its ground
+/// truth through the stereo VO's camera, for a run whose VO reads images
+/// (none otherwise). The testbed's ground maps are built once per
+/// dataset; each traverse's features are cached once per run, shared by
+/// its schemes.
+pub(crate) fn camera_frames(
+    config: &ExperimentConfig,
+    data: &PreparedData,
+    ground: &GroundCell,
+    traverses: &[Traverse],
+) -> Result<Vec<Option<Arc<StereoFrames>>>, PipelineError> {
+    use gpodo_frontends::params::VoSpec;
+    let VoSpec::Stereo(vo) = &config.frontend.vo else {
+        return Ok(vec![None; traverses.len()]);
+    };
+    let (Some((terrain, seed)), Some(soils)) = (&data.terrain, &data.soils) else {
+        return Err(gpodo_frontends::FrontendError::InvalidConfig {
+            field: "frontend.vo.kind".into(),
+            expected: "a VO without images for this dataset: `stereo` reads camera images, which only a simulated dataset renders (recordings' image topics are not read yet)".into(),
+        }
+        .into());
+    };
+    let ground: Arc<GroundMaps> = ground
+        .get_or_init(|| {
+            let start = Instant::now();
+            let maps = GroundMaps::build(terrain, soils, &SceneSpec::default(), *seed)
+                .map(Arc::new)
+                .map_err(|e| e.to_string());
+            tracing::info!(
+                secs = start.elapsed().as_secs_f64(),
+                "camera's ground maps built"
+            );
+            maps
+        })
+        .clone()
+        .map_err(|detail| {
+            PipelineError::Inconsistent(format!("the camera's ground maps: {detail}"))
+        })?;
+    Ok(traverses
+        .iter()
+        .map(|t| {
+            let source = RenderedFrames::from_traverse(
+                Arc::clone(&ground),
+                vo.camera,
+                SensorSpec::default(),
+                *seed,
+                t,
+            );
+            Some(Arc::new(StereoFrames::new(vo.camera, Arc::new(source))))
+        })
+        .collect())
+}
