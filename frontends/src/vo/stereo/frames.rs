@@ -21,8 +21,52 @@ pub trait StereoFrameSource: Send + Sync {
     fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String>;
 }
 
+/// What a frame gives the VO, computed once: its stereo features and a
+/// whole-image signature for place recognition.
+pub struct FrameFeatures {
+    /// ORB features of the left image and their right matches.
+    pub stereo: StereoFeatures,
+    /// The left image averaged over a 32 × 24 grid of blocks, less its
+    /// mean, scaled to unit length (a "tiny image": two frames of one
+    /// place correlate, whatever their features).
+    pub signature: Vec<f32>,
+}
+
 /// A frame's features, computed once.
-pub(super) type Cached = Arc<Result<StereoFeatures, String>>;
+pub(super) type Cached = Arc<Result<FrameFeatures, String>>;
+
+/// The signature of [`FrameFeatures::signature`].
+fn signature(image: &GrayImage) -> Vec<f32> {
+    let (w, h) = (image.width(), image.height());
+    let (columns, rows) = (32, 24);
+    let mut sums = vec![0f64; columns * rows];
+    let mut counts = vec![0u32; columns * rows];
+    for y in 0..h {
+        let j = y * rows / h;
+        for (x, &p) in image.row(y).iter().enumerate() {
+            let k = j * columns + x * columns / w;
+            sums[k] += f64::from(p);
+            counts[k] += 1;
+        }
+    }
+    let means: Vec<f64> = sums
+        .iter()
+        .zip(&counts)
+        .map(|(s, &c)| s / f64::from(c.max(1)))
+        .collect();
+    let mean = means.iter().sum::<f64>() / means.len() as f64;
+    let norm = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>().sqrt();
+    means
+        .iter()
+        .map(|m| {
+            if norm > 0.0 {
+                ((m - mean) / norm) as f32
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
 
 /// A camera's frames and their features, each computed once and shared by
 /// every VO (every scheme of a run) that holds this in an [`Arc`].
@@ -57,9 +101,16 @@ impl StereoFrames {
             return Arc::clone(hit);
         }
         let computed = self.source.pair(frame).and_then(|(left, right)| {
-            stereo_features(&left, &right, &self.orb, self.camera.focal_px)
-                .map_err(|e| format!("frame {}: {e}", frame.index))
+            let stereo = stereo_features(&left, &right, &self.orb, self.camera.focal_px)
+                .map_err(|e| format!("frame {}: {e}", frame.index))?;
+            Ok(FrameFeatures {
+                stereo,
+                signature: signature(&left),
+            })
         });
+        if let Err(e) = &computed {
+            tracing::warn!("stereo VO: no features for {e}; frames that need it are lost");
+        }
         let entry = Arc::new(computed);
         self.lock().insert(frame.index, Arc::clone(&entry));
         entry

@@ -18,8 +18,9 @@
 //!   ([`super::pose`]); lost below `min_tracked_features` inliers
 //!   (ORB-SLAM2's 30).
 //! * **Overlap**: the share of the reference's map points found.
-//! * **Recognition**: by appearance only: the keyframes whose descriptors
-//!   match the current frame's (ratio test) at least
+//! * **Recognition**: by appearance only: the keyframes whose whole-image
+//!   signatures correlate best with the current frame's, kept when their
+//!   descriptors match the current frame's (ratio test) at least
 //!   `min_tracked_features` times, most matches first.
 
 use std::sync::Arc;
@@ -175,7 +176,7 @@ impl StereoVo {
     /// images cannot be had).
     pub fn map_point_count(&self, frame: FrameRef) -> usize {
         match self.features(frame).as_ref() {
-            Ok(features) => self.map_points(features).len(),
+            Ok(features) => self.map_points(&features.stereo).len(),
             Err(_) => 0,
         }
     }
@@ -216,6 +217,7 @@ impl StereoVo {
         let (Ok(reference), Ok(current)) = (reference.as_ref(), current.as_ref()) else {
             return None;
         };
+        let (reference, current) = (&reference.stereo, &current.stereo);
         let points = self.map_points(reference);
         let prior = request.prior.map(|p| self.camera_prior(&p));
         let width = f64::from(self.camera.image_size_px[0]);
@@ -231,12 +233,13 @@ impl StereoVo {
                     if x.z <= 0.0 {
                         continue;
                     }
-                    let [u, v] = self.intrinsics_project(&x);
-                    (Some([u, v]), self.params.search_radius_px * scale)
+                    (
+                        self.intrinsics_project(&x),
+                        self.params.search_radius_px * scale,
+                    )
                 }
-                None => (Some([f64::from(kp.x), f64::from(kp.y)]), wide),
+                None => ([f64::from(kp.x), f64::from(kp.y)], wide),
             };
-            let Some(centre) = centre else { continue };
             let Some(found) = self.best_match(
                 &reference.left.descriptors[*k],
                 kp.level,
@@ -386,17 +389,39 @@ impl VisualOdometry for StereoVo {
         f64::from(u8::from(self.track_request(request).is_some()))
     }
 
+    /// Appearance only: the keyframes whose whole-image signatures
+    /// correlate best with the current frame's (at least 0.5, the best
+    /// [`RECOGNITION_SHORTLIST`]), kept when their descriptors match the
+    /// current frame's at least `min_tracked_features` times (ratio test);
+    /// most matches first, at most 3.
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef> {
         let now = self.features(current);
         let Ok(now) = now.as_ref() else {
             return Vec::new();
         };
-        let mut found: Vec<(usize, FrameRef)> = keyframes
+        let mut shortlist: Vec<(f32, FrameRef, Cached)> = keyframes
             .iter()
             .filter_map(|kf| {
                 let other = self.features(*kf);
+                let correlation = match other.as_ref() {
+                    Ok(o) => o
+                        .signature
+                        .iter()
+                        .zip(&now.signature)
+                        .map(|(a, b)| a * b)
+                        .sum(),
+                    Err(_) => return None,
+                };
+                (correlation >= 0.5).then_some((correlation, *kf, other))
+            })
+            .collect();
+        shortlist.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.index.cmp(&b.1.index)));
+        shortlist.truncate(RECOGNITION_SHORTLIST);
+        let mut found: Vec<(usize, FrameRef)> = shortlist
+            .iter()
+            .filter_map(|(_, kf, other)| {
                 let other = other.as_ref().as_ref().ok()?;
-                let n = self.appearance_matches(now, other);
+                let n = self.appearance_matches(&now.stereo, &other.stereo);
                 (n >= self.params.min_tracked_features).then_some((n, *kf))
             })
             .collect();
@@ -405,3 +430,7 @@ impl VisualOdometry for StereoVo {
         found.into_iter().map(|(_, kf)| kf).collect()
     }
 }
+
+/// Keyframes whose descriptors recognition compares, after their
+/// signatures.
+pub const RECOGNITION_SHORTLIST: usize = 8;
