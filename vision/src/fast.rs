@@ -51,33 +51,6 @@ pub struct Corner {
     pub score: u8,
 }
 
-/// `I_p − I_x` around the circle of the pixel at `(x, y)` (at least 3
-/// pixels from every edge).
-fn differences(image: &GrayImage, x: usize, y: usize) -> [i16; 16] {
-    let centre = i16::from(image.get(x, y));
-    CIRCLE.map(|(dx, dy)| {
-        let (cx, cy) = (x.wrapping_add_signed(dx), y.wrapping_add_signed(dy));
-        centre - i16::from(image.get(cx, cy))
-    })
-}
-
-/// Whether some 9 contiguous entries of the circle all satisfy `test`.
-fn has_arc(d: &[i16; 16], test: impl Fn(i16) -> bool) -> bool {
-    let mut run = 0;
-    // Twice around, so that a run through the start is seen whole.
-    for k in 0..16 + ARC - 1 {
-        if test(d[k % 16]) {
-            run += 1;
-            if run >= ARC {
-                return true;
-            }
-        } else {
-            run = 0;
-        }
-    }
-    false
-}
-
 /// `(A, B)`: over the 16 arcs of 9 contiguous circle pixels, the largest
 /// of an arc's smallest `d` (darker side) and of its smallest `−d`
 /// (brighter side). Each arc's minimum is built from minima of 2, 4 and 8
@@ -97,16 +70,42 @@ fn arc_extremes(d: &[i16; 16]) -> (i16, i16) {
     (side(1), side(-1))
 }
 
-/// The score of a corner at `threshold` with circle differences `d`.
-fn corner_score(d: &[i16; 16], threshold: u8) -> u8 {
-    let mut best = i16::from(threshold);
-    for start in 0..16 {
-        let arc = (0..ARC).map(|k| d[(start + k) % 16]);
-        let darker = arc.clone().min().unwrap_or(0);
-        let brighter = arc.map(|v| -v).min().unwrap_or(0);
-        best = best.max(darker).max(brighter);
+/// The score of the pixel at `idx` of the row-major `pixels` at
+/// `threshold` (0 for no corner), its circle at `offsets` from it. Any 9
+/// contiguous circle pixels hold 2 of the 4 compass pixels and 4 of the 8
+/// even ones: without those on one side there is no corner.
+fn pixel_score(pixels: &[u8], idx: usize, offsets: &[isize; 16], threshold: u8) -> u8 {
+    let t = i16::from(threshold);
+    let centre = i16::from(pixels[idx]);
+    // A dark neighbour has a positive difference.
+    let at = |k: usize| centre - i16::from(pixels[idx.wrapping_add_signed(offsets[k])]);
+    for (picks, needed) in [
+        (&[0, 4, 8, 12][..], 2),
+        (&[0, 2, 4, 6, 8, 10, 12, 14][..], 4),
+    ] {
+        let (mut dark, mut bright) = (0, 0);
+        for &k in picks {
+            let v = at(k);
+            dark += usize::from(v > t);
+            bright += usize::from(v < -t);
+        }
+        if dark < needed && bright < needed {
+            return 0;
+        }
     }
-    u8::try_from(best - 1).unwrap_or(u8::MAX)
+    let d: [i16; 16] = std::array::from_fn(at);
+    let (a, b) = arc_extremes(&d);
+    let best = a.max(b);
+    if best > t {
+        u8::try_from(best - 1).unwrap_or(u8::MAX)
+    } else {
+        0
+    }
+}
+
+/// The circle's offsets in the row-major pixels of an image `width` wide.
+fn circle_offsets(width: usize) -> [isize; 16] {
+    CIRCLE.map(|(dx, dy)| dy * width as isize + dx)
 }
 
 /// The corner score of the pixel at `(x, y)` at `threshold`, or `None`
@@ -115,23 +114,9 @@ pub fn score_at(image: &GrayImage, x: usize, y: usize, threshold: u8) -> Option<
     if x < 3 || y < 3 || x + 3 >= image.width() || y + 3 >= image.height() {
         return None;
     }
-    let t = i16::from(threshold);
-    // Any 9 contiguous circle pixels hold 2 of the 4 compass pixels (0, 4,
-    // 8, 12): without 2 of them on one side there is no corner.
-    let centre = i16::from(image.get(x, y));
-    let (mut dark, mut bright) = (0, 0);
-    for (dx, dy) in [CIRCLE[0], CIRCLE[4], CIRCLE[8], CIRCLE[12]] {
-        let v = centre - i16::from(image.get(x.wrapping_add_signed(dx), y.wrapping_add_signed(dy)));
-        dark += usize::from(v > t);
-        bright += usize::from(v < -t);
-    }
-    if dark < 2 && bright < 2 {
-        return None;
-    }
-    let d = differences(image, x, y);
-    // A dark neighbour has a positive difference.
-    let corner = has_arc(&d, |v| v > t) || has_arc(&d, |v| v < -t);
-    corner.then(|| corner_score(&d, threshold))
+    let offsets = circle_offsets(image.width());
+    let score = pixel_score(image.pixels(), y * image.width() + x, &offsets, threshold);
+    (score > 0).then_some(score)
 }
 
 /// The FAST-9 corners of `image` at `threshold`, row by row, with
@@ -165,47 +150,18 @@ pub fn detect(image: &GrayImage, threshold: u8, nonmax: bool) -> Vec<Corner> {
 /// score (at least `threshold`), or 0 where there is no corner. A corner's
 /// score does not depend on the threshold it was found at, so one map at
 /// the lower of two thresholds answers both: a pixel is a corner at
-/// `t ≥ threshold` exactly when its score is at least `t`. The same test
-/// as [`score_at`], on the row-major pixels through precomputed offsets.
+/// `t ≥ threshold` exactly when its score is at least `t`.
 pub fn score_map(image: &GrayImage, threshold: u8) -> Vec<u8> {
     let (width, height) = (image.width(), image.height());
     let mut scores = vec![0u8; width * height];
     if width < 7 || height < 7 {
         return scores;
     }
-    let pixels = image.pixels();
-    let offsets = CIRCLE.map(|(dx, dy)| dy * width as isize + dx);
-    let t = i16::from(threshold);
+    let (pixels, offsets) = (image.pixels(), circle_offsets(width));
     for y in 3..height - 3 {
         for x in 3..width - 3 {
             let idx = y * width + x;
-            let centre = i16::from(pixels[idx]);
-            let at = |k: usize| i16::from(pixels[idx.wrapping_add_signed(offsets[k])]);
-            let (mut dark, mut bright) = (0, 0);
-            for k in [0, 4, 8, 12] {
-                let v = centre - at(k);
-                dark += usize::from(v > t);
-                bright += usize::from(v < -t);
-            }
-            if dark < 2 && bright < 2 {
-                continue;
-            }
-            // 9 contiguous pixels hold 4 of the 8 even ones.
-            let (mut dark, mut bright) = (0, 0);
-            for k in [0, 2, 4, 6, 8, 10, 12, 14] {
-                let v = centre - at(k);
-                dark += usize::from(v > t);
-                bright += usize::from(v < -t);
-            }
-            if dark < 4 && bright < 4 {
-                continue;
-            }
-            let d: [i16; 16] = std::array::from_fn(|k| centre - at(k));
-            let (a, b) = arc_extremes(&d);
-            let best = a.max(b);
-            if best > t {
-                scores[idx] = u8::try_from(best - 1).unwrap_or(u8::MAX);
-            }
+            scores[idx] = pixel_score(pixels, idx, &offsets, threshold);
         }
     }
     scores

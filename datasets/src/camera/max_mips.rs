@@ -208,27 +208,14 @@ impl MaxMips {
                 return None;
             }
             t = exit;
-            let (mut parent_crossed, mut inside) = (false, true);
-            if across_u {
-                match step(i, ray.du, side) {
-                    Some(next) => {
-                        parent_crossed |= next / 2 != i / 2;
-                        i = next;
-                    }
-                    None => inside = false,
+            let mut parent_crossed = false;
+            for (across, k, d) in [(across_u, &mut i, ray.du), (across_v, &mut j, ray.dv)] {
+                if across {
+                    // Past the map's edge: nothing more to meet.
+                    let next = step(*k, d, side)?;
+                    parent_crossed |= next / 2 != *k / 2;
+                    *k = next;
                 }
-            }
-            if across_v {
-                match step(j, ray.dv, side) {
-                    Some(next) => {
-                        parent_crossed |= next / 2 != j / 2;
-                        j = next;
-                    }
-                    None => inside = false,
-                }
-            }
-            if !inside {
-                return None;
             }
             if parent_crossed && level < top {
                 level += 1;

@@ -12,7 +12,7 @@
 //! the update `T ← (R(ω), ρ) · T`.
 
 use nalgebra::{
-    Isometry3, Matrix3, Matrix6, Point3, SMatrix, Translation3, UnitQuaternion, Vector3, Vector6,
+    Isometry3, Matrix6, Point3, SMatrix, Translation3, UnitQuaternion, Vector3, Vector6,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -53,6 +53,12 @@ impl StereoIntrinsics {
         ]
     }
 
+    /// The left pixel of `x` (left-camera frame, in front of it).
+    pub fn project_left(&self, x: &Point3<f64>) -> [f64; 2] {
+        let (f, [cx, cy]) = (self.focal_px, self.principal_px);
+        [f * x.x / x.z + cx, f * x.y / x.z + cy]
+    }
+
     /// The unit bearing of the left pixel `(u, v)`.
     fn bearing(&self, [u, v]: [f64; 2]) -> Vector3<f64> {
         let [cx, cy] = self.principal_px;
@@ -88,9 +94,10 @@ fn whitened(
     }
     let [u, v, ur] = camera.project(&x);
     let (f, z) = (camera.focal_px, x.z);
-    let skew = Matrix3::new(0.0, x.z, -x.y, -x.z, 0.0, x.x, x.y, -x.x, 0.0);
+    // ∂X/∂ω = −[X]×, so a row of the projection's derivative `d` is
+    // `[X × d; d]`.
     let row = |d: Vector3<f64>| -> Vector6<f64> {
-        let rot = skew.transpose() * d;
+        let rot = x.coords.cross(&d);
         Vector6::new(rot.x, rot.y, rot.z, d.x, d.y, d.z) / c.sigma_px
     };
     let mut r = vec![
@@ -144,9 +151,12 @@ pub fn ransac_pnp(
     let mut best: Option<(Isometry3<f64>, usize)> = None;
     let mut needed = max_iterations;
     let mut iteration = 0;
-    let left_only = |c: &Correspondence| Correspondence {
-        right_x: None,
-        ..*c
+    // The left image's χ² within CHI2_MONO: the inlier test of a pose.
+    let left_inlier = |c: &Correspondence, pose: &Isometry3<f64>| {
+        let x = pose * c.point;
+        let [u, v] = camera.project_left(&x);
+        let (du, dv) = (u - c.left_px[0], v - c.left_px[1]);
+        x.z > 1e-6 && du * du + dv * dv <= CHI2_MONO * c.sigma_px * c.sigma_px
     };
     while iteration < needed {
         iteration += 1;
@@ -163,7 +173,7 @@ pub fn ransac_pnp(
         for pose in p3p(&world, &bearings) {
             let inliers = correspondences
                 .iter()
-                .filter(|c| chi2(&left_only(c), &pose, camera).0 <= CHI2_MONO)
+                .filter(|c| left_inlier(c, &pose))
                 .count();
             if best.is_none_or(|(_, count)| inliers > count) {
                 best = Some((pose, inliers));

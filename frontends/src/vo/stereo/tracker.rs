@@ -27,7 +27,7 @@ use std::sync::Arc;
 
 use gpodo_vision::orb::{Descriptor, hamming};
 use gpodo_vision::stereo::StereoFeatures;
-use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
+use nalgebra::{Isometry3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
 
 use super::frames::{Cached, StereoFrames};
@@ -234,7 +234,7 @@ impl StereoVo {
                         continue;
                     }
                     (
-                        self.intrinsics_project(&x),
+                        self.intrinsics.project_left(&x),
                         self.params.search_radius_px * scale,
                     )
                 }
@@ -282,11 +282,6 @@ impl StereoVo {
         })
     }
 
-    fn intrinsics_project(&self, x: &Point3<f64>) -> [f64; 2] {
-        let (f, [cx, cy]) = (self.intrinsics.focal_px, self.intrinsics.principal_px);
-        [f * x.x / x.z + cx, f * x.y / x.z + cy]
-    }
-
     /// The current keypoint within `radius` of `centre`, at a level next to
     /// `level`, nearest to `descriptor` in Hamming distance, if below the
     /// limit and the ratio test.
@@ -331,7 +326,7 @@ impl StereoVo {
         let relative = b * tracked.pose.inverse() * b.inverse();
         let r = b.rotation.to_rotation_matrix().into_inner();
         let t = b.translation.vector;
-        let skew = Matrix3::new(0.0, -t.z, t.y, t.z, 0.0, -t.x, -t.y, t.x, 0.0);
+        let skew = t.cross_matrix();
         let mut adjoint = Matrix6::zeros();
         adjoint.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
         adjoint.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
