@@ -158,9 +158,35 @@ pub fn score_map(image: &GrayImage, threshold: u8) -> Vec<u8> {
         return scores;
     }
     let (pixels, offsets) = (image.pixels(), circle_offsets(width));
+    let t = i16::from(threshold);
+    let inner = width - 6;
+    let mut candidate = vec![false; inner];
     for y in 3..height - 3 {
-        for x in 3..width - 3 {
-            let idx = y * width + x;
+        // The compass test of `pixel_score` for the whole row first, in a
+        // loop the compiler vectorises; the rest only where it passes.
+        let shifted = |dy: isize, dx: isize| -> &[u8] {
+            let start = (y as isize + dy) * width as isize + dx + 3;
+            &pixels[start as usize..start as usize + inner]
+        };
+        let (centre, north, south, east, west) = (
+            shifted(0, 0),
+            shifted(-3, 0),
+            shifted(3, 0),
+            shifted(0, 3),
+            shifted(0, -3),
+        );
+        for (x, pass) in candidate.iter_mut().enumerate() {
+            let c = i16::from(centre[x]);
+            let (mut dark, mut bright) = (0u8, 0u8);
+            for p in [north[x], south[x], east[x], west[x]] {
+                let v = c - i16::from(p);
+                dark += u8::from(v > t);
+                bright += u8::from(v < -t);
+            }
+            *pass = dark >= 2 || bright >= 2;
+        }
+        for (x, _) in candidate.iter().enumerate().filter(|(_, pass)| **pass) {
+            let idx = y * width + x + 3;
             scores[idx] = pixel_score(pixels, idx, &offsets, threshold);
         }
     }

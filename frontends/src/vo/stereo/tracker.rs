@@ -27,7 +27,7 @@ use std::sync::Arc;
 
 use gpodo_vision::orb::{Descriptor, hamming};
 use gpodo_vision::stereo::StereoFeatures;
-use nalgebra::{Isometry3, Matrix6, Point3};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
 
 use super::frames::{Cached, StereoFrames};
@@ -181,25 +181,26 @@ impl StereoVo {
         }
     }
 
-    /// The map points of a reference frame: `(keypoint, point)` for each
-    /// stereo match within the depth limit.
-    fn map_points(&self, features: &StereoFeatures) -> Vec<(usize, Point3<f64>)> {
-        let (f, [cx, cy], b) = (
-            self.intrinsics.focal_px,
-            self.intrinsics.principal_px,
-            self.intrinsics.baseline_m,
-        );
-        let max_depth = self.params.max_depth_baselines * b;
+    /// The map points of a reference frame: `(keypoint, point, its
+    /// covariance)` for each stereo match within the depth limit, placed
+    /// by its disparity with its level's scale as each coordinate's
+    /// standard deviation.
+    fn map_points(&self, features: &StereoFeatures) -> Vec<(usize, Point3<f64>, Matrix3<f64>)> {
+        let max_depth = self.params.max_depth_baselines * self.intrinsics.baseline_m;
         (0..features.left.keypoints.len())
             .filter_map(|k| {
                 let d = f64::from(features.disparity(k)?);
-                let z = f * b / d;
-                if !(d > 0.0 && z <= max_depth) {
+                if !(d > 0.0
+                    && self.intrinsics.focal_px * self.intrinsics.baseline_m / d <= max_depth)
+                {
                     return None;
                 }
                 let kp = &features.left.keypoints[k];
-                let (u, v) = (f64::from(kp.x), f64::from(kp.y));
-                Some((k, Point3::new((u - cx) * z / f, (v - cy) * z / f, z)))
+                let sigma = features.left.scales[usize::from(kp.level)];
+                let (point, covariance) =
+                    self.intrinsics
+                        .triangulate([f64::from(kp.x), f64::from(kp.y)], d, sigma);
+                Some((k, point, covariance))
             })
             .collect()
     }
@@ -224,7 +225,7 @@ impl StereoVo {
         let wide = self.params.wide_search_px * width / 1024.0;
         let grid = KeypointGrid::new(current);
         let mut correspondences = Vec::new();
-        for (k, point) in &points {
+        for (k, point, point_covariance) in &points {
             let kp = &reference.left.keypoints[*k];
             let scale = reference.left.scales[usize::from(kp.level)];
             let (centre, radius) = match &prior {
@@ -256,6 +257,7 @@ impl StereoVo {
                 left_px: [f64::from(c.x), f64::from(c.y)],
                 right_x: current.right_x[found].map(f64::from),
                 sigma_px: current.left.scales[usize::from(c.level)],
+                point_covariance: *point_covariance,
             });
         }
         if correspondences.len() < self.params.min_tracked_features {
