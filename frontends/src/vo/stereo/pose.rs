@@ -115,6 +115,10 @@ pub struct Correspondence {
     pub point_covariance: Matrix3<f64>,
 }
 
+/// An observation's whitened residual (one entry per observed coordinate),
+/// its Jacobian rows in the pose and in the map point.
+type Whitened = (Vec<f64>, Vec<Vector6<f64>>, Vec<Vector3<f64>>);
+
 /// The residual (prediction − observation, in σ) of `c` at `pose`, its
 /// Jacobian in the pose (rows per observed coordinate) and in the map point
 /// (keyframe frame); `None` behind the camera.
@@ -122,7 +126,7 @@ fn whitened(
     c: &Correspondence,
     pose: &Isometry3<f64>,
     camera: &StereoIntrinsics,
-) -> Option<(Vec<f64>, Vec<Vector6<f64>>, Vec<Vector3<f64>>)> {
+) -> Option<Whitened> {
     let x = pose * c.point;
     if x.z <= 1e-6 {
         return None;
@@ -471,6 +475,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)]
     fn the_jacobian_is_the_finite_difference_of_the_residual() {
         let pose = Isometry3::new(
             Vector3::new(0.1, -0.05, 0.2),
