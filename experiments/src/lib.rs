@@ -17,6 +17,7 @@
 //! atomic file writes every stage that writes shares. See
 //! `ARCHITECTURE.md` for the path of one `gpodo run`.
 
+pub mod bag_frames;
 pub mod config;
 pub mod cpu;
 pub mod error;

@@ -33,8 +33,9 @@ pub struct TopicInfo {
     /// does not depend on any message's stamp being right.
     pub summary_rate_hz: Option<f64>,
     /// What a topic map needs of its messages: frame ids (`frame` or
-    /// `frame → child` for odometry), joint names, or a TF message's
-    /// `parent → child` pairs, each once, in the order first seen (from
+    /// `frame → child` for odometry), joint names, a TF message's
+    /// `parent → child` pairs, an image's `frame: encoding W×H` (or its
+    /// compression), or a camera info's `frame: W×H, model`, each once, in the order first seen (from
     /// the first 100 messages; every message of a TF topic).
     pub names: Vec<String>,
 }
@@ -58,6 +59,15 @@ fn names_of(message: &super::messages::RosMessage) -> Vec<String> {
             .iter()
             .map(|t| format!("{} → {}", t.header.frame_id, t.child_frame_id))
             .collect(),
+        M::Image(m) => vec![format!(
+            "{}: {} {}×{}",
+            m.header.frame_id, m.encoding, m.width, m.height
+        )],
+        M::CompressedImage(m) => vec![format!("{}: {}", m.header.frame_id, m.format)],
+        M::CameraInfo(m) => vec![format!(
+            "{}: {}×{}, {}",
+            m.header.frame_id, m.width, m.height, m.distortion_model
+        )],
     }
 }
 

@@ -2,10 +2,13 @@
 //! serialisation into the same typed structs: `sensor_msgs/JointState`,
 //! `sensor_msgs/Imu`, `sensor_msgs/NavSatFix`, `nav_msgs/Odometry`,
 //! `geometry_msgs/PoseStamped`, `PoseWithCovarianceStamped`,
-//! `TwistStamped` and `tf2_msgs/TFMessage`.
+//! `TwistStamped`, `tf2_msgs/TFMessage`, and a camera's
+//! `sensor_msgs/Image`, `CompressedImage` and `CameraInfo`
+//! ([`super::images`]).
 
 use serde::Serialize;
 
+pub use super::images::{CameraInfo, CompressedImage, Image};
 use super::ros1_type_name;
 use super::wire::{WireError, WireReader};
 
@@ -141,10 +144,16 @@ pub enum RosMessage {
     TwistStamped(Header, Twist),
     /// `tf2_msgs/TFMessage`.
     Tf(Vec<TransformStamped>),
+    /// `sensor_msgs/Image`.
+    Image(Image),
+    /// `sensor_msgs/CompressedImage`.
+    CompressedImage(CompressedImage),
+    /// `sensor_msgs/CameraInfo`.
+    CameraInfo(CameraInfo),
 }
 
 /// The types [`decode`] reads, in their ROS 1 spelling.
-pub const SUPPORTED_TYPES: [&str; 8] = [
+pub const SUPPORTED_TYPES: [&str; 11] = [
     "sensor_msgs/Imu",
     "nav_msgs/Odometry",
     "sensor_msgs/NavSatFix",
@@ -153,6 +162,9 @@ pub const SUPPORTED_TYPES: [&str; 8] = [
     "geometry_msgs/PoseWithCovarianceStamped",
     "geometry_msgs/TwistStamped",
     "tf2_msgs/TFMessage",
+    "sensor_msgs/Image",
+    "sensor_msgs/CompressedImage",
+    "sensor_msgs/CameraInfo",
 ];
 
 fn header(r: &mut WireReader<'_>) -> Result<Header, WireError> {
@@ -244,6 +256,33 @@ pub fn decode(message_type: &str, encoding: &str, data: &[u8]) -> Result<RosMess
                 rotation: r.f64s()?,
             })
         })?),
+        "sensor_msgs/Image" => RosMessage::Image(Image {
+            header: header(r)?,
+            height: r.u32()?,
+            width: r.u32()?,
+            encoding: r.string()?,
+            is_bigendian: r.u8()?,
+            step: r.u32()?,
+            data: r.bytes()?.to_vec(),
+        }),
+        "sensor_msgs/CompressedImage" => RosMessage::CompressedImage(CompressedImage {
+            header: header(r)?,
+            format: r.string()?,
+            data: r.bytes()?.to_vec(),
+        }),
+        "sensor_msgs/CameraInfo" => RosMessage::CameraInfo(CameraInfo {
+            header: header(r)?,
+            height: r.u32()?,
+            width: r.u32()?,
+            distortion_model: r.string()?,
+            d: r.f64_seq()?,
+            k: r.f64s()?,
+            r: r.f64s()?,
+            p: r.f64s()?,
+            binning: [r.u32()?, r.u32()?],
+            roi: [r.u32()?, r.u32()?, r.u32()?, r.u32()?],
+            roi_do_rectify: r.bool()?,
+        }),
         other => {
             return Err(WireError(format!(
                 "type `{other}` is not one gpodo reads (it reads {})",

@@ -9,6 +9,7 @@
 
 mod damage;
 pub mod enu;
+pub mod images;
 pub mod import;
 mod info;
 mod mcap_walk;

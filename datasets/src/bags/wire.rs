@@ -164,6 +164,17 @@ impl<'a> WireReader<'a> {
         (0..n).map(|_| self.f64()).collect()
     }
 
+    /// A sequence of bytes (`uint8[]`), borrowed.
+    pub fn bytes(&mut self) -> Result<&'a [u8], WireError> {
+        let n = self.length()?;
+        self.take(n)
+    }
+
+    /// A `bool`.
+    pub fn bool(&mut self) -> Result<bool, WireError> {
+        Ok(self.u8()? != 0)
+    }
+
     /// A sequence of elements read by `read`.
     pub fn seq<T>(
         &mut self,

@@ -526,6 +526,9 @@ fn header_ns(message: &RosMessage) -> Option<i64> {
             h.stamp_ns
         }
         M::Tf(transforms) => transforms.first()?.header.stamp_ns,
+        M::Image(m) => m.header.stamp_ns,
+        M::CompressedImage(m) => m.header.stamp_ns,
+        M::CameraInfo(m) => m.header.stamp_ns,
     })
 }
 
