@@ -29,6 +29,20 @@ impl BagFrames {
         }
     }
 
+    /// The camera the stereo VO should see these frames through:
+    /// `mounting` with the intrinsics and baseline of the recorded camera
+    /// infos ([`camera_from_info`]) when the topic map names both, else
+    /// `mounting` as configured.
+    ///
+    /// # Errors
+    /// As [`camera_from_info`].
+    pub fn camera(&self, mounting: &CameraParams) -> Result<CameraParams, String> {
+        match &self.recording.info {
+            [Some(left), Some(right)] => camera_from_info(left, right, mounting),
+            _ => Ok(*mounting),
+        }
+    }
+
     /// The pairs' times on the frames' clock (s from `base_ns`).
     pub fn times_secs(&self) -> Vec<f64> {
         self.recording

@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use gpodo_datasets::bags::write::{WheelUnits, write_mcap_with_camera, written_topic_map_in};
+use gpodo_datasets::bags::write_camera::written_camera_topics;
 use gpodo_datasets::bags::write_camera::{intrinsics, projection};
 use gpodo_datasets::camera::traverse::camera_stream;
 use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
@@ -267,7 +268,10 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
             }
             if let Some(first) = logs.first() {
                 let rate_hz = median_rate_hz(first).unwrap_or(10.0);
-                let map = written_topic_map_in(first, rate_hz, options.units);
+                let mut map = written_topic_map_in(first, rate_hz, options.units);
+                if options.camera.is_some() {
+                    map.camera = Some(written_camera_topics());
+                }
                 let path = out.join("topics.yaml");
                 let text = serde_saphyr::to_string(&map).map_err(|e| PipelineError::Io {
                     path: path.clone(),

@@ -267,3 +267,23 @@ print("ok")
         "{e}"
     );
 }
+
+#[test]
+fn a_topic_map_with_both_a_recorded_vo_and_a_camera_is_refused() {
+    let log = gpodo_datasets::log::RoverLog {
+        name: "empty".into(),
+        wheel_names: Vec::new(),
+        steer_names: Vec::new(),
+        bogie_names: Vec::new(),
+        samples: Vec::new(),
+        ground_truth: Vec::new(),
+        camera_times_secs: Vec::new(),
+    };
+    let mut map = gpodo_datasets::bags::write::written_topic_map(&log, 10.0);
+    map.camera = Some(topics());
+    map.vo = Some("/orb_slam/pose".into());
+    let err =
+        gpodo_datasets::bags::import::import_bag(std::path::Path::new("none.mcap"), "none", &map)
+            .unwrap_err();
+    assert!(err.to_string().contains("not both"), "{err}");
+}

@@ -1,7 +1,8 @@
 //! `frontend.vo: {kind: stereo}` through `gpodo run`: Table II's fixed
 //! rates on a short simulated test traverse, tracked by the stereo VO on
-//! the rendered camera's images; and a dataset without a camera refused
-//! with the field named.
+//! the rendered camera's images, and on the same camera recorded in bags
+//! (`dataset: {kind: bags}` with a topic map's `camera:`); a dataset
+//! without a camera refused with the field named.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -96,4 +97,63 @@ fn a_dataset_without_a_camera_is_refused_naming_the_field() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("frontend.vo.kind"), "{stderr}");
+}
+
+#[test]
+fn the_stereo_vo_tracks_a_recorded_camera_through_a_bags_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let bags = dir.path().join("bags");
+    let sim = std::process::Command::new(common::GPODO)
+        .args(["-q", "simulate", "--format", "mcap", "--camera", "--out"])
+        .arg(&bags)
+        .args([
+            "--training-runs",
+            "1",
+            "--training-run-secs",
+            "30",
+            "--test-max-secs",
+            "16",
+        ])
+        .output()
+        .unwrap();
+    assert_succeeded(&sim, "gpodo simulate: ");
+    let topics = std::fs::read_to_string(bags.join("topics.yaml")).unwrap();
+    assert!(topics.contains("/camera/left/image_raw"), "{topics}");
+    let indented: String = topics.lines().map(|l| format!("    {l}\n")).collect();
+    let text = EXPERIMENT.replace(
+        "dataset:\n  kind: simulated\n  preset: exoter-prl\n  seed: 7\n  training_runs: 1\n  training_run_secs: 60\n  test_max_secs: 16\n",
+        &format!(
+            "dataset:\n  kind: bags\n  train: [bags/train_01.mcap]\n  test: [bags/test.mcap]\n  topics:\n{indented}"
+        ),
+    );
+    let file = dir.path().join("stereo.yaml");
+    std::fs::write(&file, text).unwrap();
+    let out = dir.path().join("out");
+    assert_succeeded(&gpodo_on("run", &file, &out, &[]), "gpodo run: ");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    let schemes = metrics["schemes"].as_array().unwrap();
+    let frames: Vec<u64> = schemes
+        .iter()
+        .map(|s| s["run"]["frames"].as_u64().unwrap())
+        .collect();
+    assert!(frames[0] >= 38 && frames[1] >= 7, "{frames:?}");
+    for s in schemes {
+        assert_eq!(
+            s["run"]["tracking_losses"].as_u64(),
+            Some(0),
+            "{}",
+            s["label"]
+        );
+        let rmse = s["run"]["metrics"]["rmse_m"].as_f64().unwrap_or(f64::NAN);
+        eprintln!(
+            "{}: {} frames, RMSE {rmse:.4} m",
+            s["label"], s["run"]["frames"]
+        );
+        assert!(
+            rmse.is_finite() && rmse < 0.05,
+            "{}: RMSE {rmse}",
+            s["label"]
+        );
+    }
 }

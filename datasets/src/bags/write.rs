@@ -309,6 +309,7 @@ pub fn written_topic_map_in(log: &RoverLog, rate_hz: f64, units: WheelUnits) -> 
         }),
         odometry: has_odometry.then(|| "/odom".into()),
         vo: None,
+        camera: None,
         rate_hz,
         max_gap_secs: 0.5,
         time: Default::default(),

@@ -109,6 +109,17 @@ fn camera_info_message(stamp_ns: u64, camera: &CameraParams, index: usize) -> Ve
     m.0
 }
 
+/// The camera topics a bag written with a camera has, for its topic map.
+pub fn written_camera_topics() -> super::images::CameraTopics {
+    let topic = |side: &str, what: &str| format!("/camera/{side}/{what}");
+    super::images::CameraTopics {
+        left: topic("left", "image_raw"),
+        right: topic("right", "image_raw"),
+        left_info: Some(topic("left", "camera_info")),
+        right_info: Some(topic("right", "camera_info")),
+    }
+}
+
 /// The four channels of a stereo camera in a bag.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct CameraChannels {

@@ -1,5 +1,6 @@
 //! The camera a run's stereo VO reads: each test traverse's frames
-//! rendered from its ground truth over the simulated testbed's ground.
+//! rendered from its ground truth over the simulated testbed's ground, or
+//! a recording's own images.
 
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
@@ -8,6 +9,7 @@ use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
 use gpodo_frontends::traverse::Traverse;
 use gpodo_frontends::vo::stereo::StereoFrames;
 
+use crate::bag_frames::BagFrames;
 use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::data::PreparedData;
@@ -33,11 +35,29 @@ pub(crate) fn camera_frames(
         return Ok(vec![None; traverses.len()]);
     };
     let (Some((terrain, seed)), Some(soils)) = (&data.terrain, &data.soils) else {
-        return Err(gpodo_frontends::FrontendError::InvalidConfig {
-            field: "frontend.vo.kind".into(),
-            expected: "a VO without images for this dataset: `stereo` reads camera images, which only a simulated dataset renders (recordings' image topics are not read yet)".into(),
+        if data.recorded_cameras.is_empty() {
+            return Err(gpodo_frontends::FrontendError::InvalidConfig {
+                field: "frontend.vo.kind".into(),
+                expected: "a VO without images for this dataset: `stereo` reads camera images, which a simulated dataset renders and a bag gives when its topic map names a `camera:`".into(),
+            }
+            .into());
         }
-        .into());
+        return traverses
+            .iter()
+            .map(|t| {
+                let frames = data.recorded_cameras.get(t.name()).ok_or_else(|| {
+                    PipelineError::Inconsistent(format!(
+                        "the test traverse `{}` has no recorded camera",
+                        t.name()
+                    ))
+                })?;
+                let camera = frames.camera(&vo.camera).map_err(|detail| {
+                    PipelineError::Inconsistent(format!("the camera of `{}`: {detail}", t.name()))
+                })?;
+                let source: Arc<BagFrames> = Arc::clone(frames);
+                Ok(Some(Arc::new(StereoFrames::new(camera, source))))
+            })
+            .collect();
     };
     let ground: Arc<GroundMaps> = ground
         .get_or_init(|| {

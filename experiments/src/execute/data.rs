@@ -149,6 +149,9 @@ pub(crate) struct PreparedData {
     /// Visual odometry recorded with the test runs (a bag's `vo` topic),
     /// by test run name.
     pub(crate) recorded_vo: BTreeMap<String, Vec<StampedPose>>,
+    /// Per recording (log name), its stereo camera's frames, when the
+    /// topic map names a `camera:`.
+    pub(crate) recorded_cameras: BTreeMap<String, std::sync::Arc<crate::bag_frames::BagFrames>>,
     /// Where each soil lies (a simulated testbed only), for the simulated
     /// tracker's feature supply.
     pub(crate) soils: Option<gpodo_datasets::sim::soil::SoilMap>,
@@ -299,6 +302,7 @@ fn from_logs(
         test_logs,
         model: Some((model, radius)),
         recorded_vo: BTreeMap::new(),
+        recorded_cameras: BTreeMap::new(),
         soils: None,
         terrain: None,
         gyro_bias_radps: None,
@@ -363,6 +367,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
         } => {
             let imported = std::cell::RefCell::new(Vec::new());
             let vo = std::cell::RefCell::new(BTreeMap::new());
+            let cameras = std::cell::RefCell::new(BTreeMap::new());
             let read = |paths: &[PathBuf]| {
                 paths
                     .iter()
@@ -371,7 +376,11 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                         let name = path
                             .file_stem()
                             .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
-                        let (log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
+                        let (mut log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
+                        if let Some(camera) = &topics.camera {
+                            let frames = recorded_camera(&path, camera, topics.skip_damaged, &report, &mut log)?;
+                            cameras.borrow_mut().insert(name.clone(), std::sync::Arc::new(frames));
+                        }
                         tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
                         imported.borrow_mut().push(import_summary(&name, &report));
                         if !report.vo_poses.is_empty() {
@@ -388,11 +397,16 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             };
             let (mut train, mut test) = (read(train)?, read(test)?);
             let mut vo = vo.into_inner();
+            let mut cameras = cameras.into_inner();
             if let Some(fraction) = train_fraction {
-                // A held-out part replays its recording's VO.
+                // A held-out part replays its recording's VO and reads its
+                // recording's camera.
                 for log in &train {
                     if let Some(poses) = vo.get(&log.name).cloned() {
                         vo.insert(format!("{}-test", log.name), poses);
+                    }
+                    if let Some(frames) = cameras.get(&log.name).cloned() {
+                        cameras.insert(format!("{}-test", log.name), frames);
                     }
                 }
                 let (mut kept, mut held_out) = (Vec::new(), Vec::new());
@@ -418,6 +432,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             );
             let mut prepared = from_logs(config, &train, &test, source, None)?;
             prepared.recorded_vo = vo;
+            prepared.recorded_cameras = cameras;
             Ok(prepared)
         }
         DatasetSpec::ResidualTable {
@@ -454,12 +469,51 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
                 test_logs: Vec::new(),
                 model: None,
                 recorded_vo: BTreeMap::new(),
+                recorded_cameras: BTreeMap::new(),
                 soils: None,
                 terrain: None,
                 gyro_bias_radps: None,
             })
         }
     }
+}
+
+/// The stereo camera of the bag at `path` as frames for the stereo VO, on
+/// the clock of its imported `log`, whose camera frames become the pairs'
+/// stamps within it (placed by their header stamps).
+fn recorded_camera(
+    path: &std::path::Path,
+    camera: &gpodo_datasets::bags::images::CameraTopics,
+    skip_damaged: bool,
+    report: &gpodo_datasets::bags::import::ImportReport,
+    log: &mut RoverLog,
+) -> Result<crate::bag_frames::BagFrames, PipelineError> {
+    use gpodo_datasets::bags::OnDamage;
+    let on_damage = if skip_damaged {
+        OnDamage::Skip
+    } else {
+        OnDamage::Stop
+    };
+    let recording = gpodo_datasets::bags::images::read_stereo(path, camera, on_damage)
+        .map_err(gpodo_datasets::bags::import::ImportError::from)?;
+    let base_ns = (report.start_epoch_secs * 1e9).round() as i64;
+    // Stamps are whole nanoseconds; the base carries an f64's rounding.
+    let frames = crate::bag_frames::BagFrames::new(recording, base_ns, 1e-3);
+    let (first, last) = match (log.samples.first(), log.samples.last()) {
+        (Some(a), Some(b)) => (a.time_secs, b.time_secs),
+        _ => (0.0, 0.0),
+    };
+    log.camera_times_secs = frames
+        .times_secs()
+        .into_iter()
+        .filter(|t| *t >= first && *t <= last)
+        .collect();
+    tracing::info!(
+        bag = %path.display(),
+        pairs = log.camera_times_secs.len(),
+        "camera frames from the recorded images"
+    );
+    Ok(frames)
 }
 
 pub(crate) fn reference_statistics(

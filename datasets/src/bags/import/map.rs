@@ -134,6 +134,16 @@ pub struct TopicMap {
     /// (`frontend: {vo: {kind: replay}}` without a `path`).
     #[serde(default)]
     pub vo: Option<String>,
+    /// A rectified stereo camera (optional): the left and right image
+    /// topics (`sensor_msgs/Image` mono8, bgr8 or rgb8, or
+    /// `CompressedImage` PNG or JPEG) and their `CameraInfo` topics. The
+    /// stamps of the pairs (left and right stamped alike) within the log
+    /// become its camera frames, and `frontend: {vo: {kind: stereo}}`
+    /// tracks on the images; with both camera-info topics the VO's
+    /// intrinsics and baseline come from their projection matrices. Not
+    /// with `vo:` (each would set the camera frames).
+    #[serde(default)]
+    pub camera: Option<crate::bags::images::CameraTopics>,
     /// The robot's own odometry (optional): `nav_msgs/Odometry` (its twist,
     /// in the child frame as ROS defines it) or `geometry_msgs/TwistStamped`
     /// (body frame); the `reported_odometry` motion model uses it as `g`.

@@ -278,6 +278,11 @@ pub fn import_bag(
             optional: false,
         });
     }
+    if map.camera.is_some() && map.vo.is_some() {
+        return Err(ImportError::Map(
+            "give `vo:` (a recorded VO to replay) or `camera:` (images for the stereo VO), not both: each sets the camera frames".into(),
+        ));
+    }
     let on_damage = if map.skip_damaged {
         OnDamage::Skip
     } else {
