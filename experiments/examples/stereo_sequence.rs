@@ -5,8 +5,11 @@
 //! prior (5 % short, 0.2° off in yaw).
 //!
 //! ```text
-//! cargo run --release -p gpodo-experiments --example stereo_sequence -- OUT [FRAMES]
+//! cargo run --release -p gpodo-experiments --example stereo_sequence -- OUT [FRAMES [FEATURES MIN_THRESHOLD]]
 //! ```
+//!
+//! `FEATURES` and `MIN_THRESHOLD` set the VO's `features` and
+//! `fast_min_threshold` (default ExoTeR's: 750 at 512 × 384, and 7).
 //!
 //! `OUT` gets `left/NNNNNN.png`, `right/NNNNNN.png`, `calibration.json`
 //! (the rectified camera and the ORB settings) and `pairs.csv`: per
@@ -33,7 +36,6 @@ use gpodo_frontends::vo::stereo::{StereoFrameSource, StereoFrames, StereoVo, Ste
 use gpodo_frontends::vo::{FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry};
 use gpodo_traits::CameraParams;
 use gpodo_vision::GrayImage;
-use gpodo_vision::orb::OrbParams;
 use gpodo_vision::png_io::write_png_gray;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
@@ -96,6 +98,11 @@ fn main() -> anyhow::Result<()> {
             .ok_or_else(|| anyhow::anyhow!("usage: OUT [FRAMES]"))?,
     );
     let frames: usize = args.next().map_or(Ok(220), |a| a.parse())?;
+    let mut params = StereoVoParams::default();
+    if let (Some(features), Some(threshold)) = (args.next(), args.next()) {
+        params.features = Some(features.parse()?);
+        params.fast_min_threshold = threshold.parse()?;
+    }
     let poses = drive(frames);
     let ground = GroundMaps::build(
         &Terrain::flat(9.0)?,
@@ -122,7 +129,7 @@ fn main() -> anyhow::Result<()> {
     }
     let source = Arc::new(Rendered(pairs));
     let [w, h] = camera.image_size_px;
-    let orb = OrbParams::exoter_for_size(w as usize, h as usize);
+    let orb = params.orb(&camera);
     let [cx, cy] = camera.principal_point();
     let calibration = serde_json::json!({
         "width": w, "height": h,
@@ -134,7 +141,7 @@ fn main() -> anyhow::Result<()> {
             "levels": orb.levels, "ini_threshold": orb.ini_threshold,
             "min_threshold": orb.min_threshold,
         },
-        "vo": serde_json::to_value(StereoVoParams::default())?,
+        "vo": serde_json::to_value(&params)?,
     });
     std::fs::write(
         out.join("calibration.json"),
@@ -154,8 +161,8 @@ fn main() -> anyhow::Result<()> {
             for k in 0..frames.saturating_sub(gap) {
                 // A fresh cache per pair, the reference's features made
                 // before the clock starts: the time is one processed frame.
-                let frames_cache = Arc::new(StereoFrames::new(camera, source.clone()));
-                let mut vo = StereoVo::new(StereoVoParams::default(), frames_cache)?;
+                let frames_cache = Arc::new(StereoFrames::with_orb(camera, source.clone(), orb));
+                let mut vo = StereoVo::new(params.clone(), frames_cache)?;
                 let _ = vo.features(frame(k));
                 let truth = poses[k].world_from_body.inverse() * poses[k + gap].world_from_body;
                 let prior = Isometry3::from_parts(

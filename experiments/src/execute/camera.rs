@@ -55,7 +55,11 @@ pub(crate) fn camera_frames(
                     PipelineError::Inconsistent(format!("the camera of `{}`: {detail}", t.name()))
                 })?;
                 let source: Arc<BagFrames> = Arc::clone(frames);
-                Ok(Some(Arc::new(StereoFrames::new(camera, source))))
+                Ok(Some(Arc::new(StereoFrames::with_orb(
+                    camera,
+                    source,
+                    vo.orb(&camera),
+                ))))
             })
             .collect();
     };
@@ -85,7 +89,11 @@ pub(crate) fn camera_frames(
                 *seed,
                 t,
             );
-            Some(Arc::new(StereoFrames::new(vo.camera, Arc::new(source))))
+            Some(Arc::new(StereoFrames::with_orb(
+                vo.camera,
+                Arc::new(source),
+                vo.orb(&vo.camera),
+            )))
         })
         .collect())
 }

@@ -82,8 +82,18 @@ impl StereoFrames {
     /// ExoTeR's for the camera's image size.
     pub fn new(camera: CameraParams, source: Arc<dyn StereoFrameSource>) -> Self {
         let [w, h] = camera.image_size_px.map(|n| n as usize);
+        Self::with_orb(camera, source, OrbParams::exoter_for_size(w, h))
+    }
+
+    /// The frames of `source`, seen by `camera`, with the ORB settings
+    /// `orb` (see [`super::StereoVoParams::orb`]).
+    pub fn with_orb(
+        camera: CameraParams,
+        source: Arc<dyn StereoFrameSource>,
+        orb: OrbParams,
+    ) -> Self {
         Self {
-            orb: OrbParams::exoter_for_size(w, h),
+            orb,
             camera,
             source,
             cache: Mutex::new(HashMap::new()),

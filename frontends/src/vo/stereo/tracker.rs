@@ -25,7 +25,7 @@
 
 use std::sync::Arc;
 
-use gpodo_vision::orb::{Descriptor, hamming};
+use gpodo_vision::orb::{Descriptor, OrbParams, hamming};
 use gpodo_vision::stereo::StereoFeatures;
 use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
@@ -63,6 +63,12 @@ pub struct StereoVoParams {
     pub ransac_iterations: usize,
     /// Seed of RANSAC's draws.
     pub seed: u64,
+    /// ORB's feature cap (default: ExoTeR's 3000 at 1024 × 768, scaled
+    /// with the image's pixel count: 750 at 512 × 384).
+    pub features: Option<usize>,
+    /// FAST's threshold in a cell without a corner at 20 (default 7,
+    /// ExoTeR's `minThFAST`; 20 keeps only the strong corners).
+    pub fast_min_threshold: u8,
     /// The rendered camera (default ExoTeR's Bumblebee2 at half
     /// resolution, 512 × 384).
     pub camera: CameraParams,
@@ -79,6 +85,8 @@ impl Default for StereoVoParams {
             max_depth_baselines: 40.0,
             ransac_iterations: 200,
             seed: 0,
+            features: None,
+            fast_min_threshold: 7,
             camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
@@ -117,7 +125,29 @@ impl StereoVoParams {
         if self.ransac_iterations == 0 {
             return bad("ransac_iterations", "at least 1");
         }
+        if self.features == Some(0) {
+            return bad("features", "at least 1");
+        }
+        if !(1..=20).contains(&self.fast_min_threshold) {
+            return bad(
+                "fast_min_threshold",
+                "a threshold in [1, 20] (the first is 20)",
+            );
+        }
         Ok(())
+    }
+
+    /// The ORB settings for `camera`'s images: ExoTeR's for its size
+    /// (`OrbParams::exoter_for_size`), with this VO's feature cap and
+    /// second FAST threshold.
+    pub fn orb(&self, camera: &CameraParams) -> OrbParams {
+        let [w, h] = camera.image_size_px.map(|n| n as usize);
+        let exoter = OrbParams::exoter_for_size(w, h);
+        OrbParams {
+            features: self.features.unwrap_or(exoter.features),
+            min_threshold: self.fast_min_threshold,
+            ..exoter
+        }
     }
 }
 
