@@ -69,8 +69,9 @@ pub struct StereoVoParams {
     /// FAST's threshold in a cell without a corner at 20 (default 7,
     /// ExoTeR's `minThFAST`; 20 keeps only the strong corners).
     pub fast_min_threshold: u8,
-    /// The rendered camera (default ExoTeR's Bumblebee2 at half
-    /// resolution, 512 × 384).
+    /// The camera (default ExoTeR's Bumblebee2 at half resolution,
+    /// 512 × 384, as rendered); a recording's camera infos, when its topic
+    /// map names both, replace its intrinsics, size and baseline.
     pub camera: CameraParams,
 }
 
