@@ -310,3 +310,68 @@ fn the_same_frames_give_the_same_numbers_at_any_thread_count() {
     assert_eq!(one, run(2));
     assert_eq!(one, run(2));
 }
+
+/// Pooled correlation of paired error components, each series centred.
+fn correlation(pairs: &[(f64, f64)]) -> f64 {
+    let n = pairs.len() as f64;
+    let (ma, mb) = (
+        pairs.iter().map(|p| p.0).sum::<f64>() / n,
+        pairs.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (a, b) in pairs {
+        ab += (a - ma) * (b - mb);
+        aa += (a - ma) * (a - ma);
+        bb += (b - mb) * (b - mb);
+    }
+    ab / (aa * bb).sqrt()
+}
+
+#[test]
+fn frames_tracked_against_one_keyframe_share_its_map_error() {
+    // Keyframes every 6 frames; each tracked by the 5 frames after it
+    // (0.4 to 2 s). The statistical tracker's `map_error_share` is the
+    // correlation of two such frames' errors; frames of different
+    // keyframes (disjoint frames) are the control.
+    let poses = drive(220, 0.03, 0.01);
+    let mut vo = vo(Soil::compact(), &poses);
+    let keyframes: Vec<usize> = (0..poses.len() - 6).step_by(6).collect();
+    let errors: Vec<Vec<Vector6<f64>>> = keyframes
+        .iter()
+        .map(|&k| {
+            (1..=5)
+                .filter_map(|g| match track(&mut vo, &poses, k, g) {
+                    TrackOutcome::Tracked(m) => Some(error(&m.relative, &truth(&poses, k, g))),
+                    TrackOutcome::Lost => None,
+                })
+                .collect()
+        })
+        .collect();
+    let mut report = Vec::new();
+    for (name, range) in [("rotation", 0..3), ("translation", 3..6)] {
+        let (mut same, mut other) = (Vec::new(), Vec::new());
+        for (i, e) in errors.iter().enumerate() {
+            for a in 0..e.len() {
+                for b in a + 1..e.len() {
+                    for c in range.clone() {
+                        same.push((e[a][c], e[b][c]));
+                    }
+                }
+                if let Some(next) = errors.get(i + 1) {
+                    for f in next {
+                        for c in range.clone() {
+                            other.push((e[a][c], f[c]));
+                        }
+                    }
+                }
+            }
+        }
+        let (rho, control) = (correlation(&same), correlation(&other));
+        report.push(format!("{name}: {rho:.2} (control {control:.2})"));
+        assert!(rho > control + 0.1, "{name}: {rho} against {control}");
+    }
+    eprintln!(
+        "map-error share, one keyframe's frames: {}",
+        report.join("; ")
+    );
+}
