@@ -353,7 +353,8 @@ struct Normal {
     /// The χ².
     chi2: f64,
     /// `Σ Jᵀ J_P Σ_P J_Pᵀ J`: the information the map points' own errors
-    /// move the pose by (see [`RefinedPose::covariance`]).
+    /// move the pose by (see [`RefinedPose::covariance`]); zero but for
+    /// [`Weighting::KeptShare`].
     map: Matrix6<f64>,
     /// `Σ tr(J_P Σ_P J_Pᵀ)`: what the map points' errors add to the χ².
     map_chi2: f64,
@@ -391,14 +392,19 @@ fn normal_equations(
             Weighting::KeptShare if c.right_x.is_some() => KEPT_SHARE_STEREO,
             Weighting::KeptShare => KEPT_SHARE_MONO,
         };
-        let mut jp = SMatrix::<f64, 6, 3>::zeros();
-        for ((ri, ji), pi) in r.iter().zip(&j).zip(&p) {
+        for (ri, ji) in r.iter().zip(&j) {
             n.h += weight * ji * ji.transpose();
             n.g += weight * ji * *ri;
-            jp += ji * pi.transpose();
-            n.map_chi2 += (pi.transpose() * c.point_covariance * pi)[0];
         }
-        n.map += jp * c.point_covariance * jp.transpose();
+        // The map points' share only enters the covariance.
+        if weighting == Weighting::KeptShare {
+            let mut jp = SMatrix::<f64, 6, 3>::zeros();
+            for (ji, pi) in j.iter().zip(&p) {
+                jp += ji * pi.transpose();
+                n.map_chi2 += (pi.transpose() * c.point_covariance * pi)[0];
+            }
+            n.map += jp * c.point_covariance * jp.transpose();
+        }
         n.chi2 += e2;
     }
     n
@@ -546,6 +552,13 @@ mod tests {
         );
     }
 
+    /// `δ = [ω; ρ]` with `truth = Exp(δ) · estimate`.
+    fn left_error(truth: &Isometry3<f64>, estimate: &Isometry3<f64>) -> Vector6<f64> {
+        let d = truth * estimate.inverse();
+        let (r, t) = (d.rotation.scaled_axis(), d.translation.vector);
+        Vector6::new(r.x, r.y, r.z, t.x, t.y, t.z)
+    }
+
     #[test]
     fn the_covariance_is_honest_over_many_draws() {
         // NEES of the refined pose over 200 noise draws: χ²(6) on average.
@@ -555,16 +568,7 @@ mod tests {
         for seed in 0..draws {
             let obs = scene(&truth, 1.0, 0, 100 + seed);
             let refined = refine_pose(&obs, &camera(), &truth).unwrap();
-            // δ with truth = Exp(δ) · estimate.
-            let d = truth * refined.pose.inverse();
-            let e = Vector6::new(
-                d.rotation.scaled_axis().x,
-                d.rotation.scaled_axis().y,
-                d.rotation.scaled_axis().z,
-                d.translation.vector.x,
-                d.translation.vector.y,
-                d.translation.vector.z,
-            );
+            let e = left_error(&truth, &refined.pose);
             total += (e.transpose() * refined.covariance.try_inverse().unwrap() * e)[0];
         }
         let mean = total / draws as f64;
@@ -614,15 +618,7 @@ mod tests {
                 });
             }
             let refined = refine_pose(&obs, &camera(), &truth).unwrap();
-            let d = truth * refined.pose.inverse();
-            let e = Vector6::new(
-                d.rotation.scaled_axis().x,
-                d.rotation.scaled_axis().y,
-                d.rotation.scaled_axis().z,
-                d.translation.vector.x,
-                d.translation.vector.y,
-                d.translation.vector.z,
-            );
+            let e = left_error(&truth, &refined.pose);
             with += (e.transpose() * refined.covariance.try_inverse().unwrap() * e)[0];
             for c in &mut obs {
                 c.point_covariance = Matrix3::zeros();
