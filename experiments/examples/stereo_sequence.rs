@@ -181,9 +181,9 @@ fn main() -> anyhow::Result<()> {
                 let (estimate, inliers) = match outcome {
                     TrackOutcome::Tracked(m) => (
                         pose_fields(&in_camera(&m.relative)),
-                        (m.overlap * map_points as f64).round(),
+                        vo.tracked_inliers(frame(k + gap)).unwrap_or(0),
                     ),
-                    TrackOutcome::Lost => (",,,,,,".into(), 0.0),
+                    TrackOutcome::Lost => (",,,,,,".into(), 0),
                 };
                 writeln!(
                     csv,

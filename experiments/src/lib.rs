@@ -32,3 +32,4 @@ pub mod runner;
 pub mod shard;
 pub mod simulate;
 pub mod stop;
+pub mod tracker_calibration;

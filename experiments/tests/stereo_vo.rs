@@ -257,7 +257,7 @@ fn tracks_are_lost_more_often_with_longer_gaps_and_turning_in_place() {
 fn median_inliers(vo: &mut StereoVo, poses: &[FramePose]) -> f64 {
     let found: Vec<f64> = (0..poses.len() - 1)
         .map(|k| match track(vo, poses, k, 1) {
-            TrackOutcome::Tracked(m) => m.overlap * vo.map_point_count(frame(k)) as f64,
+            TrackOutcome::Tracked(_) => vo.tracked_inliers(frame(k + 1)).unwrap() as f64,
             TrackOutcome::Lost => 0.0,
         })
         .collect();
@@ -374,4 +374,44 @@ fn frames_tracked_against_one_keyframe_share_its_map_error() {
         "map-error share, one keyframe's frames: {}",
         report.join("; ")
     );
+}
+
+#[test]
+fn the_keyframe_ratio_falls_below_three_quarters_as_tracked_points_are_lost() {
+    // ExoTeR's drive (3 cm/s, a slow turn) on compact soil at 2.5 fps:
+    // frames 0.4 to 20 s after frame 0 tracked against it in turn.
+    // ORB-SLAM2 (stereo) inserts a keyframe when the inliers fall below
+    // 0.75 of the reference's points seen again.
+    let poses = drive(51, 0.03, 0.01);
+    let mut vo = vo(Soil::compact(), &poses);
+    let gaps = [1usize, 5, 12, 25, 50];
+    let mut inliers = Vec::new();
+    let ratios: Vec<f64> = gaps
+        .iter()
+        .map(|&gap| match track(&mut vo, &poses, 0, gap) {
+            TrackOutcome::Tracked(m) => {
+                inliers.push(vo.tracked_inliers(frame(gap)).unwrap());
+                m.overlap
+            }
+            TrackOutcome::Lost => {
+                inliers.push(0);
+                0.0
+            }
+        })
+        .collect();
+    eprintln!("inliers at 0.4, 2, 4.8, 10, 20 s: {inliers:?}; keyframe ratio {ratios:.2?}");
+    // The first frame tracked against a keyframe scores 1; each later one
+    // its inliers over the most any frame had.
+    assert_eq!(ratios[0], 1.0);
+    let most = *inliers.iter().max().unwrap();
+    for (r, n) in ratios.iter().zip(&inliers).skip(1) {
+        assert!(
+            (r - *n as f64 / most as f64).abs() < 1e-12,
+            "{ratios:?} {inliers:?}"
+        );
+    }
+    // A frame 20 s (0.6 m) later asks for a keyframe; the ratio never
+    // rises with the gap by more than draw-to-draw noise.
+    assert!(ratios[4] < 0.75, "{ratios:?}");
+    assert!(ratios.windows(2).all(|w| w[1] <= w[0] + 0.05), "{ratios:?}");
 }

@@ -119,6 +119,12 @@ pub enum DatasetSpec {
         /// window a twelfth of it.
         #[serde(default)]
         mocap_jitter_m: Option<f64>,
+        /// Override of the preset's camera rate (Hz; 10): the stream every
+        /// scheme picks its frames from. The authors' adaptive SLAM read a
+        /// 2.5 Hz stream; a rendered camera renders each frame a scheme
+        /// picks, so the image files use it.
+        #[serde(default)]
+        camera_rate_hz: Option<f64>,
     },
     /// Rover logs in gpodo's trajectory CSV format (paths relative to the
     /// experiment file).

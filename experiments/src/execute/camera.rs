@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
 use gpodo_frontends::traverse::Traverse;
+use gpodo_frontends::vo::FrameRef;
 use gpodo_frontends::vo::stereo::StereoFrames;
+use rayon::prelude::*;
 
 use crate::bag_frames::BagFrames;
 use crate::config::ExperimentConfig;
@@ -22,9 +24,77 @@ pub(crate) type GroundCell = OnceLock<Result<Arc<GroundMaps>, String>>;
 /// Each test traverse's camera frames, rendered on demand from its ground
 /// truth through the stereo VO's camera, for a run whose VO reads images
 /// (none otherwise). The testbed's ground maps are built once per
-/// dataset; each traverse's features are cached once per run, shared by
-/// its schemes.
+/// dataset; each traverse's frames are rendered (or read) and their
+/// features found once per run, shared by its schemes: the frames of the
+/// fixed-rate schemes up front and in parallel, any other when a scheme
+/// first asks for it.
 pub(crate) fn camera_frames(
+    config: &ExperimentConfig,
+    data: &PreparedData,
+    ground: &GroundCell,
+    traverses: &[Traverse],
+) -> Result<Vec<Option<Arc<StereoFrames>>>, PipelineError> {
+    let frames = camera_sources(config, data, ground, traverses)?;
+    let start = Instant::now();
+    for (traverse, frames) in traverses.iter().zip(&frames) {
+        if let Some(frames) = frames {
+            let times = traverse.camera_times_secs();
+            fixed_rate_frames(config, times)
+                .par_iter()
+                .for_each(|&index| {
+                    let _ = frames.features(FrameRef {
+                        index,
+                        time_secs: times[index],
+                    });
+                });
+        }
+    }
+    if frames.iter().any(Option::is_some) {
+        tracing::info!(
+            secs = start.elapsed().as_secs_f64(),
+            "camera frames rendered and their features found"
+        );
+    }
+    Ok(frames)
+}
+
+/// The camera frames (indices into `times`) that the fixed-rate schemes
+/// of `config` process, which they do whatever happens: each rate's
+/// schedule, as its selector makes it, merged.
+fn fixed_rate_frames(config: &ExperimentConfig, times: &[f64]) -> Vec<usize> {
+    use gpodo_frontends::FixedRate;
+    use gpodo_frontends::spec::SelectorSpec;
+    use gpodo_traits::{FrameContext, FrameSelector};
+    let mut frames: Vec<usize> = config
+        .schemes
+        .iter()
+        .filter_map(|s| match s.selector {
+            SelectorSpec::FixedRate { fps } => FixedRate::new(fps).ok(),
+            _ => None,
+        })
+        .flat_map(|mut selector| {
+            times
+                .iter()
+                .enumerate()
+                .filter(|&(_, &time_secs)| {
+                    selector
+                        .decide(&FrameContext {
+                            time_secs,
+                            ..FrameContext::default()
+                        })
+                        .is_process()
+                })
+                .map(|(k, _)| k)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    frames.sort_unstable();
+    frames.dedup();
+    frames
+}
+
+/// The frames of each traverse, before any is rendered.
+fn camera_sources(
     config: &ExperimentConfig,
     data: &PreparedData,
     ground: &GroundCell,

@@ -319,6 +319,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             test_max_secs,
             route,
             mocap_jitter_m,
+            camera_rate_hz,
         } => {
             let mut sim = SimulatorConfig::preset(*preset, *seed);
             sim.route = *route;
@@ -333,6 +334,16 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             }
             if let Some(j) = mocap_jitter_m {
                 sim.sensors.mocap_jitter_m = *j;
+            }
+            if let Some(r) = camera_rate_hz {
+                if !(r.is_finite() && *r > 0.0) {
+                    return Err(gpodo_frontends::FrontendError::InvalidConfig {
+                        field: "dataset.camera_rate_hz".into(),
+                        expected: format!("a positive rate in Hz, not {r}"),
+                    }
+                    .into());
+                }
+                sim.camera_rate_hz = *r;
             }
             tracing::info!(seed, "simulating the testbed");
             let testbed = sim.simulate()?;

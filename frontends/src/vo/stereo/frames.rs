@@ -3,7 +3,7 @@
 //! shared by every VO that holds the same [`StereoFrames`].
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use gpodo_vision::GrayImage;
 use gpodo_vision::orb::OrbParams;
@@ -74,7 +74,9 @@ pub struct StereoFrames {
     camera: CameraParams,
     orb: OrbParams,
     source: Arc<dyn StereoFrameSource>,
-    cache: Mutex<HashMap<usize, Cached>>,
+    /// One slot per frame asked for: the first asker computes it, and
+    /// every other (another scheme's thread) waits for that result.
+    cache: Mutex<HashMap<usize, Arc<OnceLock<Cached>>>>,
 }
 
 impl StereoFrames {
@@ -105,11 +107,15 @@ impl StereoFrames {
         &self.camera
     }
 
-    /// The features of `frame`, from the cache or computed (and cached).
+    /// The features of `frame`, from the cache or computed (and cached):
+    /// each frame's are computed once, however many threads ask at once.
     pub fn features(&self, frame: FrameRef) -> Cached {
-        if let Some(hit) = self.lock().get(&frame.index) {
-            return Arc::clone(hit);
-        }
+        let slot = Arc::clone(self.lock().entry(frame.index).or_default());
+        Arc::clone(slot.get_or_init(|| Arc::new(self.compute(frame))))
+    }
+
+    /// Renders or reads `frame`'s pair and finds its features.
+    fn compute(&self, frame: FrameRef) -> Result<FrameFeatures, String> {
         let computed = self.source.pair(frame).and_then(|(left, right)| {
             let stereo = stereo_features(&left, &right, &self.orb, self.camera.focal_px)
                 .map_err(|e| format!("frame {}: {e}", frame.index))?;
@@ -121,17 +127,18 @@ impl StereoFrames {
         if let Err(e) = &computed {
             tracing::warn!("stereo VO: no features for {e}; frames that need it are lost");
         }
-        let entry = Arc::new(computed);
-        self.lock().insert(frame.index, Arc::clone(&entry));
-        entry
+        computed
     }
 
     /// How many frames' features are cached.
     pub fn cached(&self) -> usize {
-        self.lock().len()
+        self.lock()
+            .values()
+            .filter(|slot| slot.get().is_some())
+            .count()
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Cached>> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<usize, Arc<OnceLock<Cached>>>> {
         // A poisoned cache only means a panic elsewhere; its entries are
         // whole.
         self.cache.lock().unwrap_or_else(|e| e.into_inner())

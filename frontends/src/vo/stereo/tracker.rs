@@ -9,7 +9,8 @@
 //!   ExoTeR), placed by their disparity.
 //! * **Matching**: each map point is projected into the current frame by
 //!   the prior and matched within `search_radius_px` times its level's
-//!   scale (ORB-SLAM2's `TrackWithMotionModel`, 7 px for stereo) to the
+//!   scale (ORB-SLAM2's `TrackWithMotionModel`, 7 px for stereo, searched
+//!   again at twice that when the first search does not track) to the
 //!   current keypoints of the neighbouring levels, by Hamming distance
 //!   below 100 (`TH_HIGH`) and a ratio test; without a prior, within
 //!   `wide_search_px`.
@@ -17,12 +18,20 @@
 //!   two frames' indices, then the robust motion-only refinement
 //!   ([`super::pose`]); lost below `min_tracked_features` inliers
 //!   (ORB-SLAM2's 30).
-//! * **Overlap**: the share of the reference's map points found.
+//! * **Overlap**, what the keyframe rule reads: ORB-SLAM2's ratio of the
+//!   tracked inliers to the reference keyframe's points that are seen
+//!   again (`mnMatchesInliers` against `TrackedMapPoints(nMinObs)` in
+//!   `Tracking::NeedNewKeyFrame`; its stereo threshold is 0.75). Here the
+//!   points seen again are the most inliers any frame tracked against the
+//!   reference has had, so the ratio measures what tracking has lost since
+//!   then, whatever share of its corners a frame finds again at best (a
+//!   fresh keyframe's first tracked frame scores 1).
 //! * **Recognition**: by appearance only: the keyframes whose whole-image
 //!   signatures correlate best with the current frame's, kept when their
 //!   descriptors match the current frame's (ratio test) at least
 //!   `min_tracked_features` times, most matches first.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use gpodo_vision::orb::{Descriptor, OrbParams, hamming};
@@ -158,6 +167,11 @@ pub struct StereoVo {
     camera: CameraParams,
     intrinsics: StereoIntrinsics,
     frames: Arc<StereoFrames>,
+    /// Per reference frame: the most inliers a frame tracked against it
+    /// has had.
+    seen_again: HashMap<usize, usize>,
+    /// Per tracked frame: its inliers when it was last tracked.
+    inliers: HashMap<usize, usize>,
 }
 
 /// What tracking one request found, before it is a measurement.
@@ -166,7 +180,6 @@ struct Tracked {
     pose: Isometry3<f64>,
     covariance: Matrix6<f64>,
     inliers: usize,
-    map_points: usize,
 }
 
 impl StereoVo {
@@ -195,6 +208,8 @@ impl StereoVo {
             params,
             camera,
             frames,
+            seen_again: HashMap::new(),
+            inliers: HashMap::new(),
         })
     }
 
@@ -210,6 +225,12 @@ impl StereoVo {
             Ok(features) => self.map_points(&features.stereo).len(),
             Err(_) => 0,
         }
+    }
+
+    /// How many inliers `frame` kept when this VO last tracked it (`None`
+    /// when it has not).
+    pub fn tracked_inliers(&self, frame: FrameRef) -> Option<usize> {
+        self.inliers.get(&frame.index).copied()
     }
 
     /// The map points of a reference frame: `(keypoint, point, its
@@ -244,6 +265,12 @@ impl StereoVo {
 
     /// Tracks `request` (see the module); `None` when lost.
     fn track_request(&self, request: &TrackRequest) -> Option<Tracked> {
+        self.track_within(request, 1.0)
+            .or_else(|| request.prior.and_then(|_| self.track_within(request, 2.0)))
+    }
+
+    /// Tracks `request` with the prior's search window times `widen`.
+    fn track_within(&self, request: &TrackRequest, widen: f64) -> Option<Tracked> {
         let reference = self.features(request.reference);
         let current = self.features(request.current);
         let (Ok(reference), Ok(current)) = (reference.as_ref(), current.as_ref()) else {
@@ -267,7 +294,7 @@ impl StereoVo {
                     }
                     (
                         self.intrinsics.project_left(&x),
-                        self.params.search_radius_px * scale,
+                        self.params.search_radius_px * widen * scale,
                     )
                 }
                 None => ([f64::from(kp.x), f64::from(kp.y)], wide),
@@ -307,11 +334,13 @@ impl StereoVo {
             return None;
         }
         let refined = refine_pose(&correspondences, &self.intrinsics, &rough)?;
-        (refined.inlier_count >= self.params.min_tracked_features).then_some(Tracked {
+        if refined.inlier_count < self.params.min_tracked_features {
+            return None;
+        }
+        Some(Tracked {
             pose: refined.pose,
             covariance: refined.covariance,
             inliers: refined.inlier_count,
-            map_points: points.len(),
         })
     }
 
@@ -353,8 +382,9 @@ impl StereoVo {
     /// The measurement of a tracked request: the body motion
     /// `reference_from_current` and its covariance as a right
     /// perturbation (the camera's left perturbation carried through the
-    /// mounting's adjoint).
-    fn measurement(&self, tracked: &Tracked) -> VoMeasurement {
+    /// mounting's adjoint), with the overlap against `seen_again` of the
+    /// reference's points.
+    fn measurement(&self, tracked: &Tracked, seen_again: usize) -> VoMeasurement {
         let b = self.camera.body_from_camera();
         let relative = b * tracked.pose.inverse() * b.inverse();
         let r = b.rotation.to_rotation_matrix().into_inner();
@@ -367,7 +397,7 @@ impl StereoVo {
         VoMeasurement {
             relative,
             covariance: adjoint * tracked.covariance * adjoint.transpose(),
-            overlap: tracked.inliers as f64 / tracked.map_points.max(1) as f64,
+            overlap: tracked.inliers as f64 / seen_again.max(1) as f64,
         }
     }
 
@@ -407,8 +437,29 @@ impl VisualOdometry for StereoVo {
 
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome {
         match self.track_request(request) {
-            Some(tracked) => TrackOutcome::Tracked(self.measurement(&tracked)),
-            None => TrackOutcome::Lost,
+            Some(tracked) => {
+                let seen_again = self.seen_again.entry(request.reference.index).or_default();
+                *seen_again = (*seen_again).max(tracked.inliers);
+                let seen_again = *seen_again;
+                let measurement = self.measurement(&tracked, seen_again);
+                tracing::trace!(
+                    reference = request.reference.index,
+                    current = request.current.index,
+                    inliers = tracked.inliers,
+                    overlap = measurement.overlap,
+                    "stereo VO tracked"
+                );
+                self.inliers.insert(request.current.index, tracked.inliers);
+                TrackOutcome::Tracked(measurement)
+            }
+            None => {
+                tracing::trace!(
+                    reference = request.reference.index,
+                    current = request.current.index,
+                    "stereo VO lost"
+                );
+                TrackOutcome::Lost
+            }
         }
     }
 
