@@ -139,6 +139,34 @@ fn fit(observations: &[Observation], drives: &[Drive], stereo: &StereoVoParams) 
         let ratio = per_overlap(d.name) / compact;
         println!("- {}: inliers / compact's = {ratio:.3}", d.name);
     }
+    // The overlap model's depth range: driving straight, the inliers per
+    // feature at full overlap against the model's overlap at each range.
+    let straight: Vec<&Observation> = of("straight at 0.1 m/s")
+        .filter(|o| o.stereo.is_some() && o.gap_secs > 0.5)
+        .collect();
+    let misfit = |depth_range_m: f64| {
+        let camera = gpodo_traits::CameraParams {
+            depth_range_m,
+            ..stereo.camera
+        };
+        straight
+            .iter()
+            .map(|o| {
+                let (_, _, n) = o.stereo.unwrap();
+                (n as f64 / compact - camera.body_overlap(&o.truth)).powi(2)
+            })
+            .sum::<f64>()
+    };
+    let (best, _) = (10..=60)
+        .map(|k| f64::from(k) * 0.05)
+        .map(|d| (d, misfit(d)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    println!(
+        "- depth_range_m = {best:.2} (least squares of inliers / F against the overlap, straight at 0.1 m/s; 3.0 gives {:.2}, {best:.2} gives {:.2})",
+        misfit(3.0),
+        misfit(best)
+    );
     // Blur half-width: the share left, 1 / (1 + b / b½).
     if let Some(blurred) = drives.iter().find(|d| d.shake_radps > 0.0) {
         let camera = stereo.camera;

@@ -162,6 +162,8 @@ pub struct Observation {
     pub drive: &'static str,
     /// Gap between the frames (s).
     pub gap_secs: f64,
+    /// The true body motion `reference_from_current`.
+    pub truth: Isometry3<f64>,
     /// The geometric overlap of the two views (the camera's model).
     pub overlap: f64,
     /// The true relative rotation (rad) and translation (m).
@@ -181,8 +183,8 @@ pub struct Observation {
 }
 
 /// Every request of `drive`: each frame from the first on, every
-/// `stride` frames, against each `gap` later, both trackers on the stereo
-/// VO's camera.
+/// `stride` frames, against each `gap` later, each tracker with its own
+/// camera (by default the same one: ExoTeR's Bumblebee2 at 512 × 384).
 ///
 /// # Errors
 /// A drive whose ground or traverse cannot be built.
@@ -216,14 +218,7 @@ pub fn observe(
     ));
     let mut vo = StereoVo::new(stereo.clone(), frames).map_err(|e| e.to_string())?;
     let traverse = drive.traverse(&camera)?;
-    let statistical = SimulatedVo::new(
-        SimulatedVoParams {
-            camera,
-            ..*simulated
-        },
-        &traverse,
-    )
-    .map_err(|e| e.to_string())?;
+    let statistical = SimulatedVo::new(*simulated, &traverse).map_err(|e| e.to_string())?;
     let frame = |k: usize| FrameRef {
         index: k,
         time_secs: k as f64 / FPS,
@@ -259,6 +254,7 @@ pub fn observe(
             out.push(Observation {
                 drive: drive.name,
                 gap_secs: gap as f64 / FPS,
+                truth,
                 overlap,
                 rotation_rad: truth.rotation.angle(),
                 distance_m: truth.translation.vector.norm(),

@@ -1,7 +1,7 @@
 //! The terrain reaches the simulated tracker: on loose sand a match finds
 //! fewer features than on gravel, and so fails more often. The expected
 //! values are computed here from the documented parameters
-//! (`frontends/README.md`: F = 300 features at full overlap on compact
+//! (`frontends/README.md`: F = 156 features at full overlap on compact
 //! soil, the soils' textures, the blur `f · T · v / d̄` of a forward drive,
 //! the overlap of a forward drive, tracking's 30 features) and the
 //! regularised incomplete gamma function, `P(N ≥ k) = P(k, λ)` for
@@ -22,9 +22,9 @@ use statrs::function::gamma::gamma_lr;
 
 const DT: f64 = 0.08;
 const SPEED_MPS: f64 = 0.05;
-/// The keyframe and the tracked frame: 1.4 m apart.
+/// The keyframe and the tracked frame: 0.8 m apart.
 const REFERENCE: usize = 13;
-const CURRENT: usize = REFERENCE + 350;
+const CURRENT: usize = REFERENCE + 200;
 
 /// A 40-s straight drive at 5 cm/s, a camera frame on every sample.
 fn straight_drive() -> Traverse {
@@ -75,25 +75,26 @@ fn request(traverse: &Traverse) -> TrackRequest {
 /// Expected features and success probability from the documented
 /// parameters alone.
 fn expected(texture: f64) -> (f64, f64) {
-    let camera = CameraParams::default();
-    let (pitch, f, exposure) = (0.35f64, 500.0, 0.01);
-    assert_eq!(camera.pitch_down_rad, pitch);
-    assert_eq!(camera.focal_px, f);
+    // The tracker's camera: ExoTeR's Bumblebee2 at 512 × 384.
+    let camera = SimulatedVoParams::default().camera;
+    let (pitch, f, exposure) = (30f64.to_radians(), 419.0, 0.01);
+    assert!((camera.pitch_down_rad - pitch).abs() < 1e-15);
+    assert!((camera.focal_px - f).abs() < 1e-9, "{}", camera.focal_px);
     assert_eq!(camera.exposure_secs, exposure);
     // A forward drive of d: along the optical axis by d cos(pitch) over the
-    // 3 m depth range, across the image by d sin(pitch) over the 2.5 m
+    // 0.95 m depth range, across the image by d sin(pitch) over the 2.5 m
     // footprint.
     let d = SPEED_MPS * (CURRENT - REFERENCE) as f64 * DT;
-    let overlap = (1.0 - d * pitch.cos() / 3.0) * (1.0 - d * pitch.sin() / 2.5);
+    let overlap = (1.0 - d * pitch.cos() / 0.95) * (1.0 - d * pitch.sin() / 2.5);
     // Blur: the 5 cm/s drive over the exposure, seen at the 2 m mean
-    // depth; features halve at 3 px.
+    // depth; features halve at 19 px.
     let blur_px = f * SPEED_MPS * exposure / 2.0;
-    let blur_factor = 1.0 / (1.0 + blur_px / 3.0);
-    let features = 300.0 * texture * blur_factor * overlap;
-    // Guided tracking with an exact prior at this overlap (0.45, above the
-    // 0.3 ± 0.05 ramp) succeeds geometrically; prior-free matching (0.7)
+    let blur_factor = 1.0 / (1.0 + blur_px / 19.0);
+    let features = 156.0 * texture * blur_factor * overlap;
+    // Guided tracking with an exact prior at this overlap (0.23, above the
+    // 0.15 ± 0.05 ramp) succeeds geometrically; prior-free matching (0.7)
     // does not; the rest is the count.
-    assert!(overlap > 0.35 && overlap < 0.65, "overlap {overlap}");
+    assert!(overlap > 0.2 && overlap < 0.65, "overlap {overlap}");
     (features, gamma_lr(30.0, features))
 }
 
@@ -139,8 +140,10 @@ fn loose_sand_tracks_fewer_features_and_fails_more_often_than_gravel() {
     let ((sand_features, sand_failure), (gravel_features, gravel_failure)) =
         (failure[0], failure[1]);
     assert!(sand_features < gravel_features);
+    // The measured textures (sand 1.3, gravel 1.9) leave sand a few
+    // failures in a hundred where gravel has almost none.
     assert!(
-        sand_failure > 0.1 && gravel_failure < 1e-6,
+        sand_failure > 0.005 && gravel_failure < 1e-4,
         "sand fails {sand_failure}, gravel {gravel_failure}"
     );
 }
@@ -167,8 +170,8 @@ fn the_footprint_reads_the_soil_ahead_not_under_the_wheels() {
     // Standing on sand 0.3 m from the border: the footprint, 1.2–3.2 m ahead
     // of the body (`CameraParams::footprint_body`), lies on gravel when
     // the rover faces east, on sand when it faces west.
-    assert_eq!(texture(0.0), Soil::gravel().texture);
-    assert_eq!(texture(std::f64::consts::PI), Soil::loose_sand().texture);
+    assert!((texture(0.0) - Soil::gravel().texture).abs() < 1e-12);
+    assert!((texture(std::f64::consts::PI) - Soil::loose_sand().texture).abs() < 1e-12);
     // Facing north along the border, the footprint's columns lie 0.83 m
     // either side of the body: the eastern column of three points is on
     // gravel, the other six on sand.
@@ -177,7 +180,8 @@ fn the_footprint_reads_the_soil_ahead_not_under_the_wheels() {
     assert!((across - expected).abs() < 1e-12, "{across} vs {expected}");
     // The contrast exponent: 0 makes every soil alike, 2 squares each.
     assert_eq!(texture_with(std::f64::consts::FRAC_PI_2, 0.0), 1.0);
-    let squared = (6.0 * 0.25f64.powi(2) + 3.0 * 1.2f64.powi(2)) / 9.0;
+    let squared =
+        (6.0 * Soil::loose_sand().texture.powi(2) + 3.0 * Soil::gravel().texture.powi(2)) / 9.0;
     let got = texture_with(std::f64::consts::FRAC_PI_2, 2.0);
     assert!((got - squared).abs() < 1e-12, "{got} vs {squared}");
 }

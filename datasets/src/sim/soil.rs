@@ -47,9 +47,9 @@ pub struct Soil {
     pub vibration_mps2: f64,
     /// Matchable image features this soil offers per frame, relative to
     /// compact soil's (dimensionless, > 0): what the simulated tracker's
-    /// feature supply reads under the camera's footprint. An assumption:
-    /// no published per-soil feature counts were found (see
-    /// `frontends/README.md`).
+    /// feature supply reads under the camera's footprint. Measured as the
+    /// stereo VO's inliers on the rendered camera (see
+    /// `frontends/README.md`); no published per-soil counts were found.
     pub texture: f64,
 }
 
@@ -81,8 +81,9 @@ impl Soil {
     /// slip-versus-slope curves of Mars rovers (≈ 16% at 5°, 30% at 10°, 54%
     /// at 15°, the 0.9 clamp at 20° with the default slope rate). `slip_base`
     /// 0.08, `slope_slip_gain` 0.12, `lateral_slip_gain` 0.45, `turn_slip`
-    /// 0.15, `vibration_mps2` 0.03, `texture` 0.25 (fine, uniform grains:
-    /// few corners).
+    /// 0.15, `vibration_mps2` 0.03, `texture` 1.3 (the stereo VO's inliers on
+    /// the rendered sand, whose look is calibrated against ExoTeR's lab,
+    /// over compact soil's: `experiments/examples/tracker_calibration.rs`).
     pub fn loose_sand() -> Self {
         Self {
             name: "loose_sand".to_owned(),
@@ -91,14 +92,15 @@ impl Soil {
             lateral_slip_gain: 0.45,
             turn_slip: 0.15,
             vibration_mps2: 0.03,
-            texture: 0.25,
+            texture: 1.3,
         }
     }
 
     /// Gravel: intermediate traction, rough ride (≈ 10% slip at 5°, 18% at
     /// 10°, 55% at 20°). `slip_base` 0.05, `slope_slip_gain` 0.07,
     /// `lateral_slip_gain` 0.25, `turn_slip` 0.10, `vibration_mps2` 0.06,
-    /// `texture` 1.2 (stones of many sizes: corners at every scale).
+    /// `texture` 1.9 (the stereo VO's inliers on
+    /// the rendered gravel over compact soil's, as for sand).
     pub fn gravel() -> Self {
         Self {
             name: "gravel".to_owned(),
@@ -107,7 +109,7 @@ impl Soil {
             lateral_slip_gain: 0.25,
             turn_slip: 0.10,
             vibration_mps2: 0.06,
-            texture: 1.2,
+            texture: 1.9,
         }
     }
 

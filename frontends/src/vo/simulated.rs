@@ -59,9 +59,12 @@ use crate::traverse::Traverse;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimulatedVoParams {
-    /// The camera.
+    /// The camera (default: the stereo VO's, ExoTeR's Bumblebee2 at
+    /// 512 × 384, with the overlap model's `depth_range_m` 0.95, fitted to
+    /// the stereo VO's inliers driving straight).
     pub camera: CameraParams,
-    /// Overlap at which guided tracking succeeds half the time (default 0.3).
+    /// Overlap at which guided tracking succeeds half the time (default
+    /// 0.15, where the stereo VO still tracks).
     pub min_overlap: f64,
     /// Half-width of the overlap thresholds' transition (default 0.05).
     pub overlap_softness: f64,
@@ -82,15 +85,17 @@ pub struct SimulatedVoParams {
     pub recognition_probability: f64,
     /// At most this many recognised keyframes are proposed (default 3).
     pub max_candidates: usize,
-    /// Translation error floor σ_t0 (m; default 0.0007).
+    /// Translation error floor σ_t0 (m; default 0.0012; the five error
+    /// defaults are fitted to the stereo VO's errors on rendered drives,
+    /// see `frontends/README.md`).
     pub translation_sigma_m: f64,
     /// Translation error per metre of relative translation k_t (default
-    /// 0.007; the four error defaults are calibrated on the paper's
-    /// ORB-SLAM 2.5 fps row, see `frontends/README.md`).
+    /// 0.00092).
     pub translation_sigma_per_m: f64,
-    /// Rotation error floor σ_r0 (rad; default 0.00035).
+    /// Rotation error floor σ_r0 (rad; default 0.00087).
     pub rotation_sigma_rad: f64,
-    /// Rotation error per radian of relative rotation k_r (default 0.0035).
+    /// Rotation error per radian of relative rotation k_r (default
+    /// 0.00057).
     pub rotation_sigma_per_rad: f64,
     /// Exponent p of the overlap in the error (default 1).
     pub overlap_exponent: f64,
@@ -99,7 +104,8 @@ pub struct SimulatedVoParams {
     pub error_model: TrackerErrorModel,
     /// Under `error_model: shared`, the fraction ρ of a measurement's
     /// error variance that is its reference keyframe's map error, shared
-    /// by every frame tracked against that keyframe (default 0.5; 0: no
+    /// by every frame tracked against that keyframe (default 0.17, the stereo
+    /// VO's measured correlation; 0: no
     /// sharing, 1: fully shared).
     pub map_error_share: f64,
     /// Whether features are counted: the traverse's per-frame feature
@@ -115,7 +121,8 @@ pub struct SimulatedVoParams {
     /// counts were found.
     pub texture_contrast: f64,
     /// Features F a match finds at full overlap on the reference texture
-    /// (compact soil, no blur; default 300).
+    /// (compact soil, no blur; default 156, the stereo VO's inliers per unit
+    /// overlap between frames 0.4 s apart).
     pub features_per_frame: f64,
     /// Features tracking needs (default 30, ORB-SLAM2's local-map
     /// inliers).
@@ -146,8 +153,11 @@ pub enum TrackerErrorModel {
 impl Default for SimulatedVoParams {
     fn default() -> Self {
         Self {
-            camera: CameraParams::default(),
-            min_overlap: 0.3,
+            camera: CameraParams {
+                depth_range_m: 0.95,
+                ..CameraParams::exoter_bumblebee2().scaled(0.5)
+            },
+            min_overlap: 0.15,
             overlap_softness: 0.05,
             search_radius_px: 15.0,
             search_softness_px: 3.0,
@@ -155,16 +165,16 @@ impl Default for SimulatedVoParams {
             recognition_min_overlap: 0.5,
             recognition_probability: 0.9,
             max_candidates: 3,
-            translation_sigma_m: 0.0007,
-            translation_sigma_per_m: 0.007,
-            rotation_sigma_rad: 0.00035,
-            rotation_sigma_per_rad: 0.0035,
+            translation_sigma_m: 0.0012,
+            translation_sigma_per_m: 0.00092,
+            rotation_sigma_rad: 0.00087,
+            rotation_sigma_per_rad: 0.00057,
             overlap_exponent: 1.0,
             error_model: TrackerErrorModel::Shared,
-            map_error_share: 0.5,
+            map_error_share: 0.17,
             terrain_features: true,
             texture_contrast: 1.0,
-            features_per_frame: 300.0,
+            features_per_frame: 156.0,
             min_tracked_features: 30,
             min_relocalisation_features: 50,
             seed: 0,
