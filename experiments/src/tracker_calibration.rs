@@ -1,10 +1,10 @@
 //! The statistical tracker set beside the stereo VO on the same requests:
-//! rendered drives over each soil, turning in place and under motion blur;
+//! rendered drives over each soil, straight, turning in place and under blur;
 //! every frame tracked against earlier ones at gaps of 0.4 to 20 s with a
 //! wheel-odometry-like prior; for each request, the stereo VO's outcome and
 //! error, and the statistical tracker's success probability and error
-//! standard deviations. [`compare`] bins both by geometric overlap, gap,
-//! rotation, soil and blur; `examples/tracker_calibration.rs` prints the
+//! standard deviations. [`by_overlap`] bins both by geometric overlap and
+//! [`differences`] compares them; `examples/tracker_calibration.rs` prints the
 //! curves and fits the statistical tracker's parameters to them.
 
 use std::sync::Arc;

@@ -66,16 +66,45 @@ fn assert_both_rates_tracked(out: &std::path::Path) {
     }
 }
 
+/// `gpodo run` of `file` into `out` on `threads` threads.
+fn run_on_threads(file: &std::path::Path, out: &std::path::Path, threads: &str) {
+    let run = std::process::Command::new(common::GPODO)
+        .args(["--quiet", "run"])
+        .arg(file)
+        .arg("--out")
+        .arg(out)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .unwrap();
+    assert_succeeded(&run, "gpodo run: ");
+}
+
 #[test]
 fn the_stereo_vo_tracks_the_fixed_rates_on_the_rendered_camera() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("stereo.yaml");
     std::fs::write(&file, EXPERIMENT).unwrap();
     let out = dir.path().join("out");
-    assert_succeeded(&gpodo_on("run", &file, &out, &[]), "gpodo run: ");
+    run_on_threads(&file, &out, "2");
     assert_both_rates_tracked(&out);
     let config = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(config.contains("ORB-SLAM 0.5 fps"));
+    // The same numbers on one thread: every frame rendered once whichever
+    // scheme asks first, each scheme's keyframe ratio its own.
+    let one = dir.path().join("one");
+    run_on_threads(&file, &one, "1");
+    let schemes = |dir: &std::path::Path| {
+        let metrics: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap())
+                .unwrap();
+        metrics["schemes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["run"].clone())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(schemes(&out), schemes(&one));
 }
 
 #[test]
