@@ -94,13 +94,32 @@ fn params(vo: SimulatedVoParams) -> FrontendParams {
     }
 }
 
+/// The tracker these hand-made traverses were designed around: its
+/// defaults before the calibration against the stereo VO (a 500-px camera
+/// with a 3-m depth range, guided tracking at even odds at overlap 0.3,
+/// the earlier error scales, 300 features, a map-error share of 0.5), so
+/// that their turns and gaps lose track where the tests say.
+fn earlier_tracker() -> SimulatedVoParams {
+    SimulatedVoParams {
+        camera: gpodo_frontends::vo::CameraParams::default(),
+        min_overlap: 0.3,
+        translation_sigma_m: 0.0007,
+        translation_sigma_per_m: 0.007,
+        rotation_sigma_rad: 0.00035,
+        rotation_sigma_per_rad: 0.0035,
+        features_per_frame: 300.0,
+        map_error_share: 0.5,
+        ..SimulatedVoParams::default()
+    }
+}
+
 fn precise_vo() -> SimulatedVoParams {
     SimulatedVoParams {
         translation_sigma_m: 1e-9,
         translation_sigma_per_m: 0.0,
         rotation_sigma_rad: 1e-9,
         rotation_sigma_per_rad: 0.0,
-        ..SimulatedVoParams::default()
+        ..earlier_tracker()
     }
 }
 
@@ -128,7 +147,7 @@ fn vo_corrects_biased_wheels_and_more_frames_correct_more() {
     let t = traverse(300.0, s_curve, bias, &[0.0]);
     let vo_params = SimulatedVoParams {
         seed: 4,
-        ..SimulatedVoParams::default()
+        ..earlier_tracker()
     };
     let p = params(vo_params);
     let run = |fps: f64| {
@@ -168,7 +187,7 @@ fn quarter_turn() -> Traverse {
 #[test]
 fn a_fast_turn_between_sparse_frames_loses_track_and_relocalises_at_a_mapped_place() {
     let t = quarter_turn();
-    let vo_params = SimulatedVoParams::default();
+    let vo_params = earlier_tracker();
     let p = params(vo_params);
     let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
     // One frame every 5 s: the frames at 25 s and 30 s look 45° and 90°
@@ -213,7 +232,7 @@ fn an_online_learner_picks_up_a_constant_residual_and_then_looks_less() {
     let t = traverse(900.0, s_curve, bias, &[0.3, -0.2]);
     let vo_params = SimulatedVoParams {
         seed: 9,
-        ..SimulatedVoParams::default()
+        ..earlier_tracker()
     };
     let p = params(vo_params);
     let mut vo = SimulatedVo::new(vo_params, &t).unwrap();
@@ -266,7 +285,7 @@ fn an_online_learner_picks_up_a_constant_residual_and_then_looks_less() {
 #[test]
 fn the_oracle_respects_its_budget_and_gap_limit() {
     let t = traverse(200.0, s_curve, Vector3::new(0.004, 0.0, 0.0), &[0.0]);
-    let vo = SimulatedVo::new(SimulatedVoParams::default(), &t).unwrap();
+    let vo = SimulatedVo::new(earlier_tracker(), &t).unwrap();
     let predictions = vec![Vector3::zeros(); t.windows().len()];
     let params = OracleParams {
         frames: Some(60),
@@ -370,7 +389,7 @@ fn the_hindsight_search_is_never_worse_than_the_policy_it_starts_from() {
     for seed in [1, 2, 3] {
         let p = params(SimulatedVoParams {
             seed,
-            ..SimulatedVoParams::default()
+            ..earlier_tracker()
         });
         let ctx = SchemeContext {
             params: &p,
@@ -551,7 +570,7 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
     use gpodo_frontends::scheme::{SchemeContext, SchemeResiduals, SchemeSpecRef, run_scheme};
 
     let t = quarter_turn();
-    let p = params(SimulatedVoParams::default());
+    let p = params(earlier_tracker());
     let ctx = SchemeContext {
         params: &p,
         matched_frames: None,
@@ -618,8 +637,8 @@ fn with_shared_errors_only_keyframes_are_graph_nodes_and_frames_follow_their_key
         let mut source = zero_predictions(&t, 1e-6);
         run_frontend(&t, &params(vo_params), &mut selector, &mut source, &mut vo).unwrap()
     };
-    let shared = run(TrackerErrorModel::Shared, SimulatedVoParams::default());
-    let independent = run(TrackerErrorModel::Independent, SimulatedVoParams::default());
+    let shared = run(TrackerErrorModel::Shared, earlier_tracker());
+    let independent = run(TrackerErrorModel::Independent, earlier_tracker());
     // The start pose and the keyframes; or the start pose and every frame.
     assert_eq!(shared.graph_nodes, shared.keyframes + 1);
     assert_eq!(independent.graph_nodes, independent.frames + 1);
