@@ -387,7 +387,8 @@ mod tests {
         let b = cam.motion_blur_px(&turn);
         let swing = 0.3 * 0.2 * 0.01 / 2.0;
         assert!((b - 500.0 * (0.2 * 0.01 + swing)).abs() < 1e-3, "{b}");
-        assert!((cam.blur_factor(3.0) - 0.5).abs() < 1e-15);
+        assert!((cam.blur_factor(cam.blur_half_px) - 0.5).abs() < 1e-15);
+        assert!((cam.blur_factor(19.0) - 0.5).abs() < 1e-15);
         assert_eq!(cam.blur_factor(0.0), 1.0);
     }
 
