@@ -13,30 +13,13 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use gpodo_experiments::tracker_calibration::{
-    BinSummary, Drive, Observation, by_overlap, observe, summarise,
+    BinSummary, Drive, Observation, by_overlap, observe_all, summarise,
 };
 use gpodo_frontends::vo::SimulatedVoParams;
 use gpodo_frontends::vo::stereo::StereoVoParams;
-use rayon::prelude::*;
 
 /// Gaps of 0.4 to 20 s.
 const GAPS: [usize; 8] = [1, 3, 6, 12, 18, 25, 35, 50];
-
-fn row(label: &str, b: &BinSummary) -> String {
-    format!(
-        "| {label} | {} | {:.2} | {:.2} | {} | {:.3} | {:.3} | {:.2} | {:.2} |",
-        b.count,
-        b.stereo_success,
-        b.statistical_success,
-        b.tracked,
-        b.stereo_sd.0.to_degrees(),
-        b.statistical_sd.0.to_degrees(),
-        b.stereo_sd.1 * 1e3,
-        b.statistical_sd.1 * 1e3,
-    )
-}
-
-const HEADER: &str = "| bin | requests | success, stereo | success, statistical | tracked | rotation sd (°), stereo | statistical | translation sd (mm), stereo | statistical |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|";
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -49,14 +32,8 @@ fn main() -> anyhow::Result<()> {
     let stereo = StereoVoParams::default();
     let simulated = SimulatedVoParams::default();
     let drives = Drive::calibration_set(frames);
-    let observations: Vec<Observation> = drives
-        .par_iter()
-        .map(|d| observe(d, &stereo, &simulated, &GAPS, 2))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(anyhow::Error::msg)?
-        .into_iter()
-        .flatten()
-        .collect();
+    let observations =
+        observe_all(&drives, &stereo, &simulated, &GAPS, 2).map_err(anyhow::Error::msg)?;
     let mut csv = String::from(
         "drive,gap_secs,overlap,rotation_rad,distance_m,supply,tracked,inliers,err_rx,err_ry,err_rz,err_tx,err_ty,err_tz,success_probability,sigma_r,sigma_t\n",
     );
@@ -81,11 +58,11 @@ fn main() -> anyhow::Result<()> {
         )?;
     }
     std::fs::write(out.join("requests.csv"), csv)?;
-    println!("By geometric overlap:\n{HEADER}");
+    println!("By geometric overlap:\n{}", BinSummary::TABLE_HEADER);
     for (lo, b) in by_overlap(&observations) {
-        println!("{}", row(&format!("{lo:.1}–{:.1}", lo + 0.1), &b));
+        println!("{}", b.table_row(&format!("{lo:.1}–{:.1}", lo + 0.1)));
     }
-    println!("\nBy gap:\n{HEADER}");
+    println!("\nBy gap:\n{}", BinSummary::TABLE_HEADER);
     for gap in GAPS {
         let secs = gap as f64 / 2.5;
         let b = summarise(
@@ -93,12 +70,12 @@ fn main() -> anyhow::Result<()> {
                 .iter()
                 .filter(|o| (o.gap_secs - secs).abs() < 1e-9),
         );
-        println!("{}", row(&format!("{secs:.1} s"), &b));
+        println!("{}", b.table_row(&format!("{secs:.1} s")));
     }
-    println!("\nBy drive:\n{HEADER}");
+    println!("\nBy drive:\n{}", BinSummary::TABLE_HEADER);
     for d in &drives {
         let b = summarise(observations.iter().filter(|o| o.drive == d.name));
-        println!("{}", row(d.name, &b));
+        println!("{}", b.table_row(d.name));
     }
     fit(&observations, &drives, &stereo);
     Ok(())

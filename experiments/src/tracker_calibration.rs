@@ -288,6 +288,49 @@ pub struct BinSummary {
     pub statistical_sd: (f64, f64),
 }
 
+impl BinSummary {
+    /// The header of [`BinSummary::table_row`]'s Markdown table.
+    pub const TABLE_HEADER: &'static str = "| bin | requests | success, stereo | success, statistical | tracked | rotation sd (°), stereo | statistical | translation sd (mm), stereo | statistical |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|";
+
+    /// This bin as a Markdown table row labelled `label` (degrees and
+    /// millimetres).
+    pub fn table_row(&self, label: &str) -> String {
+        format!(
+            "| {label} | {} | {:.2} | {:.2} | {} | {:.3} | {:.3} | {:.2} | {:.2} |",
+            self.count,
+            self.stereo_success,
+            self.statistical_success,
+            self.tracked,
+            self.stereo_sd.0.to_degrees(),
+            self.statistical_sd.0.to_degrees(),
+            self.stereo_sd.1 * 1e3,
+            self.statistical_sd.1 * 1e3,
+        )
+    }
+}
+
+/// [`observe`] over every drive of `drives`, in parallel, in the drives'
+/// order.
+///
+/// # Errors
+/// The first drive that cannot be built.
+pub fn observe_all(
+    drives: &[Drive],
+    stereo: &StereoVoParams,
+    simulated: &SimulatedVoParams,
+    gaps: &[usize],
+    stride: usize,
+) -> Result<Vec<Observation>, String> {
+    use rayon::prelude::*;
+    Ok(drives
+        .par_iter()
+        .map(|d| observe(d, stereo, simulated, gaps, stride))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .flatten()
+        .collect())
+}
+
 /// The bin summary of `observations`.
 pub fn summarise<'a>(observations: impl IntoIterator<Item = &'a Observation>) -> BinSummary {
     let (mut count, mut tracked) = (0usize, 0usize);

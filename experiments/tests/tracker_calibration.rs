@@ -11,42 +11,26 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use gpodo_experiments::tracker_calibration::{
-    Drive, Observation, by_overlap, differences, observe, summarise,
+    BinSummary, Drive, by_overlap, differences, observe_all, summarise,
 };
 use gpodo_frontends::vo::SimulatedVoParams;
 use gpodo_frontends::vo::stereo::StereoVoParams;
-use rayon::prelude::*;
 
 #[test]
 fn the_statistical_trackers_curves_follow_the_stereo_vos() {
     let gaps = [1, 3, 6, 12, 18, 25, 35, 50];
-    let observations: Vec<Observation> = Drive::calibration_set(66)
-        .par_iter()
-        .map(|d| {
-            observe(
-                d,
-                &StereoVoParams::default(),
-                &SimulatedVoParams::default(),
-                &gaps,
-                2,
-            )
-            .unwrap()
-        })
-        .flatten()
-        .collect();
+    let observations = observe_all(
+        &Drive::calibration_set(66),
+        &StereoVoParams::default(),
+        &SimulatedVoParams::default(),
+        &gaps,
+        2,
+    )
+    .unwrap();
     let bins = by_overlap(&observations);
+    eprintln!("{}", BinSummary::TABLE_HEADER);
     for (lo, b) in &bins {
-        eprintln!(
-            "overlap {lo:.1}: {} requests, success {:.2} / {:.2}; {} tracked, sd {:.3}° / {:.3}°, {:.2} mm / {:.2} mm",
-            b.count,
-            b.stereo_success,
-            b.statistical_success,
-            b.tracked,
-            b.stereo_sd.0.to_degrees(),
-            b.statistical_sd.0.to_degrees(),
-            b.stereo_sd.1 * 1e3,
-            b.statistical_sd.1 * 1e3
-        );
+        eprintln!("{}", b.table_row(&format!("{lo:.1}")));
     }
     let compared = bins.iter().filter(|(_, b)| b.count >= 30).count();
     assert!(compared >= 6, "only {compared} bins with 30 requests");
