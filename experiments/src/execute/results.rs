@@ -5,6 +5,7 @@ use gpodo_datasets::residuals::StepWindows;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::scheme::SchemeResult;
 use gpodo_frontends::traverse::Traverse;
+use gpodo_frontends::vo::stereo::StereoFrames;
 use gpodo_regressors::metrics::{Evaluation, evaluate};
 use gpodo_traits::{FitReport, Predictions, ResidualDataset};
 use serde::{Deserialize, Serialize};
@@ -133,6 +134,36 @@ pub struct ExperimentResults {
     /// (`[regressor][traverse]`).
     #[serde(skip)]
     pub window_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>>,
+    /// Each traverse's camera frames, for runs whose VO reads images (for
+    /// the figures of the frames around each loss of track).
+    #[serde(skip)]
+    pub camera_frames: CameraFrames,
+}
+
+/// Each test traverse's camera frames and their cached features (`None`
+/// for a traverse without images). A cache of what the traverses
+/// determine, so results compare equal whatever it holds.
+#[derive(Clone, Default)]
+pub struct CameraFrames(pub Vec<Option<std::sync::Arc<StereoFrames>>>);
+
+impl CameraFrames {
+    /// The frames of traverse `t`, if it has images.
+    pub fn of(&self, t: usize) -> Option<&StereoFrames> {
+        self.0.get(t)?.as_deref()
+    }
+}
+
+impl std::fmt::Debug for CameraFrames {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let with = self.0.iter().filter(|c| c.is_some()).count();
+        write!(f, "CameraFrames({with} of {} traverses)", self.0.len())
+    }
+}
+
+impl PartialEq for CameraFrames {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// The rows the regressors see: inputs standardised once, here, with the

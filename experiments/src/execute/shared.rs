@@ -25,7 +25,7 @@ use crate::execute::code_version;
 use crate::execute::data::{PreparedData, model_rows, prepare, reference_statistics};
 use crate::execute::feature_supply::feature_supply;
 use crate::execute::fit::fit_and_score;
-use crate::execute::results::{ExperimentResults, ModelRows, RegressorResult};
+use crate::execute::results::{CameraFrames, ExperimentResults, ModelRows, RegressorResult};
 use crate::execute::schemes::{SchemeInputs, run_schemes};
 use crate::execute::traverses::{build_traverse, window_predictions};
 
@@ -334,6 +334,7 @@ impl SharedWork {
             fitted.iter().map(|f| f.predictions.clone()).collect();
         let absolute_predictions: Vec<Option<Vec<Vec<ResidualPrediction>>>> =
             absolute.iter().map(|f| f.predictions.clone()).collect();
+        let mut camera = CameraFrames::default();
         let schemes = if config.schemes.is_empty() {
             Vec::new()
         } else {
@@ -345,7 +346,7 @@ impl SharedWork {
             let traverses = with_feature_supply(config, p)?;
             let frames = camera_frames(config, &p.data, &p.ground, &traverses)?;
             let config = &with_derived_odometry(config, p);
-            run_schemes(&SchemeInputs {
+            let schemes = run_schemes(&SchemeInputs {
                 config,
                 traverses: &traverses,
                 predictions: &predictions,
@@ -354,7 +355,9 @@ impl SharedWork {
                 absolute_labels: &absolute_labels,
                 recorded_vo: &p.data.recorded_vo,
                 frames: &frames,
-            })?
+            })?;
+            camera = CameraFrames(frames);
+            schemes
         };
         let data = &p.data;
         Ok(ExperimentResults {
@@ -379,6 +382,7 @@ impl SharedWork {
             test_rows: Some(data.test.clone()),
             traverses: Arc::clone(&p.traverses),
             window_predictions: predictions,
+            camera_frames: camera,
         })
     }
 }

@@ -1,5 +1,6 @@
 //! The files of a single run: `report.md`, `metrics.json`, the residual
-//! rows as CSV, the trajectories of Table II (TUM) and its figures. Files
+//! rows as CSV, the trajectories of Table II (TUM) and its figures (with
+//! images, the frames around each loss of track). Files
 //! are written to a temporary name and renamed, so a crash never leaves a
 //! half-written report.
 
@@ -10,8 +11,8 @@ use gpodo_frontends::tum::{StampedPose, format_tum};
 
 use crate::execute::results::ExperimentResults;
 use crate::output::{slug, write_file};
-use crate::report::plots;
 use crate::report::run::markdown;
+use crate::report::{loss_strips, plots};
 
 /// Writes `report.md` and `metrics.json` into `dir` (created if needed),
 /// the residual rows, and with schemes the trajectories and (when `plots`)
@@ -53,6 +54,7 @@ fn write_table_two_files(
     let (traj_dir, plot_dir) = (dir.join("trajectories"), dir.join("plots"));
     std::fs::create_dir_all(&traj_dir)?;
     std::fs::create_dir_all(&plot_dir)?;
+    let mut losses = String::new();
     for (t, traverse) in results.traverses.iter().enumerate() {
         let stamped = |poses: &[nalgebra::Isometry3<f64>]| -> Vec<StampedPose> {
             traverse
@@ -99,6 +101,9 @@ fn write_table_two_files(
                 &plot_dir.join(format!("fig5_{file}.svg")),
                 plots::trajectory_svg(traverse, &scheme.run, &title)?.as_bytes(),
             )?;
+            if let Some(frames) = results.camera_frames.of(t) {
+                losses += &loss_strips::write_strips(traverse, frames, scheme, &plot_dir, &file)?;
+            }
         }
         if !plots {
             continue;
@@ -109,6 +114,12 @@ fn write_table_two_files(
                 plots::residual_map_svg(traverse, predictions, &label)?.as_bytes(),
             )?;
         }
+    }
+    if !losses.is_empty() {
+        write_file(
+            &plot_dir.join("losses.md"),
+            format!("{}{losses}", loss_strips::INDEX_HEADER).as_bytes(),
+        )?;
     }
     Ok(())
 }

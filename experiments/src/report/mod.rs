@@ -1,6 +1,7 @@
 //! The fourth stage: what the results say, as files. [`files`] writes a
 //! single run's folder (`report.md` from [`run`], `metrics.json`, residual
-//! rows, trajectories, figures from [`plots`]); [`sweep`] merges the
+//! rows, trajectories, figures from [`plots`] and the frames around each
+//! loss of track); [`sweep`] merges the
 //! records of a results folder into `summary.md` and its CSV tables;
 //! [`bench`](mod@bench) writes `bench.md`. Every Table I and Table II is a
 //! [`table::Table`].
@@ -14,6 +15,7 @@ pub mod curves;
 pub mod curves_section;
 pub mod files;
 pub mod hindsight;
+mod loss_strips;
 pub mod plots;
 pub mod prequential_plot;
 pub mod run;

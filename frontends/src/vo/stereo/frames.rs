@@ -130,6 +130,15 @@ impl StereoFrames {
         computed
     }
 
+    /// The rectified pair of `frame`, rendered or read again (images are
+    /// not cached; their features are).
+    ///
+    /// # Errors
+    /// The source's message naming the frame.
+    pub fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String> {
+        self.source.pair(frame)
+    }
+
     /// How many frames' features are cached.
     pub fn cached(&self) -> usize {
         self.lock()
