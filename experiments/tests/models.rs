@@ -149,6 +149,39 @@ fn gpodo_fit_then_predict_on_the_runs_residual_rows() {
 }
 
 #[test]
+fn a_model_file_says_how_its_rows_were_made() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = write_config(tmp.path());
+    let config = ExperimentConfig::from_path(&file).unwrap();
+    let fitted = fit_model(&config, "ILGR").unwrap();
+    let recipe = fitted.file.rows.clone().unwrap();
+    // ExoTeR's simulated sensors run at 12.5 Hz; rows average 1 s; the
+    // default weighted-Jacobian model, read back as the experiment's block.
+    assert!((recipe.rate_hz.unwrap() - 12.5).abs() < 1e-9, "{recipe:?}");
+    assert_eq!(recipe.window_secs, Some(1.0));
+    assert!(!recipe.absolute_targets);
+    let model: gpodo_kinematics::spec::MotionModelSpec =
+        serde_json::from_value(recipe.motion_model.clone()).unwrap();
+    assert_eq!(model, config.motion_model);
+    let path = tmp.path().join("m.gpodo");
+    fitted.file.save(&path).unwrap();
+    assert_eq!(ModelFile::load(&path).unwrap().rows, Some(recipe));
+
+    // A version-2 file (no recipe) reads as the current version without
+    // one.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut v2: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v2["version"] = 2.into();
+    v2.as_object_mut().unwrap().remove("rows");
+    let old = tmp.path().join("v2.gpodo");
+    std::fs::write(&old, v2.to_string()).unwrap();
+    let loaded = ModelFile::load(&old).unwrap();
+    assert_eq!(loaded.version, gpodo_regressors::model_file::MODEL_VERSION);
+    assert_eq!(loaded.rows, None);
+    assert_eq!(loaded.state, ModelFile::load(&path).unwrap().state);
+}
+
+#[test]
 fn bad_model_files_and_rows_are_refused_with_their_reason() {
     let tmp = tempfile::tempdir().unwrap();
     let file = write_config(tmp.path());
@@ -169,12 +202,12 @@ fn bad_model_files_and_rows_are_refused_with_their_reason() {
     let other_version = tmp.path().join("v99.gpodo");
     std::fs::write(
         &other_version,
-        text.replacen("\"version\":2", "\"version\":99", 1),
+        text.replacen("\"version\":3", "\"version\":99", 1),
     )
     .unwrap();
     let e = ModelFile::load(&other_version).unwrap_err().to_string();
     assert!(
-        e.contains("model file version 99") && e.contains("reads versions 1 and 2"),
+        e.contains("model file version 99") && e.contains("reads versions 1 to 3"),
         "{e}"
     );
 

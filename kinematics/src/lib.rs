@@ -13,7 +13,8 @@
 //! * [`qp`]: the same problem with bounds, as a QP (Clarabel);
 //! * [`skid_steer`]: the ideal differential-drive model;
 //! * [`reported_odometry`]: the robot's own odometry as the model, for
-//!   robots without modelled kinematics.
+//!   robots without modelled kinematics;
+//! * [`spec`]: which of them a run uses, as configured, and building it.
 
 pub mod chain;
 pub mod description;
@@ -23,6 +24,7 @@ pub mod loads;
 pub mod qp;
 pub mod reported_odometry;
 pub mod skid_steer;
+pub mod spec;
 pub mod weighted_jacobian;
 
 pub use description::RoverDescription;

@@ -35,9 +35,10 @@ use crate::{RegressorError, RegressorSpec};
 /// What the first field of every model file says.
 pub const MODEL_FORMAT: &str = "gpodo-model";
 
-/// The model-file version this build writes. It reads it and version 1
-/// (whose GP settings had the `hyperopt:` settings at their top level).
-pub const MODEL_VERSION: u32 = 2;
+/// The model-file version this build writes. It reads it, version 2
+/// (which had no row recipe) and version 1 (whose GP settings had the
+/// `hyperopt:` settings at their top level).
+pub const MODEL_VERSION: u32 = 3;
 
 /// A regressor's learned state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -64,6 +65,28 @@ pub struct Provenance {
     pub training_rows: usize,
 }
 
+/// How the model's input rows were made from a robot's streams, so that
+/// rows can be made the same way from live messages: the experiment's
+/// clock, window and motion model. A model fitted on a residual table has
+/// none (its rows came ready-made).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RowRecipe {
+    /// The clock the streams were resampled to (Hz): a bag import's
+    /// `rate_hz`, the simulator's sensor rate; none for rover logs read as
+    /// recorded.
+    pub rate_hz: Option<f64>,
+    /// Seconds each row averages (`residuals.window_secs`); none for one
+    /// row per clock step.
+    pub window_secs: Option<f64>,
+    /// Whether the targets are |residual| (`residuals.absolute_targets`).
+    pub absolute_targets: bool,
+    /// The experiment's `motion_model:` block, its rover description's
+    /// path as on the machine that trained the model (the robot gives its
+    /// own).
+    pub motion_model: serde_json::Value,
+}
+
 /// A trained model as saved on disk.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -83,6 +106,10 @@ pub struct ModelFile {
     pub input_standardizer: Option<Standardizer>,
     /// Where it came from.
     pub provenance: Provenance,
+    /// How its input rows were made (none before version 3, and for rows
+    /// read from a residual table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rows: Option<RowRecipe>,
     /// The learned state.
     pub state: SavedState,
 }
@@ -225,6 +252,7 @@ impl ModelFile {
             target_names: train.target_names.clone(),
             input_standardizer,
             provenance,
+            rows: None,
             state,
         };
         Ok((file, model, report))
@@ -287,11 +315,12 @@ impl ModelFile {
             serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
         match header.version {
             Some(MODEL_VERSION) => {}
+            Some(2) => value["version"] = serde_json::Value::from(MODEL_VERSION),
             Some(1) => upgrade_v1(&mut value),
             other => {
                 let version = other.map_or("without a version".into(), |v| format!("version {v}"));
                 return Err(invalid(format!(
-                    "model file {version}; this gpodo reads versions 1 and {MODEL_VERSION} (save the model again with this version)"
+                    "model file {version}; this gpodo reads versions 1 to {MODEL_VERSION} (save the model again with this version)"
                 )));
             }
         }
@@ -463,9 +492,10 @@ impl Predictor {
     }
 }
 
-/// Rewrites a version-1 file as version 2: a GP's optimiser settings move
-/// from the top level of its `params` into `params.hyperopt`. Version 1 of
-/// the other kinds reads as version 2.
+/// Rewrites a version-1 file as the current version: a GP's optimiser
+/// settings move from the top level of its `params` into
+/// `params.hyperopt` (version 2), and it has no row recipe (version 3).
+/// Version 1 of the other kinds reads as it is.
 fn upgrade_v1(value: &mut serde_json::Value) {
     use serde_json::{Map, Value};
     if let Some(version) = value.get_mut("version") {

@@ -26,7 +26,7 @@ use gpodo_datasets::residuals::ResidualConfig;
 use gpodo_datasets::sim::preset::Preset;
 use gpodo_frontends::FrontendParams;
 use gpodo_frontends::params::VoSpec;
-use gpodo_kinematics::{WeightedJacobianConfig, YawSource};
+pub use gpodo_kinematics::spec::{AttitudeWithoutImu, MotionModelSpec};
 use gpodo_regressors::RegressorSpec;
 use serde::{Deserialize, Serialize};
 
@@ -165,70 +165,6 @@ pub enum DatasetSpec {
         /// Fraction of rows (the first ones) used for training.
         train_fraction: f64,
     },
-}
-
-/// Where a robot without an IMU gets the roll and pitch its motion model
-/// uses (the weighted-Jacobian model's normal-force weighting).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum AttitudeWithoutImu {
-    /// Level ground: roll and pitch 0.
-    #[default]
-    Level,
-    /// The ground truth's roll and pitch: off board, so opt-in, said in the
-    /// report, and never a regressor input.
-    GroundTruth,
-}
-
-/// The parametric motion model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum MotionModelSpec {
-    /// The weighted Jacobian model of §III.
-    WeightedJacobian {
-        /// Rover description YAML (relative to the experiment file);
-        /// omitted, the built-in ExoTeR-like rover.
-        #[serde(default)]
-        rover: Option<PathBuf>,
-        /// Model settings.
-        #[serde(default)]
-        config: WeightedJacobianConfig,
-        /// For a robot without an IMU, where the roll and pitch of the
-        /// contact geometry come from (default: level ground).
-        #[serde(default)]
-        attitude_without_imu: AttitudeWithoutImu,
-    },
-    /// The ideal skid-steer model.
-    SkidSteer {
-        /// Rover description YAML; omitted, the ExoTeR-like rover.
-        #[serde(default)]
-        rover: Option<PathBuf>,
-        /// Angular rate source.
-        #[serde(default)]
-        yaw: YawSource,
-    },
-    /// The robot's own odometry (a log's `odom_*` columns, a bag's
-    /// `odometry` topic) as the model, for a robot whose kinematics gpodo
-    /// does not model.
-    ReportedOdometry {
-        /// Rover description YAML, needed only when the logs also hold
-        /// wheel joints (for the wheel radius and the joint order).
-        #[serde(default)]
-        rover: Option<PathBuf>,
-        /// Angular rate source (default: the odometry's own).
-        #[serde(default)]
-        angular: gpodo_kinematics::AngularSource,
-    },
-}
-
-impl Default for MotionModelSpec {
-    fn default() -> Self {
-        Self::WeightedJacobian {
-            rover: None,
-            config: WeightedJacobianConfig::default(),
-            attitude_without_imu: AttitudeWithoutImu::Level,
-        }
-    }
 }
 
 impl ExperimentConfig {

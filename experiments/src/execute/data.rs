@@ -12,9 +12,7 @@ use gpodo_datasets::residuals::{LogStep, StepWindows, log_steps, residual_datase
 use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::speed_check::{median_speed_ratio, unit_warning};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
-use gpodo_kinematics::{
-    ReportedOdometryModel, RoverDescription, SkidSteerModel, WeightedJacobianModel,
-};
+use gpodo_kinematics::RoverDescription;
 use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualDataset};
 
@@ -103,33 +101,7 @@ fn summarize(log: &RoverLog) -> RunSummary {
 fn motion_model(
     spec: &MotionModelSpec,
 ) -> Result<(Box<dyn MotionModel>, Option<RoverDescription>), PipelineError> {
-    let load = |rover: &Option<PathBuf>| match rover {
-        Some(p) => RoverDescription::from_path(&p.clone()),
-        None => Ok(RoverDescription::exoter()),
-    };
-    Ok(match spec {
-        MotionModelSpec::WeightedJacobian { rover, config, .. } => {
-            let d = load(rover)?;
-            (
-                Box::new(WeightedJacobianModel::new(d.clone(), *config)?),
-                Some(d),
-            )
-        }
-        MotionModelSpec::SkidSteer { rover, yaw } => {
-            let d = load(rover)?;
-            (
-                Box::new(SkidSteerModel::from_description(&d, *yaw)?),
-                Some(d),
-            )
-        }
-        MotionModelSpec::ReportedOdometry { rover, angular } => {
-            let d = match rover {
-                Some(p) => Some(RoverDescription::from_path(&p.clone())?),
-                None => None,
-            };
-            (Box::new(ReportedOdometryModel::new(*angular)), d)
-        }
-    })
+    Ok(spec.build()?)
 }
 
 /// Train/test rows plus what the report says about where they came from.

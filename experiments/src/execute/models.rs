@@ -6,11 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
+use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_regressors::metrics::Evaluation;
-use gpodo_regressors::model_file::{ModelFile, ModelFileError, Provenance};
+use gpodo_regressors::model_file::{ModelFile, ModelFileError, Provenance, RowRecipe};
 use gpodo_traits::{Predictions, SampleMatrix};
 
-use crate::config::ExperimentConfig;
+use crate::config::{DatasetSpec, ExperimentConfig};
 use crate::error::PipelineError;
 use crate::execute::code_version;
 use crate::execute::data::{model_rows, prepare};
@@ -80,6 +81,7 @@ pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, 
     crate::execute::fit::check_memory(spec, label, &rows.train, crate::memory::available_bytes())?;
     let (mut file, model) = ModelFile::fit(spec, &rows.train, Some(scaler), provenance)?;
     file.label = label.to_string();
+    file.rows = row_recipe(config);
     let test_predictions =
         model
             .predict(&rows.test.inputs)
@@ -93,6 +95,25 @@ pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, 
         test_inputs: (data.test.input_names.clone(), data.test.inputs.clone()),
         test_predictions,
         evaluation,
+    })
+}
+
+/// How `config` makes its input rows from a robot's streams, for the
+/// model file; none when its rows come from a residual table.
+pub fn row_recipe(config: &ExperimentConfig) -> Option<RowRecipe> {
+    let rate_hz = match &config.dataset {
+        DatasetSpec::ResidualTable { .. } => return None,
+        DatasetSpec::Simulated { preset, seed, .. } => {
+            Some(1.0 / SimulatorConfig::preset(*preset, *seed).dt_secs)
+        }
+        DatasetSpec::Logs { .. } => None,
+        DatasetSpec::Bags { topics, .. } => Some(topics.rate_hz),
+    };
+    Some(RowRecipe {
+        rate_hz,
+        window_secs: config.residuals.window_secs,
+        absolute_targets: config.residuals.absolute_targets,
+        motion_model: serde_json::to_value(&config.motion_model).ok()?,
     })
 }
 
