@@ -20,7 +20,7 @@
 //! here). Inputs are left in physical units: normalisation uses training
 //! statistics only, see [`gpodo_traits::Standardizer`].
 
-use gpodo_traits::{MotionModel, Predictions, ResidualDataset, SampleMatrix};
+use gpodo_traits::{MotionModel, Predictions, ProprioceptiveSample, ResidualDataset, SampleMatrix};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -101,20 +101,37 @@ impl ResidualConfig {
 /// The input column names for a log's joints, in the order the rows hold
 /// them.
 pub fn feature_names(log: &RoverLog) -> Vec<String> {
-    let has_imu = log.samples.first().is_some_and(|s| s.imu.is_some());
+    sample_feature_names(
+        &log.wheel_names,
+        &log.steer_names,
+        &log.bogie_names,
+        log.samples.first().is_some_and(|s| s.imu.is_some()),
+        log.samples.first().is_some_and(|s| s.odometry.is_some()),
+    )
+}
+
+/// The names of [`sample_features`]' inputs for a rover with these joints
+/// (in its order), with or without an IMU and the robot's own odometry.
+pub fn sample_feature_names(
+    wheels: &[String],
+    steers: &[String],
+    bogies: &[String],
+    imu: bool,
+    odometry: bool,
+) -> Vec<String> {
     let mut names = Vec::new();
-    if has_imu {
+    if imu {
         names.extend(["roll", "pitch"].map(String::from));
     }
-    names.extend(log.bogie_names.iter().map(|b| format!("pos_{b}_passive")));
-    names.extend(log.steer_names.iter().map(|s| format!("pos_{s}_steer")));
-    names.extend(log.bogie_names.iter().map(|b| format!("spd_{b}_passive")));
-    names.extend(log.steer_names.iter().map(|s| format!("spd_{s}_steer")));
-    names.extend(log.wheel_names.iter().map(|w| format!("spd_{w}_transl")));
-    if has_imu {
+    names.extend(bogies.iter().map(|b| format!("pos_{b}_passive")));
+    names.extend(steers.iter().map(|s| format!("pos_{s}_steer")));
+    names.extend(bogies.iter().map(|b| format!("spd_{b}_passive")));
+    names.extend(steers.iter().map(|s| format!("spd_{s}_steer")));
+    names.extend(wheels.iter().map(|w| format!("spd_{w}_transl")));
+    if imu {
         names.extend(["acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"].map(String::from));
     }
-    if log.samples.first().is_some_and(|s| s.odometry.is_some()) {
+    if odometry {
         names.extend(ODOMETRY_FEATURES.map(String::from));
     }
     names
@@ -127,7 +144,12 @@ pub const ODOMETRY_FEATURES: [&str; 6] = [
 
 /// The inputs of step `k`.
 fn step_features(log: &RoverLog, k: usize, wheel_radius_m: f64) -> Vec<f64> {
-    let s = &log.samples[k];
+    sample_features(&log.samples[k], wheel_radius_m)
+}
+
+/// The inputs one sample gives, in [`feature_names`]' order (its joints in
+/// the rover's order; `wheel_radius_m` turns wheel rates into speeds).
+pub fn sample_features(s: &ProprioceptiveSample, wheel_radius_m: f64) -> Vec<f64> {
     let mut x = Vec::new();
     if let Some(imu) = &s.imu {
         x.extend([imu.roll_rad, imu.pitch_rad]);

@@ -1,0 +1,23 @@
+//! gpodo on the robot: a saved residual model queried live.
+//!
+//! The paper's GP ran on board, trained offline and queried as the rover
+//! drove, its prediction fed to SLAM as the odometry's covariance. This
+//! crate is that loop without ROS in it:
+//!
+//! * [`rows`]: the model's input rows made from samples as they arrive,
+//!   averaged over the trailing window the model was trained with;
+//! * [`pipeline`]: per sample, the rover's motion model, the saved
+//!   regressor's prediction, the corrected twist with its covariance, and
+//!   the pose integrated from it.
+//!
+//! A model is accepted only when its file says how its rows were made
+//! (model files of version 3 fitted on logs, bags or the simulator) and
+//! this robot gives every column it reads.
+
+pub mod error;
+pub mod pipeline;
+pub mod rows;
+
+pub use error::NodeError;
+pub use pipeline::{LiveModel, LiveOutput, LiveSettings, OdometryMode};
+pub use rows::LiveRows;

@@ -1,0 +1,273 @@
+//! Per sample: the rover's motion model, the saved regressor's prediction
+//! on the row in force, the twist and its covariance, and the pose.
+//!
+//! In gpodo's mode the twist is the motion model's plus the predicted
+//! residual, with the predictive variance as its linear covariance; in the
+//! authors' mode (a model of |residual|, `slam-orogen-gp_odometry`) the
+//! twist is left as the motion model gives it and the linear variance is
+//! the prediction squared. The regressor says nothing of rotation: the
+//! angular variance is a setting. No variance is ever below the floor
+//! setting (robot_localization treats a variance under 1e-9 as exact).
+
+use std::path::Path;
+
+use gpodo_datasets::residuals::{sample_feature_names, sample_features};
+use gpodo_kinematics::RoverDescription;
+use gpodo_kinematics::spec::MotionModelSpec;
+use gpodo_regressors::model_file::{ModelFile, Predictor};
+use gpodo_traits::{BodyTwist, MotionModel, ProprioceptiveSample, SampleMatrix};
+use nalgebra::{Isometry3, Vector3};
+
+use crate::NodeError;
+use crate::rows::LiveRows;
+
+/// What the twist and its covariance are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OdometryMode {
+    /// The motion model's twist plus the predicted residual; the
+    /// predictive variance.
+    Corrected,
+    /// The motion model's twist; the predicted |residual| squared (the
+    /// authors' on-board odometry).
+    Authors,
+}
+
+/// Settings of the live pipeline.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveSettings {
+    /// No variance published is below this ((m/s)² or (rad/s)²; default
+    /// 1e-8).
+    pub min_variance: f64,
+    /// The angular velocity's variance ((rad/s)²; default 1e-4, i.e.
+    /// 0.01 rad/s): the regressor predicts linear residuals only.
+    pub angular_variance: f64,
+}
+
+impl Default for LiveSettings {
+    fn default() -> Self {
+        Self {
+            min_variance: 1e-8,
+            angular_variance: 1e-4,
+        }
+    }
+}
+
+/// What one sample produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveOutput {
+    /// The sample's time (s).
+    pub time_secs: f64,
+    /// The row the prediction used, in [`LiveModel::columns`]' order
+    /// (none before the first window has a step: the twist is then the
+    /// motion model's, its variance the angular setting's).
+    pub row: Option<Vec<f64>>,
+    /// Seconds of steps the row averages.
+    pub covered_secs: f64,
+    /// The motion model's twist.
+    pub uncorrected: BodyTwist,
+    /// The twist published.
+    pub twist: BodyTwist,
+    /// Variances of the published twist: linear x, y, z, then angular.
+    pub variance: [f64; 6],
+    /// `odom_from_body`, integrated from the published twists.
+    pub pose: Isometry3<f64>,
+}
+
+/// A saved model run live on one robot.
+pub struct LiveModel {
+    predictor: Predictor,
+    columns: Vec<String>,
+    motion: Box<dyn MotionModel>,
+    wheel_radius_m: f64,
+    mode: OdometryMode,
+    settings: LiveSettings,
+    rows: LiveRows,
+    /// The previous sample's time and published twist.
+    last: Option<(f64, BodyTwist)>,
+    pose: Isometry3<f64>,
+}
+
+impl LiveModel {
+    /// Loads `model_path` for the rover described at `rover_path`, whose
+    /// streams give an IMU or not and the robot's own odometry or not.
+    ///
+    /// # Errors
+    /// [`NodeError::Model`] for a file that cannot be read, that does not
+    /// say how its rows were made, or whose windowing or motion model
+    /// cannot be reproduced; [`NodeError::MissingColumns`] when it reads
+    /// columns this robot does not give.
+    pub fn load(
+        model_path: &Path,
+        rover_path: &Path,
+        imu: bool,
+        odometry: bool,
+        settings: LiveSettings,
+    ) -> Result<Self, NodeError> {
+        let model_error = |detail: String| NodeError::Model {
+            path: model_path.to_path_buf(),
+            detail,
+        };
+        let file = ModelFile::load(model_path).map_err(|e| model_error(e.to_string()))?;
+        let recipe = file.rows.clone().ok_or_else(|| {
+            model_error(
+                "the file does not say how its input rows were made (a model of version 2 or older, or one fitted on a residual table); fit it again with `gpodo fit` from logs, bags or the simulator".into(),
+            )
+        })?;
+        if recipe
+            .window_secs
+            .is_some_and(|w| !(w.is_finite() && w > 0.0))
+        {
+            return Err(model_error(format!(
+                "its rows average {:?} s, which no live window can reproduce",
+                recipe.window_secs
+            )));
+        }
+        let spec: MotionModelSpec = serde_json::from_value(recipe.motion_model.clone())
+            .map_err(|e| model_error(format!("its motion model cannot be read: {e}")))?;
+        let spec = spec.with_rover(rover_path.to_path_buf());
+        let (motion, rover) = spec.build().map_err(|e| {
+            model_error(format!("its motion model on {}: {e}", rover_path.display()))
+        })?;
+        let rover = match rover {
+            Some(r) => r,
+            None => RoverDescription::from_path(rover_path)
+                .map_err(|e| model_error(format!("{}: {e}", rover_path.display())))?,
+        };
+        let columns = sample_feature_names(
+            &rover.wheel_names(),
+            &rover.steer_names(),
+            &rover.bogie_names(),
+            imu,
+            odometry,
+        );
+        let missing: Vec<String> = file
+            .input_names
+            .iter()
+            .filter(|n| !columns.contains(n))
+            .cloned()
+            .collect();
+        if !missing.is_empty() {
+            return Err(NodeError::MissingColumns {
+                path: model_path.to_path_buf(),
+                missing,
+                given: columns,
+            });
+        }
+        let predictor = file.predictor().map_err(|e| model_error(e.to_string()))?;
+        Ok(Self {
+            predictor,
+            columns,
+            motion,
+            wheel_radius_m: rover.wheel_radius_m,
+            mode: if recipe.absolute_targets {
+                OdometryMode::Authors
+            } else {
+                OdometryMode::Corrected
+            },
+            settings,
+            rows: LiveRows::new(recipe.window_secs),
+            last: None,
+            pose: Isometry3::identity(),
+        })
+    }
+
+    /// The columns of the rows this robot gives, in order.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+
+    /// Gpodo's mode or the authors'.
+    pub fn mode(&self) -> OdometryMode {
+        self.mode
+    }
+
+    /// Processes one sample (joints in the rover's order; the IMU's latest
+    /// reading, if the robot has one).
+    ///
+    /// # Errors
+    /// [`NodeError::Sample`] for a sample that does not fit the rover, a
+    /// time that does not move forward, a non-finite input, or a model
+    /// that fails on it; the pipeline is left as it was.
+    pub fn process(&mut self, sample: &ProprioceptiveSample) -> Result<LiveOutput, NodeError> {
+        let time_secs = sample.time_secs;
+        let bad = |detail: String| NodeError::Sample { time_secs, detail };
+        let inputs = sample_features(sample, self.wheel_radius_m);
+        if inputs.len() != self.columns.len() {
+            return Err(bad(format!(
+                "{} inputs, this robot's rows have {} ({:?})",
+                inputs.len(),
+                self.columns.len(),
+                self.columns
+            )));
+        }
+        if let Some(k) = inputs.iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!("`{}` is not finite", self.columns[k])));
+        }
+        let dt = self.last.map(|(t, _)| time_secs - t);
+        if dt.is_some_and(|dt| dt <= 0.0) {
+            return Err(bad("its time is not after the previous sample's".into()));
+        }
+        let estimate = self
+            .motion
+            .estimate(sample, dt.unwrap_or(0.0))
+            .map_err(|e| bad(format!("the motion model: {e}")))?;
+        let mut rows = self.rows.clone();
+        let row = rows.push(time_secs, inputs)?;
+        let floor = self.settings.min_variance;
+        let angular = self.settings.angular_variance.max(floor);
+        let uncorrected = estimate.twist;
+        let (twist, linear) = match &row {
+            None => (uncorrected, [angular; 3]),
+            Some(row) => {
+                let x = SampleMatrix::from_rows(row.inputs.len(), &[&row.inputs])
+                    .map_err(|e| bad(e.to_string()))?;
+                let p = self
+                    .predictor
+                    .predict(&self.columns, &x)
+                    .map_err(|e| bad(format!("the model: {e}")))?;
+                let (mean, variance) = (p.mean.row(0), p.variance.row(0));
+                if mean.len() < 3 || mean.iter().chain(variance).any(|v| !v.is_finite()) {
+                    return Err(bad(format!(
+                        "the model predicted {mean:?} ± {variance:?}; expected three finite residuals"
+                    )));
+                }
+                match self.mode {
+                    OdometryMode::Corrected => (
+                        BodyTwist {
+                            linear_mps: uncorrected.linear_mps
+                                + Vector3::new(mean[0], mean[1], mean[2]),
+                            angular_radps: uncorrected.angular_radps,
+                        },
+                        [variance[0], variance[1], variance[2]],
+                    ),
+                    OdometryMode::Authors => (
+                        uncorrected,
+                        [mean[0] * mean[0], mean[1] * mean[1], mean[2] * mean[2]],
+                    ),
+                }
+            }
+        };
+        self.rows = rows;
+        if let (Some(dt), Some((_, previous))) = (dt, self.last) {
+            self.pose *= previous.pose_delta(dt);
+        }
+        self.last = Some((time_secs, twist));
+        let variance = [
+            linear[0].max(floor),
+            linear[1].max(floor),
+            linear[2].max(floor),
+            angular,
+            angular,
+            angular,
+        ];
+        Ok(LiveOutput {
+            time_secs,
+            covered_secs: row.as_ref().map_or(0.0, |r| r.covered_secs),
+            row: row.map(|r| r.inputs),
+            uncorrected,
+            twist,
+            variance,
+            pose: self.pose,
+        })
+    }
+}

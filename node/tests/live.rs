@@ -1,0 +1,225 @@
+//! The live pipeline on a simulated ExoTeR drive, against the batch
+//! pipeline: its rows at whole seconds equal the batch's 1-s windows, its
+//! predictions equal the saved model's on all its rows at once, and a
+//! model it cannot run is refused with the file and the reason named.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::{Path, PathBuf};
+
+use gpodo_datasets::residuals::{
+    ResidualConfig, log_steps, residual_dataset_from_steps, window_rows,
+};
+use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_kinematics::spec::MotionModelSpec;
+use gpodo_node::{LiveModel, LiveSettings, NodeError, OdometryMode};
+use gpodo_regressors::RegressorSpec;
+use gpodo_regressors::model_file::{ModelFile, Provenance, RowRecipe};
+use gpodo_traits::SampleMatrix;
+
+fn exoter_yaml() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-9)
+}
+
+/// A simulated testbed, and an exact GP fitted on its training run's 1-s
+/// rows and saved with their recipe (`absolute` for a |residual| model).
+fn fitted(dir: &Path, absolute: bool) -> (gpodo_datasets::sim::preset::SimulatedTestbed, PathBuf) {
+    let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 5);
+    config.training_runs = 1;
+    config.training_run_secs = 60.0;
+    config.test_max_secs = 40.0;
+    let testbed = config.simulate().unwrap();
+    let spec = MotionModelSpec::default();
+    let (motion, rover) = spec.build().unwrap();
+    let rover = rover.unwrap();
+    let log = &testbed.train[0];
+    let steps = log_steps(log, motion.as_ref(), rover.wheel_radius_m).unwrap();
+    let residuals = ResidualConfig {
+        absolute_targets: absolute,
+        ..ResidualConfig::default()
+    };
+    let train = residual_dataset_from_steps(&[log], &[steps], &residuals).unwrap();
+    let regressor: RegressorSpec = serde_json::from_str(
+        r#"{"kind": "exact_gp", "kernel": "rbf", "hyperopt": {"max_iters": 15}}"#,
+    )
+    .unwrap();
+    let (mut file, _) = ModelFile::fit(&regressor, &train, None, Provenance::default()).unwrap();
+    file.rows = Some(RowRecipe {
+        rate_hz: Some(1.0 / config.dt_secs),
+        window_secs: residuals.window_secs,
+        absolute_targets: absolute,
+        motion_model: serde_json::to_value(&spec).unwrap(),
+    });
+    let path = dir.join(if absolute { "abs.gpodo" } else { "m.gpodo" });
+    file.save(&path).unwrap();
+    (testbed, path)
+}
+
+#[test]
+fn live_rows_are_the_batch_windows_and_predictions_are_the_saved_models() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    let mut live =
+        LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+    assert_eq!(live.mode(), OdometryMode::Corrected);
+    let log = &testbed.test[0];
+    let outputs: Vec<_> = log
+        .samples
+        .iter()
+        .map(|s| live.process(s).unwrap())
+        .collect();
+
+    // The batch's 1-s windows of the same log.
+    let (motion, rover) = MotionModelSpec::default().build().unwrap();
+    let steps = log_steps(log, motion.as_ref(), rover.unwrap().wheel_radius_m).unwrap();
+    let windows = window_rows(&steps, 1.0);
+    let t0 = log.samples[0].time_secs;
+    let mut compared = 0;
+    for w in &windows {
+        // The sample at the window's end sees exactly its steps.
+        let Some(out) = outputs
+            .iter()
+            .find(|o| (o.time_secs - w.end_secs).abs() < 1e-9)
+        else {
+            continue;
+        };
+        if (w.end_secs - w.start_secs - 1.0).abs() > 1e-9 || w.start_secs < t0 {
+            continue;
+        }
+        let row = out.row.as_ref().unwrap();
+        for (a, b) in row.iter().zip(&w.inputs) {
+            assert!(close(*a, *b), "window at {} s: {a} vs {b}", w.start_secs);
+        }
+        compared += 1;
+    }
+    assert!(compared >= 10, "only {compared} windows ended on a sample");
+
+    // Every row at once through the saved model, as `gpodo predict` does.
+    let with_rows: Vec<_> = outputs.iter().filter(|o| o.row.is_some()).collect();
+    assert_eq!(
+        with_rows.len(),
+        outputs.len() - 1,
+        "every sample but the first has a row"
+    );
+    let rows: Vec<&[f64]> = with_rows
+        .iter()
+        .map(|o| o.row.as_deref().unwrap())
+        .collect();
+    let matrix = SampleMatrix::from_rows(live.columns().len(), &rows).unwrap();
+    let batch = ModelFile::load(&path)
+        .unwrap()
+        .predictor()
+        .unwrap()
+        .predict(live.columns(), &matrix)
+        .unwrap();
+    for (i, out) in with_rows.iter().enumerate() {
+        let correction = out.twist.linear_mps - out.uncorrected.linear_mps;
+        for c in 0..3 {
+            let (mean, var) = (batch.mean.get(i, c), batch.variance.get(i, c));
+            // The correction is the uncorrected twist plus the mean, so it
+            // carries that sum's rounding.
+            let scale = out.uncorrected.linear_mps[c].abs().max(mean.abs());
+            assert!(
+                (correction[c] - mean).abs() <= 1e-12 * scale.max(1e-9),
+                "row {i}, {c}: {} vs {mean}",
+                correction[c]
+            );
+            assert!(
+                close(out.variance[c], var.max(1e-8)),
+                "row {i}, {c}: variance"
+            );
+        }
+        assert_eq!(out.twist.angular_radps, out.uncorrected.angular_radps);
+        assert!(out.variance.iter().all(|v| *v >= 1e-8));
+    }
+    // The pose integrates the published twists.
+    let last = outputs.last().unwrap();
+    let mut pose = nalgebra::Isometry3::identity();
+    for pair in outputs.windows(2) {
+        pose *= pair[0]
+            .twist
+            .pose_delta(pair[1].time_secs - pair[0].time_secs);
+    }
+    assert!((pose.translation.vector - last.pose.translation.vector).norm() < 1e-12);
+}
+
+#[test]
+fn the_authors_mode_leaves_the_twist_and_squares_the_predicted_residual() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), true);
+    let mut live =
+        LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+    assert_eq!(live.mode(), OdometryMode::Authors);
+    let log = &testbed.test[0];
+    let predictor = ModelFile::load(&path).unwrap().predictor().unwrap();
+    for s in log.samples.iter().take(40) {
+        let out = live.process(s).unwrap();
+        assert_eq!(out.twist, out.uncorrected);
+        if let Some(row) = &out.row {
+            let x = SampleMatrix::from_rows(row.len(), &[row]).unwrap();
+            let p = predictor.predict(live.columns(), &x).unwrap();
+            for c in 0..3 {
+                let want = (p.mean.get(0, c) * p.mean.get(0, c)).max(1e-8);
+                assert!(
+                    close(out.variance[c], want),
+                    "{} vs {want}",
+                    out.variance[c]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn models_that_cannot_run_live_are_refused_with_the_file_and_the_reason() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    // This robot has no IMU: the model reads roll, pitch and the IMU's
+    // columns.
+    let e = LiveModel::load(&path, &exoter_yaml(), false, false, LiveSettings::default())
+        .err()
+        .unwrap();
+    let NodeError::MissingColumns { missing, .. } = &e else {
+        panic!("{e}");
+    };
+    assert_eq!(missing[..2], ["roll".to_string(), "pitch".to_string()]);
+    assert!(e.to_string().contains("m.gpodo"), "{e}");
+
+    // A file without its recipe (as version 2 wrote them).
+    let mut file = ModelFile::load(&path).unwrap();
+    file.rows = None;
+    let old = tmp.path().join("old.gpodo");
+    file.save(&old).unwrap();
+    let e = LiveModel::load(&old, &exoter_yaml(), true, false, LiveSettings::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("old.gpodo") && e.contains("does not say how"),
+        "{e}"
+    );
+
+    // A sample going back in time, or with a NaN, leaves the pipeline as
+    // it was.
+    let mut live =
+        LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+    let samples = &testbed.test[0].samples;
+    let first = live.process(&samples[0]).unwrap();
+    let second = live.process(&samples[1]).unwrap();
+    let e = live.process(&samples[0]).unwrap_err().to_string();
+    assert!(e.contains("not after"), "{e}");
+    let mut nan = samples[2].clone();
+    nan.wheels[0].rate_radps = f64::NAN;
+    let e = live.process(&nan).unwrap_err().to_string();
+    assert!(e.contains("spd_") && e.contains("not finite"), "{e}");
+    let third = live.process(&samples[2]).unwrap();
+    let mut again =
+        LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+    assert_eq!(again.process(&samples[0]).unwrap(), first);
+    assert_eq!(again.process(&samples[1]).unwrap(), second);
+    assert_eq!(again.process(&samples[2]).unwrap(), third);
+}
