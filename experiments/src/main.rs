@@ -101,6 +101,34 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Run a saved model as the robot would: from a recording (`--replay`),
+    /// each joint-state message gives one odometry output (the motion
+    /// model's twist corrected by the predicted residual, its covariance
+    /// the predictive variance; the authors' mode for a |residual| model),
+    /// written to an MCAP (`/odom/gp`, `/odom/wheel`), and with `--rows`
+    /// the input rows as a CSV `gpodo predict` reads.
+    Live {
+        /// The model file (version 3, fitted from logs, bags or the
+        /// simulator: it says how its rows were made).
+        #[arg(long)]
+        model: PathBuf,
+        /// The robot's rover description (YAML).
+        #[arg(long)]
+        rover: PathBuf,
+        /// The topic map: the joint states, the IMU and how their joints
+        /// map to the rover's.
+        #[arg(long)]
+        topics: PathBuf,
+        /// The recording to replay (MCAP, ROS 1 or a rosbag2 folder).
+        #[arg(long)]
+        replay: PathBuf,
+        /// Where to write the odometry (MCAP).
+        #[arg(long)]
+        out: PathBuf,
+        /// Where to write the input rows (CSV).
+        #[arg(long)]
+        rows: Option<PathBuf>,
+    },
     /// Turn ROS bags into the rover-log CSV that `dataset: {kind: logs}`
     /// reads, through a topic map (which topic is the IMU, the ground
     /// truth, the joints; the common clock's rate; the longest gap bridged).
@@ -460,6 +488,46 @@ fn import(
     Ok(())
 }
 
+/// `gpodo live`: a recording through a saved model, as on the robot.
+fn live(
+    model: &Path,
+    rover: &Path,
+    topics: &Path,
+    replay: &Path,
+    out: &Path,
+    rows: Option<&Path>,
+) -> anyhow::Result<()> {
+    let map = gpodo_experiments::import::read_topic_map(topics)?;
+    let description = gpodo_kinematics::RoverDescription::from_path(rover)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", rover.display()))?;
+    let mut live = gpodo_node::LiveModel::load(
+        model,
+        rover,
+        map.imu.is_some(),
+        false,
+        gpodo_node::LiveSettings::default(),
+    )?;
+    let summary = gpodo_node::replay::replay(replay, &map, &description, &mut live, out, rows)?;
+    for reason in summary.skipped.iter().take(5) {
+        tracing::warn!("joint state not used: {reason}");
+    }
+    if summary.skipped.len() > 5 {
+        tracing::warn!("{} more joint states not used", summary.skipped.len() - 5);
+    }
+    println!(
+        "wrote {} ({} odometry messages on each of {}, from {} joint states and {} IMU messages)",
+        out.display(),
+        summary.outputs,
+        gpodo_node::replay::OUTPUT_TOPICS.join(" and "),
+        summary.joint_messages,
+        summary.imu_messages
+    );
+    if let Some(rows) = rows {
+        println!("wrote {} ({} rows)", rows.display(), summary.rows);
+    }
+    Ok(())
+}
+
 fn simulate(options: &SimulateOptions, out: &Path) -> anyhow::Result<()> {
     for written in simulate_to(options, out)? {
         println!("{written}");
@@ -544,6 +612,14 @@ fn main() -> anyhow::Result<()> {
             println!("wrote {} ({rows} rows)", out.display());
             Ok(())
         }
+        Command::Live {
+            model,
+            rover,
+            topics,
+            replay,
+            out,
+            rows,
+        } => live(&model, &rover, &topics, &replay, &out, rows.as_deref()),
         Command::Simulate {
             format,
             preset,

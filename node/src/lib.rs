@@ -8,7 +8,9 @@
 //!   averaged over the trailing window the model was trained with;
 //! * [`pipeline`]: per sample, the rover's motion model, the saved
 //!   regressor's prediction, the corrected twist with its covariance, and
-//!   the pose integrated from it.
+//!   the pose integrated from it;
+//! * [`replay`]: a recording fed through it, the odometry written to an
+//!   MCAP and the rows to a CSV that `gpodo predict` reads.
 //!
 //! A model is accepted only when its file says how its rows were made
 //! (model files of version 3 fitted on logs, bags or the simulator) and
@@ -16,6 +18,7 @@
 
 pub mod error;
 pub mod pipeline;
+pub mod replay;
 pub mod rows;
 
 pub use error::NodeError;

@@ -71,6 +71,8 @@ pub struct LiveOutput {
     pub variance: [f64; 6],
     /// `odom_from_body`, integrated from the published twists.
     pub pose: Isometry3<f64>,
+    /// The same integrated from the motion model's twists alone.
+    pub uncorrected_pose: Isometry3<f64>,
 }
 
 /// A saved model run live on one robot.
@@ -82,9 +84,10 @@ pub struct LiveModel {
     mode: OdometryMode,
     settings: LiveSettings,
     rows: LiveRows,
-    /// The previous sample's time and published twist.
-    last: Option<(f64, BodyTwist)>,
+    /// The previous sample's time, published and uncorrected twists.
+    last: Option<(f64, BodyTwist, BodyTwist)>,
     pose: Isometry3<f64>,
+    uncorrected_pose: Isometry3<f64>,
 }
 
 impl LiveModel {
@@ -168,6 +171,7 @@ impl LiveModel {
             rows: LiveRows::new(recipe.window_secs),
             last: None,
             pose: Isometry3::identity(),
+            uncorrected_pose: Isometry3::identity(),
         })
     }
 
@@ -203,7 +207,7 @@ impl LiveModel {
         if let Some(k) = inputs.iter().position(|v| !v.is_finite()) {
             return Err(bad(format!("`{}` is not finite", self.columns[k])));
         }
-        let dt = self.last.map(|(t, _)| time_secs - t);
+        let dt = self.last.map(|(t, _, _)| time_secs - t);
         if dt.is_some_and(|dt| dt <= 0.0) {
             return Err(bad("its time is not after the previous sample's".into()));
         }
@@ -248,10 +252,11 @@ impl LiveModel {
             }
         };
         self.rows = rows;
-        if let (Some(dt), Some((_, previous))) = (dt, self.last) {
+        if let (Some(dt), Some((_, previous, wheels))) = (dt, self.last) {
             self.pose *= previous.pose_delta(dt);
+            self.uncorrected_pose *= wheels.pose_delta(dt);
         }
-        self.last = Some((time_secs, twist));
+        self.last = Some((time_secs, twist, uncorrected));
         let variance = [
             linear[0].max(floor),
             linear[1].max(floor),
@@ -268,6 +273,7 @@ impl LiveModel {
             twist,
             variance,
             pose: self.pose,
+            uncorrected_pose: self.uncorrected_pose,
         })
     }
 }

@@ -196,6 +196,111 @@ fn pose_stamped(stamp_ns: u64, frame: &str, pose: &nalgebra::Isometry3<f64>) -> 
     m.0
 }
 
+/// A `nav_msgs/msg/Odometry` in CDR: `frame` → `child` at `stamp_ns`,
+/// the pose and the twist (in `child`) each with its row-major 6 × 6
+/// covariance (x, y, z, then rotation about x, y, z).
+pub fn odometry_message(
+    stamp_ns: u64,
+    frame: &str,
+    child: &str,
+    pose: &nalgebra::Isometry3<f64>,
+    pose_covariance: &[f64; 36],
+    twist: &gpodo_traits::BodyTwist,
+    twist_covariance: &[f64; 36],
+) -> Vec<u8> {
+    let r = pose.rotation;
+    let mut o = Cdr::new();
+    o.header(stamp_ns, frame);
+    o.string(child);
+    o.f64s(pose.translation.vector.as_slice());
+    o.f64s(&[r.i, r.j, r.k, r.w]);
+    o.f64s(pose_covariance);
+    o.f64s(twist.linear_mps.as_slice());
+    o.f64s(twist.angular_radps.as_slice());
+    o.f64s(twist_covariance);
+    o.0
+}
+
+/// An MCAP of ROS 2 `nav_msgs/msg/Odometry` topics, built in memory and
+/// written (to a temporary name, then renamed) when finished.
+pub struct OdometryMcap {
+    writer: mcap::Writer<Cursor<Vec<u8>>>,
+    channels: Vec<u16>,
+    sequence: u32,
+    path: PathBuf,
+}
+
+impl OdometryMcap {
+    /// An MCAP at `path` with one Odometry channel per topic.
+    ///
+    /// # Errors
+    /// [`DatasetError::Io`] naming the file.
+    pub fn new(path: &Path, topics: &[&str]) -> Result<Self, DatasetError> {
+        let mcap_error = |e: mcap::McapError| DatasetError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(e),
+        };
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .chunk_size(Some(CHUNK_BYTES))
+            .create(Cursor::new(Vec::new()))
+            .map_err(mcap_error)?;
+        let schema = writer
+            .add_schema(
+                "nav_msgs/msg/Odometry",
+                "ros2msg",
+                odometry_schema().as_bytes(),
+            )
+            .map_err(mcap_error)?;
+        let channels = topics
+            .iter()
+            .map(|topic| writer.add_channel(schema, topic, "cdr", &BTreeMap::new()))
+            .collect::<Result<Vec<u16>, _>>()
+            .map_err(mcap_error)?;
+        Ok(Self {
+            writer,
+            channels,
+            sequence: 0,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Writes `data` (an [`odometry_message`]) on the `topic`-th topic, at
+    /// `stamp_ns`.
+    ///
+    /// # Errors
+    /// [`DatasetError::Io`] naming the file, or for a topic it does not
+    /// have.
+    pub fn write(&mut self, topic: usize, stamp_ns: u64, data: &[u8]) -> Result<(), DatasetError> {
+        let io = |detail: String| DatasetError::Io {
+            path: self.path.clone(),
+            source: std::io::Error::other(detail),
+        };
+        let channel = *self
+            .channels
+            .get(topic)
+            .ok_or_else(|| io(format!("no topic {topic}")))?;
+        put(&mut self.writer, channel, self.sequence, stamp_ns, data)
+            .map_err(|e| io(e.to_string()))?;
+        self.sequence += 1;
+        Ok(())
+    }
+
+    /// Closes the file and writes it; returns its path.
+    ///
+    /// # Errors
+    /// [`DatasetError::Io`] naming the file.
+    pub fn finish(mut self) -> Result<PathBuf, DatasetError> {
+        let path = self.path.clone();
+        self.writer.finish().map_err(|e| DatasetError::Io {
+            path: path.clone(),
+            source: std::io::Error::other(e),
+        })?;
+        let bytes = self.writer.into_inner().into_inner();
+        StagedFile::stage(&path, &bytes)?.commit()
+    }
+}
+
 /// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
 pub(super) fn stamp_ns(time_secs: f64) -> u64 {
     EPOCH_NS.saturating_add_signed((time_secs * 1e9).round() as i64)
@@ -558,16 +663,8 @@ pub fn write_mcap_with_camera(
         }
         out.extend([(pose, g, t), (tf, f.0, t)]);
         if let (Some(channel), Some(twist)) = (odom, s.odometry) {
-            let mut o = Cdr::new();
-            o.header(t, "odom");
-            o.string("base_link");
-            o.f64s(position.as_slice());
-            o.f64s(&[r.i, r.j, r.k, r.w]);
-            o.f64s(&[0.0; 36]);
-            o.f64s(twist.linear_mps.as_slice());
-            o.f64s(twist.angular_radps.as_slice());
-            o.f64s(&[0.0; 36]);
-            out.push((channel, o.0, t));
+            let o = odometry_message(t, "odom", "base_link", p, &[0.0; 36], &twist, &[0.0; 36]);
+            out.push((channel, o, t));
         }
         for (channel_id, data, time) in out {
             put(&mut writer, channel_id, k as u32, time, &data).map_err(mcap_error)?;

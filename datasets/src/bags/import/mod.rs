@@ -10,6 +10,7 @@
 //! * `stream`: streams on their own clocks, and the common clock.
 
 pub mod heading;
+pub mod live;
 pub mod map;
 mod roles;
 mod stream;
@@ -183,10 +184,9 @@ pub enum ImportError {
 
 /// Roll and pitch (rad) of a `[x, y, z, w]` orientation (ZYX Euler angles).
 fn roll_pitch(q: &[f64]) -> (f64, f64) {
-    let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
-    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
-    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
-    (roll, pitch)
+    live::roll_pitch(&UnitQuaternion::new_unchecked(Quaternion::new(
+        q[3], q[0], q[1], q[2],
+    )))
 }
 
 /// Imports the bag at `path` as the rover log `name`.

@@ -5,8 +5,9 @@
 
 use std::path::Path;
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::UnitQuaternion;
 
+use super::live::{imu_in_body, joint_values};
 use super::stream::{Clock, Stream};
 use super::{GroundTruthSource, ImportError, JointRef, TimeSource, TopicMap};
 use crate::bags::enu::LocalEnu;
@@ -29,12 +30,7 @@ pub(super) fn imu_stream(
         .iter()
         .filter_map(|s| match &s.message {
             RosMessage::Imu(m) => {
-                let o = m.orientation;
-                let world_from_imu =
-                    UnitQuaternion::from_quaternion(Quaternion::new(o[3], o[0], o[1], o[2]));
-                let q = world_from_imu * body_from_imu.inverse();
-                let gyro = body_from_imu * Vector3::from(m.angular_velocity);
-                let acc = body_from_imu * Vector3::from(m.linear_acceleration);
+                let (q, gyro, acc) = imu_in_body(&body_from_imu, m);
                 let mut v = vec![q.i, q.j, q.k, q.w];
                 v.extend(gyro.iter());
                 v.extend(acc.iter());
@@ -216,23 +212,9 @@ pub(super) fn joint_stream(
                 let RosMessage::JointState(m) = &s.message else {
                     continue;
                 };
-                let mut v = Vec::new();
-                let mut ok = true;
-                for (_, refs) in groups {
-                    for (_, r) in refs {
-                        match m.name.iter().position(|n| *n == r.joint) {
-                            Some(k) if k < m.position.len() && k < m.velocity.len() => {
-                                v.push(m.position[k] * r.position_scale);
-                                v.push(m.velocity[k] * r.rate_scale);
-                            }
-                            _ => ok = false,
-                        }
-                    }
-                }
-                if ok {
-                    samples.push((clock.at(s, m.header.stamp_ns), v));
-                } else {
-                    unusable += 1;
+                match joint_values(groups, m) {
+                    Ok(v) => samples.push((clock.at(s, m.header.stamp_ns), v)),
+                    Err(_) => unusable += 1,
                 }
             }
             Some(Stream::new(

@@ -1,0 +1,219 @@
+//! A recording fed to the live pipeline as a robot's topics would feed
+//! it: every joint-state message drives one output, the IMU's latest
+//! message is held, and the outputs go to an MCAP (`/odom/gp`, the
+//! published odometry; `/odom/wheel`, the motion model's alone) and, when
+//! asked, the input rows to a CSV in the columns `gpodo predict` reads
+//! (after a `time_secs` column).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use gpodo_datasets::bags::OnDamage;
+use gpodo_datasets::bags::import::live::LiveDecoder;
+use gpodo_datasets::bags::import::{TimeSource, TopicMap};
+use gpodo_datasets::bags::messages::RosMessage;
+use gpodo_datasets::bags::topic::{TopicRequest, read_topics};
+use gpodo_datasets::bags::write::{OdometryMcap, odometry_message};
+use gpodo_kinematics::RoverDescription;
+use gpodo_traits::{ImuSample, ProprioceptiveSample};
+
+use crate::NodeError;
+use crate::pipeline::{LiveModel, LiveOutput};
+
+/// The topics a replay writes, in [`OdometryMcap`] order.
+pub const OUTPUT_TOPICS: [&str; 2] = ["/odom/gp", "/odom/wheel"];
+
+/// What a replay did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplaySummary {
+    /// Joint-state messages read.
+    pub joint_messages: usize,
+    /// IMU messages read.
+    pub imu_messages: usize,
+    /// Odometry messages written per topic.
+    pub outputs: usize,
+    /// Rows written (every output but the first of a windowed model).
+    pub rows: usize,
+    /// Joint-state messages not used, each with its reason.
+    pub skipped: Vec<String>,
+}
+
+fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
+    NodeError::Model {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    }
+}
+
+/// Replays `bag` through `model` on the rover `rover`, reading its topics
+/// as `map` says; writes the odometry to `out` and the rows to `rows`.
+///
+/// # Errors
+/// A bag, topic map or output that cannot be used, named; a message that
+/// cannot be used is skipped and counted instead.
+pub fn replay(
+    bag: &Path,
+    map: &TopicMap,
+    rover: &RoverDescription,
+    model: &mut LiveModel,
+    out: &Path,
+    rows: Option<&Path>,
+) -> Result<ReplaySummary, NodeError> {
+    let joints = map
+        .joints
+        .as_ref()
+        .ok_or_else(|| io_error(bag, "the topic map has no `joints:`, which drive the node"))?;
+    let decoder = LiveDecoder::new(
+        map,
+        &rover.wheel_names(),
+        &rover.steer_names(),
+        &rover.bogie_names(),
+    )
+    .map_err(|e| io_error(bag, e))?;
+    let mut requests = vec![TopicRequest {
+        topic: &joints.topic,
+        role: "joints",
+        expected: &["sensor_msgs/JointState"],
+        optional: false,
+    }];
+    if let Some(imu) = &map.imu {
+        requests.push(TopicRequest {
+            topic: imu,
+            role: "imu",
+            expected: &["sensor_msgs/Imu"],
+            optional: false,
+        });
+    }
+    let (messages, _) =
+        read_topics(bag, &requests, OnDamage::Stop).map_err(|e| io_error(bag, e))?;
+    // Every message by its time (the IMU first at a tie, so a joint state
+    // sees the IMU reading of its own instant).
+    let stamp = |s: &gpodo_datasets::bags::topic::Stamped, header_ns: i64| match map.time {
+        TimeSource::Header => header_ns,
+        TimeSource::Receive => s.log_time_ns as i64,
+    };
+    let mut order: Vec<(i64, usize, usize)> = Vec::new();
+    for (topic, list) in messages.iter().enumerate() {
+        for (k, s) in list.iter().enumerate() {
+            let header_ns = match &s.message {
+                RosMessage::JointState(m) => m.header.stamp_ns,
+                RosMessage::Imu(m) => m.header.stamp_ns,
+                _ => continue,
+            };
+            order.push((stamp(s, header_ns), usize::from(topic == 0), k));
+            // (IMU messages sort with 0, joint states with 1.)
+        }
+    }
+    order.sort_unstable();
+    let base_ns = order
+        .first()
+        .map_or(0, |o| o.0.div_euclid(1_000_000_000) * 1_000_000_000);
+    let mut mcap = OdometryMcap::new(out, &OUTPUT_TOPICS).map_err(|e| io_error(out, e))?;
+    let mut csv = String::new();
+    if rows.is_some() {
+        csv.push_str("time_secs");
+        for c in model.columns() {
+            csv.push(',');
+            csv.push_str(c);
+        }
+        csv.push('\n');
+    }
+    let mut summary = ReplaySummary {
+        joint_messages: messages[0].len(),
+        imu_messages: messages.get(1).map_or(0, Vec::len),
+        outputs: 0,
+        rows: 0,
+        skipped: Vec::new(),
+    };
+    let mut imu: Option<ImuSample> = None;
+    for (ns, is_joint, k) in order {
+        let time_secs = (ns - base_ns) as f64 * 1e-9;
+        match &messages[1 - is_joint][k].message {
+            RosMessage::Imu(m) if is_joint == 0 => imu = Some(decoder.imu(m)),
+            RosMessage::JointState(m) if is_joint == 1 => {
+                let [wheels, steering, bogies] = match decoder.joints(m) {
+                    Ok(j) => j,
+                    Err(joint) => {
+                        summary
+                            .skipped
+                            .push(format!("{time_secs} s: no joint `{joint}`"));
+                        continue;
+                    }
+                };
+                if map.imu.is_some() && imu.is_none() {
+                    summary
+                        .skipped
+                        .push(format!("{time_secs} s: before the first IMU message"));
+                    continue;
+                }
+                let sample = ProprioceptiveSample {
+                    time_secs,
+                    wheels,
+                    steering,
+                    bogies,
+                    imu,
+                    ..ProprioceptiveSample::default()
+                };
+                let output = match model.process(&sample) {
+                    Ok(o) => o,
+                    Err(e) => {
+                        summary.skipped.push(e.to_string());
+                        continue;
+                    }
+                };
+                write_output(&mut mcap, ns, &output).map_err(|e| io_error(out, e))?;
+                summary.outputs += 1;
+                if let (Some(_), Some(row)) = (rows, &output.row) {
+                    let _ = write!(csv, "{time_secs}");
+                    for v in row {
+                        let _ = write!(csv, ",{v}");
+                    }
+                    csv.push('\n');
+                    summary.rows += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    mcap.finish().map_err(|e| io_error(out, e))?;
+    if let Some(path) = rows {
+        let tmp = path.with_extension("csv.partial");
+        std::fs::write(&tmp, csv)
+            .and_then(|()| std::fs::rename(&tmp, path))
+            .map_err(|e| io_error(path, e))?;
+    }
+    Ok(summary)
+}
+
+/// The two odometry messages of one output, stamped as its input.
+fn write_output(
+    mcap: &mut OdometryMcap,
+    stamp_ns: i64,
+    o: &LiveOutput,
+) -> Result<(), gpodo_datasets::DatasetError> {
+    let stamp = u64::try_from(stamp_ns).unwrap_or(0);
+    let mut twist_covariance = [0.0; 36];
+    for (i, v) in o.variance.iter().enumerate() {
+        twist_covariance[i * 7] = *v;
+    }
+    let gp = odometry_message(
+        stamp,
+        "odom",
+        "base_link",
+        &o.pose,
+        &[0.0; 36],
+        &o.twist,
+        &twist_covariance,
+    );
+    let wheel = odometry_message(
+        stamp,
+        "odom",
+        "base_link",
+        &o.uncorrected_pose,
+        &[0.0; 36],
+        &o.uncorrected,
+        &[0.0; 36],
+    );
+    mcap.write(0, stamp, &gp)?;
+    mcap.write(1, stamp, &wheel)
+}
