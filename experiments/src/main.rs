@@ -514,6 +514,9 @@ fn live(
     if summary.skipped.len() > 5 {
         tracing::warn!("{} more joint states not used", summary.skipped.len() - 5);
     }
+    for (input, rows) in &summary.out_of_range {
+        tracing::warn!("`{input}` outside the training range in {rows} rows");
+    }
     println!(
         "wrote {} ({} odometry messages on each of {}, from {} joint states and {} IMU messages)",
         out.display(),

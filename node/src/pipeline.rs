@@ -41,6 +41,9 @@ pub struct LiveSettings {
     /// The angular velocity's variance ((rad/s)²; default 1e-4, i.e.
     /// 0.01 rad/s): the regressor predicts linear residuals only.
     pub angular_variance: f64,
+    /// An input is outside the training range when its value, z-scored
+    /// by the training rows, exceeds this in magnitude (default 4).
+    pub out_of_range_z: f64,
 }
 
 impl Default for LiveSettings {
@@ -48,6 +51,7 @@ impl Default for LiveSettings {
         Self {
             min_variance: 1e-8,
             angular_variance: 1e-4,
+            out_of_range_z: 4.0,
         }
     }
 }
@@ -73,12 +77,18 @@ pub struct LiveOutput {
     pub pose: Isometry3<f64>,
     /// The same integrated from the motion model's twists alone.
     pub uncorrected_pose: Isometry3<f64>,
+    /// The model's inputs whose value in the row is outside the training
+    /// range (see [`LiveSettings::out_of_range_z`]).
+    pub out_of_range: Vec<String>,
 }
 
 /// A saved model run live on one robot.
 pub struct LiveModel {
     predictor: Predictor,
     columns: Vec<String>,
+    /// Per model input with a training z-scoring: its column in the row,
+    /// its training mean and standard deviation.
+    ranges: Vec<(usize, f64, f64)>,
     motion: Box<dyn MotionModel>,
     wheel_radius_m: f64,
     mode: OdometryMode,
@@ -156,10 +166,22 @@ impl LiveModel {
                 given: columns,
             });
         }
+        let ranges = match &file.input_standardizer {
+            Some(z) => file
+                .input_names
+                .iter()
+                .zip(z.mean.iter().zip(&z.std))
+                .filter_map(|(name, (&m, &s))| {
+                    Some((columns.iter().position(|c| c == name)?, m, s))
+                })
+                .collect(),
+            None => Vec::new(),
+        };
         let predictor = file.predictor().map_err(|e| model_error(e.to_string()))?;
         Ok(Self {
             predictor,
             columns,
+            ranges,
             motion,
             wheel_radius_m: rover.wheel_radius_m,
             mode: if recipe.absolute_targets {
@@ -265,7 +287,15 @@ impl LiveModel {
             angular,
             angular,
         ];
+        let out_of_range = row.as_ref().map_or_else(Vec::new, |r| {
+            self.ranges
+                .iter()
+                .filter(|(c, m, s)| ((r.inputs[*c] - m) / s).abs() > self.settings.out_of_range_z)
+                .map(|(c, _, _)| self.columns[*c].clone())
+                .collect()
+        });
         Ok(LiveOutput {
+            out_of_range,
             time_secs,
             covered_secs: row.as_ref().map_or(0.0, |r| r.covered_secs),
             row: row.map(|r| r.inputs),

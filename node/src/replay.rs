@@ -36,6 +36,8 @@ pub struct ReplaySummary {
     pub rows: usize,
     /// Joint-state messages not used, each with its reason.
     pub skipped: Vec<String>,
+    /// Per model input, how many rows had it outside the training range.
+    pub out_of_range: std::collections::BTreeMap<String, usize>,
 }
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
@@ -124,6 +126,7 @@ pub fn replay(
         outputs: 0,
         rows: 0,
         skipped: Vec::new(),
+        out_of_range: std::collections::BTreeMap::new(),
     };
     let mut imu: Option<ImuSample> = None;
     for (ns, is_joint, k) in order {
@@ -163,6 +166,9 @@ pub fn replay(
                 };
                 write_output(&mut mcap, ns, &output).map_err(|e| io_error(out, e))?;
                 summary.outputs += 1;
+                for name in &output.out_of_range {
+                    *summary.out_of_range.entry(name.clone()).or_default() += 1;
+                }
                 if let (Some(_), Some(row)) = (rows, &output.row) {
                     let _ = write!(csv, "{time_secs}");
                     for v in row {

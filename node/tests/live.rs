@@ -223,3 +223,53 @@ fn models_that_cannot_run_live_are_refused_with_the_file_and_the_reason() {
     assert_eq!(again.process(&samples[1]).unwrap(), second);
     assert_eq!(again.process(&samples[2]).unwrap(), third);
 }
+
+#[test]
+fn inputs_outside_the_training_range_are_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    // The same model with a training z-scoring whose spread is tiny for
+    // one wheel's speed and huge for every other input.
+    let mut file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let names: Vec<String> = serde_json::from_value(file["input_names"].clone()).unwrap();
+    let std: Vec<f64> = names
+        .iter()
+        .map(|n| if n == "spd_fl_transl" { 1e-6 } else { 1e9 })
+        .collect();
+    file["input_standardizer"] = serde_json::json!({"mean": vec![0.0; names.len()], "std": std});
+    let scaled = tmp.path().join("scaled.gpodo");
+    std::fs::write(&scaled, file.to_string()).unwrap();
+    let mut live = LiveModel::load(
+        &scaled,
+        &exoter_yaml(),
+        true,
+        false,
+        LiveSettings::default(),
+    )
+    .unwrap();
+    let outputs: Vec<_> = testbed.test[0]
+        .samples
+        .iter()
+        .map(|s| live.process(s).unwrap())
+        .collect();
+    let flagged = outputs
+        .iter()
+        .filter(|o| !o.out_of_range.is_empty())
+        .count();
+    assert!(
+        flagged > outputs.len() / 2,
+        "{flagged} of {}",
+        outputs.len()
+    );
+    for o in &outputs {
+        let row = o.row.as_ref();
+        let column = live
+            .columns()
+            .iter()
+            .position(|c| c == "spd_fl_transl")
+            .unwrap();
+        let expected = row.is_some_and(|r| r[column].abs() > 4e-6);
+        assert_eq!(o.out_of_range == ["spd_fl_transl".to_string()], expected);
+    }
+}
