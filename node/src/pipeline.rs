@@ -13,7 +13,7 @@ use std::path::Path;
 
 use gpodo_datasets::residuals::{sample_feature_names, sample_features};
 use gpodo_kinematics::RoverDescription;
-use gpodo_kinematics::spec::MotionModelSpec;
+use gpodo_kinematics::spec::{AttitudeWithoutImu, MotionModelSpec};
 use gpodo_regressors::model_file::{ModelFile, Predictor};
 use gpodo_traits::{BodyTwist, MotionModel, ProprioceptiveSample, SampleMatrix};
 use nalgebra::{Isometry3, Vector3};
@@ -137,6 +137,19 @@ impl LiveModel {
         }
         let spec: MotionModelSpec = serde_json::from_value(recipe.motion_model.clone())
             .map_err(|e| model_error(format!("its motion model cannot be read: {e}")))?;
+        if !imu
+            && matches!(
+                spec,
+                MotionModelSpec::WeightedJacobian {
+                    attitude_without_imu: AttitudeWithoutImu::GroundTruth,
+                    ..
+                }
+            )
+        {
+            return Err(model_error(
+                "its motion model took roll and pitch from the ground truth (`attitude_without_imu: ground_truth`), which a robot without an IMU does not have live".into(),
+            ));
+        }
         let spec = spec.with_rover(rover_path.to_path_buf());
         let (motion, rover) = spec.build().map_err(|e| {
             model_error(format!("its motion model on {}: {e}", rover_path.display()))

@@ -189,6 +189,28 @@ fn models_that_cannot_run_live_are_refused_with_the_file_and_the_reason() {
     assert_eq!(missing[..2], ["roll".to_string(), "pitch".to_string()]);
     assert!(e.to_string().contains("m.gpodo"), "{e}");
 
+    // A model whose motion model read the ground truth's attitude, on a
+    // robot without an IMU.
+    let mut file = ModelFile::load(&path).unwrap();
+    let recipe = file.rows.as_mut().unwrap();
+    recipe.motion_model["attitude_without_imu"] = "ground_truth".into();
+    let off_board = tmp.path().join("off-board.gpodo");
+    file.save(&off_board).unwrap();
+    let e = LiveModel::load(
+        &off_board,
+        &exoter_yaml(),
+        false,
+        false,
+        LiveSettings::default(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        e.contains("off-board.gpodo") && e.contains("ground truth"),
+        "{e}"
+    );
+
     // A file without its recipe (as version 2 wrote them).
     let mut file = ModelFile::load(&path).unwrap();
     file.rows = None;
