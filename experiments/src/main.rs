@@ -119,7 +119,7 @@ enum Command {
         /// map to the rover's.
         #[arg(long)]
         topics: PathBuf,
-        /// The recording to replay (MCAP, ROS 1 or a rosbag2 folder).
+        /// The recording to replay (MCAP or ROS 1, as `gpodo import` reads).
         #[arg(long)]
         replay: PathBuf,
         /// Where to write the odometry (MCAP).
