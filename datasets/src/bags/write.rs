@@ -240,11 +240,7 @@ impl OdometryMcap {
             path: path.to_path_buf(),
             source: std::io::Error::other(e),
         };
-        let mut writer = mcap::WriteOptions::new()
-            .profile("ros2")
-            .chunk_size(Some(CHUNK_BYTES))
-            .create(Cursor::new(Vec::new()))
-            .map_err(mcap_error)?;
+        let mut writer = ros2_writer().map_err(mcap_error)?;
         let schema = writer
             .add_schema(
                 "nav_msgs/msg/Odometry",
@@ -299,6 +295,14 @@ impl OdometryMcap {
         let bytes = self.writer.into_inner().into_inner();
         StagedFile::stage(&path, &bytes)?.commit()
     }
+}
+
+/// An in-memory MCAP writer with ROS 2's profile and gpodo's chunk size.
+fn ros2_writer() -> Result<mcap::Writer<Cursor<Vec<u8>>>, mcap::McapError> {
+    mcap::WriteOptions::new()
+        .profile("ros2")
+        .chunk_size(Some(CHUNK_BYTES))
+        .create(Cursor::new(Vec::new()))
 }
 
 /// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
@@ -527,11 +531,7 @@ pub fn write_mcap_with_camera(
         path: path.clone(),
         source: std::io::Error::other(e),
     };
-    let mut writer = mcap::WriteOptions::new()
-        .profile("ros2")
-        .chunk_size(Some(CHUNK_BYTES))
-        .create(Cursor::new(Vec::new()))
-        .map_err(mcap_error)?;
+    let mut writer = ros2_writer().map_err(mcap_error)?;
     let none = BTreeMap::new();
     let mut channel = |ty: &str, text: String, topic: &str| -> Result<u16, DatasetError> {
         let schema = writer
