@@ -23,6 +23,7 @@ pub mod cpu;
 pub mod error;
 pub mod execute;
 pub mod import;
+pub mod live;
 pub mod memory;
 pub mod output;
 pub mod plan;

@@ -101,12 +101,15 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Run a saved model as the robot would: from a recording (`--replay`),
-    /// each joint-state message gives one odometry output (the motion
-    /// model's twist corrected by the predicted residual, its covariance
-    /// the predictive variance; the authors' mode for a |residual| model),
-    /// written to an MCAP (`/odom/gp`, `/odom/wheel`), and with `--rows`
-    /// the input rows as a CSV `gpodo predict` reads.
+    /// Run a saved model as the robot would. Each joint-state message
+    /// gives one odometry output (the motion model's twist corrected by
+    /// the predicted residual, its covariance the predictive variance; the
+    /// authors' mode for a |residual| model) on `/odom/gp`, and the motion
+    /// model's alone on `/odom/wheel`. On ROS 2 (a build with the `ros2`
+    /// feature) it subscribes to the topic map's joint states and IMU and
+    /// publishes those topics and `/diagnostics`; with `--replay` it reads
+    /// a recording instead and writes an MCAP (and with `--rows` the input
+    /// rows as a CSV `gpodo predict` reads).
     Live {
         /// The model file (version 3, fitted from logs, bags or the
         /// simulator: it says how its rows were made).
@@ -119,15 +122,31 @@ enum Command {
         /// map to the rover's.
         #[arg(long)]
         topics: PathBuf,
-        /// The recording to replay (MCAP or ROS 1, as `gpodo import` reads).
-        #[arg(long)]
-        replay: PathBuf,
-        /// Where to write the odometry (MCAP).
-        #[arg(long)]
-        out: PathBuf,
-        /// Where to write the input rows (CSV).
-        #[arg(long)]
+        /// A recording to replay (MCAP or ROS 1, as `gpodo import` reads)
+        /// instead of subscribing on ROS 2.
+        #[arg(long, requires = "out")]
+        replay: Option<PathBuf>,
+        /// Where a replay writes the odometry (MCAP).
+        #[arg(long, requires = "replay")]
+        out: Option<PathBuf>,
+        /// Where a replay writes the input rows (CSV).
+        #[arg(long, requires = "replay")]
         rows: Option<PathBuf>,
+        /// The DDS domain on ROS 2 (default: $ROS_DOMAIN_ID, else 0).
+        #[arg(long, conflicts_with = "replay")]
+        domain_id: Option<u16>,
+        /// On ROS 2, stop after this many outputs.
+        #[arg(long, conflicts_with = "replay")]
+        max_outputs: Option<usize>,
+        /// On ROS 2, stop when no input came for this many seconds after
+        /// the first.
+        #[arg(long, conflicts_with = "replay")]
+        idle_exit_secs: Option<f64>,
+        /// On ROS 2, an interface DDS may use, by address (repeatable;
+        /// default all): `--dds-interface 127.0.0.1` keeps it on this
+        /// machine.
+        #[arg(long = "dds-interface", conflicts_with = "replay")]
+        dds_interfaces: Vec<std::net::IpAddr>,
     },
     /// Turn ROS bags into the rover-log CSV that `dataset: {kind: logs}`
     /// reads, through a topic map (which topic is the IMU, the ground
@@ -488,49 +507,6 @@ fn import(
     Ok(())
 }
 
-/// `gpodo live`: a recording through a saved model, as on the robot.
-fn live(
-    model: &Path,
-    rover: &Path,
-    topics: &Path,
-    replay: &Path,
-    out: &Path,
-    rows: Option<&Path>,
-) -> anyhow::Result<()> {
-    let map = gpodo_experiments::import::read_topic_map(topics)?;
-    let description = gpodo_kinematics::RoverDescription::from_path(rover)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", rover.display()))?;
-    let mut live = gpodo_node::LiveModel::load(
-        model,
-        rover,
-        map.imu.is_some(),
-        false,
-        gpodo_node::LiveSettings::default(),
-    )?;
-    let summary = gpodo_node::replay::replay(replay, &map, &description, &mut live, out, rows)?;
-    for reason in summary.skipped.iter().take(5) {
-        tracing::warn!("joint state not used: {reason}");
-    }
-    if summary.skipped.len() > 5 {
-        tracing::warn!("{} more joint states not used", summary.skipped.len() - 5);
-    }
-    for (input, rows) in &summary.out_of_range {
-        tracing::warn!("`{input}` outside the training range in {rows} rows");
-    }
-    println!(
-        "wrote {} ({} odometry messages on each of {}, from {} joint states and {} IMU messages)",
-        out.display(),
-        summary.outputs,
-        gpodo_node::replay::OUTPUT_TOPICS.join(" and "),
-        summary.joint_messages,
-        summary.imu_messages
-    );
-    if let Some(rows) = rows {
-        println!("wrote {} ({} rows)", rows.display(), summary.rows);
-    }
-    Ok(())
-}
-
 fn simulate(options: &SimulateOptions, out: &Path) -> anyhow::Result<()> {
     for written in simulate_to(options, out)? {
         println!("{written}");
@@ -622,7 +598,22 @@ fn main() -> anyhow::Result<()> {
             replay,
             out,
             rows,
-        } => live(&model, &rover, &topics, &replay, &out, rows.as_deref()),
+            domain_id,
+            max_outputs,
+            idle_exit_secs,
+            dds_interfaces,
+        } => gpodo_experiments::live::live(&gpodo_experiments::live::LiveOptions {
+            model,
+            rover,
+            topics,
+            replay,
+            out,
+            rows,
+            domain_id,
+            max_outputs,
+            idle_exit_secs,
+            dds_interfaces,
+        }),
         Command::Simulate {
             format,
             preset,

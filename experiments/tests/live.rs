@@ -170,6 +170,26 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
         assert!(g.twist_covariance.iter().step_by(7).all(|v| *v >= 1e-8));
     }
 
+    // Without `--replay`, a build without the `ros2` feature says how to
+    // get one.
+    if !cfg!(feature = "ros2") {
+        let out = gpodo(&[
+            "live".as_ref(),
+            "--model".as_ref(),
+            model.as_os_str(),
+            "--rover".as_ref(),
+            exoter().as_os_str(),
+            "--topics".as_ref(),
+            topics.as_os_str(),
+        ]);
+        assert!(!out.status.success());
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            said.contains("built without ROS 2") && said.contains("--features ros2"),
+            "{said}"
+        );
+    }
+
     // A model without its row recipe (as version 2 wrote them) is refused,
     // and nothing is written.
     let mut old: serde_json::Value =

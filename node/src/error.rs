@@ -26,6 +26,13 @@ pub enum NodeError {
         /// The columns this robot gives.
         given: Vec<String>,
     },
+    /// The topic map cannot drive the node on this rover.
+    #[error("the topic map: {0}")]
+    Topics(String),
+    /// DDS failed (a participant, topic, reader or writer that cannot be
+    /// made, or a write that fails).
+    #[error("DDS: {0}")]
+    Dds(String),
     /// A sample that cannot be used (the node warns and goes on).
     #[error("sample at {time_secs} s: {detail}")]
     Sample {

@@ -9,6 +9,10 @@
 //! * [`pipeline`]: per sample, the rover's motion model, the saved
 //!   regressor's prediction, the corrected twist with its covariance, and
 //!   the pose integrated from it;
+//! * [`feed`]: joint-state and IMU messages made into samples, each joint
+//!   state with the IMU reading of its time;
+//! * [`diagnostics`]: latency, the last input's age, and warnings;
+//! * `ros2` (with the `ros2` feature): the node on ROS 2 over DDS;
 //! * [`replay`]: a recording fed through it, the odometry written to an
 //!   MCAP and the rows to a CSV that `gpodo predict` reads.
 //!
@@ -16,9 +20,13 @@
 //! (model files of version 3 fitted on logs, bags or the simulator) and
 //! this robot gives every column it reads.
 
+pub mod diagnostics;
 pub mod error;
+pub mod feed;
 pub mod pipeline;
 pub mod replay;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod rows;
 
 pub use error::NodeError;

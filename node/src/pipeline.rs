@@ -14,7 +14,7 @@ use std::path::Path;
 use gpodo_datasets::residuals::{sample_feature_names, sample_features};
 use gpodo_kinematics::RoverDescription;
 use gpodo_kinematics::spec::{AttitudeWithoutImu, MotionModelSpec};
-use gpodo_regressors::model_file::{ModelFile, Predictor};
+use gpodo_regressors::model_file::{ModelFile, Predictor, SavedState};
 use gpodo_traits::{BodyTwist, MotionModel, ProprioceptiveSample, SampleMatrix};
 use nalgebra::{Isometry3, Vector3};
 
@@ -44,6 +44,9 @@ pub struct LiveSettings {
     /// An input is outside the training range when its value, z-scored
     /// by the training rows, exceeds this in magnitude (default 4).
     pub out_of_range_z: f64,
+    /// The IMU is stale when the reading a joint state gets is older than
+    /// this (s; default 0.5).
+    pub stale_imu_secs: f64,
 }
 
 impl Default for LiveSettings {
@@ -52,6 +55,7 @@ impl Default for LiveSettings {
             min_variance: 1e-8,
             angular_variance: 1e-4,
             out_of_range_z: 4.0,
+            stale_imu_secs: 0.5,
         }
     }
 }
@@ -82,8 +86,20 @@ pub struct LiveOutput {
     pub out_of_range: Vec<String>,
 }
 
+/// What a model is, for the node's diagnostics.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModelSummary {
+    /// Its kind (`exact_gp`, `sparse_gp`, `ilgr`, `sparse_spectrum`).
+    pub kind: String,
+    /// Its label: the kind with its kernel and settings.
+    pub label: String,
+    /// Rows it was trained on.
+    pub training_rows: usize,
+}
+
 /// A saved model run live on one robot.
 pub struct LiveModel {
+    summary: ModelSummary,
     predictor: Predictor,
     columns: Vec<String>,
     /// Per model input with a training z-scoring: its column in the row,
@@ -191,7 +207,18 @@ impl LiveModel {
             None => Vec::new(),
         };
         let predictor = file.predictor().map_err(|e| model_error(e.to_string()))?;
+        let kind = match &file.state {
+            SavedState::ExactGp(_) => "exact_gp",
+            SavedState::SparseGp(_) => "sparse_gp",
+            SavedState::Ilgr(_) => "ilgr",
+            SavedState::SparseSpectrum(_) => "sparse_spectrum",
+        };
         Ok(Self {
+            summary: ModelSummary {
+                kind: kind.into(),
+                label: file.label.clone(),
+                training_rows: file.provenance.training_rows,
+            },
             predictor,
             columns,
             ranges,
@@ -208,6 +235,16 @@ impl LiveModel {
             pose: Isometry3::identity(),
             uncorrected_pose: Isometry3::identity(),
         })
+    }
+
+    /// What the model is.
+    pub fn summary(&self) -> &ModelSummary {
+        &self.summary
+    }
+
+    /// The settings it runs with.
+    pub fn settings(&self) -> &LiveSettings {
+        &self.settings
     }
 
     /// The columns of the rows this robot gives, in order.

@@ -9,15 +9,14 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use gpodo_datasets::bags::OnDamage;
-use gpodo_datasets::bags::import::live::LiveDecoder;
 use gpodo_datasets::bags::import::{TimeSource, TopicMap};
 use gpodo_datasets::bags::messages::RosMessage;
 use gpodo_datasets::bags::topic::{TopicRequest, read_topics};
 use gpodo_datasets::bags::write::{OdometryMcap, odometry_message};
 use gpodo_kinematics::RoverDescription;
-use gpodo_traits::{ImuSample, ProprioceptiveSample};
 
 use crate::NodeError;
+use crate::feed::LiveFeed;
 use crate::pipeline::{LiveModel, LiveOutput};
 
 /// The topics a replay writes, in [`OdometryMcap`] order.
@@ -65,13 +64,6 @@ pub fn replay(
         .joints
         .as_ref()
         .ok_or_else(|| io_error(bag, "the topic map has no `joints:`, which drive the node"))?;
-    let decoder = LiveDecoder::new(
-        map,
-        &rover.wheel_names(),
-        &rover.steer_names(),
-        &rover.bogie_names(),
-    )
-    .map_err(|e| io_error(bag, e))?;
     let mut requests = vec![TopicRequest {
         topic: &joints.topic,
         role: "joints",
@@ -107,9 +99,6 @@ pub fn replay(
         }
     }
     order.sort_unstable();
-    let base_ns = order
-        .first()
-        .map_or(0, |o| o.0.div_euclid(1_000_000_000) * 1_000_000_000);
     let mut mcap = OdometryMcap::new(out, &OUTPUT_TOPICS).map_err(|e| io_error(out, e))?;
     let mut csv = String::new();
     if rows.is_some() {
@@ -128,49 +117,28 @@ pub fn replay(
         skipped: Vec::new(),
         out_of_range: std::collections::BTreeMap::new(),
     };
-    let mut imu: Option<ImuSample> = None;
-    for (ns, is_joint, k) in order {
-        let time_secs = (ns - base_ns) as f64 * 1e-9;
-        match &messages[1 - is_joint][k].message {
-            RosMessage::Imu(m) if is_joint == 0 => imu = Some(decoder.imu(m)),
+    let mut feed = LiveFeed::new(map, rover, model)?;
+    for (_, is_joint, k) in order {
+        let stamped = &messages[1 - is_joint][k];
+        let receive_ns = stamped.log_time_ns as i64;
+        match &stamped.message {
+            RosMessage::Imu(m) if is_joint == 0 => feed.imu(m, receive_ns),
             RosMessage::JointState(m) if is_joint == 1 => {
-                let [wheels, steering, bogies] = match decoder.joints(m) {
-                    Ok(j) => j,
-                    Err(joint) => {
-                        summary
-                            .skipped
-                            .push(format!("{time_secs} s: no joint `{joint}`"));
+                let fed = match feed.joints(m, receive_ns) {
+                    Ok(f) => f,
+                    Err(reason) => {
+                        summary.skipped.push(reason);
                         continue;
                     }
                 };
-                if map.imu.is_some() && imu.is_none() {
-                    summary
-                        .skipped
-                        .push(format!("{time_secs} s: before the first IMU message"));
-                    continue;
-                }
-                let sample = ProprioceptiveSample {
-                    time_secs,
-                    wheels,
-                    steering,
-                    bogies,
-                    imu,
-                    ..ProprioceptiveSample::default()
-                };
-                let output = match model.process(&sample) {
-                    Ok(o) => o,
-                    Err(e) => {
-                        summary.skipped.push(e.to_string());
-                        continue;
-                    }
-                };
-                write_output(&mut mcap, ns, &output).map_err(|e| io_error(out, e))?;
+                let output = &fed.output;
+                write_output(&mut mcap, fed.stamp_ns, output).map_err(|e| io_error(out, e))?;
                 summary.outputs += 1;
                 for name in &output.out_of_range {
                     *summary.out_of_range.entry(name.clone()).or_default() += 1;
                 }
                 if let (Some(_), Some(row)) = (rows, &output.row) {
-                    let _ = write!(csv, "{time_secs}");
+                    let _ = write!(csv, "{}", output.time_secs);
                     for v in row {
                         let _ = write!(csv, ",{v}");
                     }
@@ -198,6 +166,16 @@ fn write_output(
     o: &LiveOutput,
 ) -> Result<(), gpodo_datasets::DatasetError> {
     let stamp = u64::try_from(stamp_ns).unwrap_or(0);
+    let [gp, wheel] = output_messages(stamp, o);
+    mcap.write(0, stamp, &gp)?;
+    mcap.write(1, stamp, &wheel)
+}
+
+/// The CDR of the two odometry messages of one output, stamped
+/// ``stamp`, in [`OUTPUT_TOPICS`] order: the published twist with its
+/// variances, and the motion model's alone (its covariance left zero:
+/// it is for comparison, not for fusion).
+pub fn output_messages(stamp: u64, o: &LiveOutput) -> [Vec<u8>; 2] {
     let mut twist_covariance = [0.0; 36];
     for (i, v) in o.variance.iter().enumerate() {
         twist_covariance[i * 7] = *v;
@@ -220,6 +198,5 @@ fn write_output(
         &o.uncorrected,
         &[0.0; 36],
     );
-    mcap.write(0, stamp, &gp)?;
-    mcap.write(1, stamp, &wheel)
+    [gp, wheel]
 }

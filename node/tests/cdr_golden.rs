@@ -1,5 +1,6 @@
-//! The CDR bytes of the odometry gpodo publishes, against the `rosbags`
-//! package's serialiser of ROS 2 Humble's `nav_msgs/msg/Odometry`
+//! The CDR bytes of the odometry and diagnostics gpodo publishes, against
+//! the `rosbags` package's serialiser of ROS 2 Humble's
+//! `nav_msgs/msg/Odometry` and `diagnostic_msgs/msg/DiagnosticArray`
 //! (skipped without it, unless `GPODO_REQUIRE_PYTHON` is set, as in CI).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -78,6 +79,74 @@ fn odometry_is_the_bytes_rosbags_writes() {
         "twist_covariance": twist_covariance.as_slice(),
     });
     let theirs = run_python(&python, SERIALISE, &[values.to_string().as_ref()]);
+    let ours_hex: String = ours.iter().map(|b| format!("{b:02x}")).collect();
+    assert_eq!(ours_hex, theirs.trim(), "gpodo's CDR against rosbags'");
+}
+
+const SERIALISE_DIAGNOSTICS: &str = r#"
+import json, sys
+from rosbags.typesys import Stores, get_typestore
+ts = get_typestore(Stores.ROS2_HUMBLE)
+T = ts.types
+v = json.loads(sys.argv[1])
+msg = T['diagnostic_msgs/msg/DiagnosticArray'](
+    header=T['std_msgs/msg/Header'](
+        stamp=T['builtin_interfaces/msg/Time'](sec=v['sec'], nanosec=v['nanosec']),
+        frame_id=''),
+    status=[T['diagnostic_msgs/msg/DiagnosticStatus'](
+        level=s['level'], name=s['name'], message=s['message'], hardware_id=s['hardware_id'],
+        values=[T['diagnostic_msgs/msg/KeyValue'](key=k, value=x) for k, x in s['values']])
+        for s in v['status']],
+)
+print(bytes(ts.serialize_cdr(msg, 'diagnostic_msgs/msg/DiagnosticArray')).hex())
+"#;
+
+#[test]
+fn diagnostics_are_the_bytes_rosbags_writes() {
+    use gpodo_datasets::bags::write::{DiagnosticStatus, diagnostic_array_message};
+    let Some(python) = python_with(&["rosbags", "numpy"], "rosbags") else {
+        return;
+    };
+    let stamp_ns: u64 = 1_700_000_001_000_000_123;
+    // Strings of every length modulo 4, an empty list of values, and a
+    // level byte before strings (its padding).
+    let status = vec![
+        DiagnosticStatus {
+            level: 1,
+            name: "gpodo live: /odom/gp".into(),
+            message: "stale IMU".into(),
+            hardware_id: String::new(),
+            values: vec![
+                ("model kind".into(), "exact_gp".into()),
+                ("latency p99 (ms)".into(), "0.123".into()),
+                ("a".into(), "".into()),
+            ],
+        },
+        DiagnosticStatus {
+            level: 0,
+            name: "x".into(),
+            message: "ok".into(),
+            hardware_id: "rover".into(),
+            values: vec![],
+        },
+    ];
+    let ours = diagnostic_array_message(stamp_ns, &status);
+    let values = serde_json::json!({
+        "sec": stamp_ns / 1_000_000_000,
+        "nanosec": stamp_ns % 1_000_000_000,
+        "status": status.iter().map(|s| serde_json::json!({
+            "level": s.level,
+            "name": s.name,
+            "message": s.message,
+            "hardware_id": s.hardware_id,
+            "values": s.values,
+        })).collect::<Vec<_>>(),
+    });
+    let theirs = run_python(
+        &python,
+        SERIALISE_DIAGNOSTICS,
+        &[values.to_string().as_ref()],
+    );
     let ours_hex: String = ours.iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(ours_hex, theirs.trim(), "gpodo's CDR against rosbags'");
 }

@@ -5,58 +5,18 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
+mod common;
 
-use gpodo_datasets::residuals::{
-    ResidualConfig, log_steps, residual_dataset_from_steps, window_rows,
-};
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_datasets::residuals::{log_steps, window_rows};
 use gpodo_kinematics::spec::MotionModelSpec;
-use gpodo_node::{LiveModel, LiveSettings, NodeError, OdometryMode};
-use gpodo_regressors::RegressorSpec;
-use gpodo_regressors::model_file::{ModelFile, Provenance, RowRecipe};
-use gpodo_traits::SampleMatrix;
 
-fn exoter_yaml() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
-}
+use common::{bag_messages, exoter_yaml, fitted};
+use gpodo_node::{LiveModel, LiveSettings, NodeError, OdometryMode};
+use gpodo_regressors::model_file::ModelFile;
+use gpodo_traits::SampleMatrix;
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-9)
-}
-
-/// A simulated testbed, and an exact GP fitted on its training run's 1-s
-/// rows and saved with their recipe (`absolute` for a |residual| model).
-fn fitted(dir: &Path, absolute: bool) -> (gpodo_datasets::sim::preset::SimulatedTestbed, PathBuf) {
-    let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 5);
-    config.training_runs = 1;
-    config.training_run_secs = 60.0;
-    config.test_max_secs = 40.0;
-    let testbed = config.simulate().unwrap();
-    let spec = MotionModelSpec::default();
-    let (motion, rover) = spec.build().unwrap();
-    let rover = rover.unwrap();
-    let log = &testbed.train[0];
-    let steps = log_steps(log, motion.as_ref(), rover.wheel_radius_m).unwrap();
-    let residuals = ResidualConfig {
-        absolute_targets: absolute,
-        ..ResidualConfig::default()
-    };
-    let train = residual_dataset_from_steps(&[log], &[steps], &residuals).unwrap();
-    let regressor: RegressorSpec = serde_json::from_str(
-        r#"{"kind": "exact_gp", "kernel": "rbf", "hyperopt": {"max_iters": 15}}"#,
-    )
-    .unwrap();
-    let (mut file, _) = ModelFile::fit(&regressor, &train, None, Provenance::default()).unwrap();
-    file.rows = Some(RowRecipe {
-        rate_hz: Some(1.0 / config.dt_secs),
-        window_secs: residuals.window_secs,
-        absolute_targets: absolute,
-        motion_model: serde_json::to_value(&spec).unwrap(),
-    });
-    let path = dir.join(if absolute { "abs.gpodo" } else { "m.gpodo" });
-    file.save(&path).unwrap();
-    (testbed, path)
 }
 
 #[test]
@@ -294,4 +254,69 @@ fn inputs_outside_the_training_range_are_named() {
         let expected = row.is_some_and(|r| r[column].abs() > 4e-6);
         assert_eq!(o.out_of_range == ["spd_fl_transl".to_string()], expected);
     }
+}
+
+#[test]
+fn a_joint_state_gets_the_imu_reading_of_its_time_whichever_topic_arrives_first() {
+    use gpodo_datasets::bags::messages::RosMessage;
+    use gpodo_node::feed::LiveFeed;
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    let mut log = testbed.test[0].clone();
+    log.samples.truncate(200);
+    log.ground_truth.truncate(200);
+    log.camera_times_secs
+        .retain(|t| *t <= log.samples[199].time_secs);
+    let (map, messages) = bag_messages(tmp.path(), &log);
+    let rover = gpodo_kinematics::RoverDescription::from_path(&exoter_yaml()).unwrap();
+    let run = |order: &[usize]| {
+        let mut model =
+            LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+        let mut feed = LiveFeed::new(&map, &rover, &mut model).unwrap();
+        let mut outputs = Vec::new();
+        for &k in order {
+            match &messages[k].1 {
+                RosMessage::Imu(m) => feed.imu(m, 0),
+                RosMessage::JointState(m) => outputs.push(feed.joints(m, 0)),
+                _ => unreachable!(),
+            }
+        }
+        outputs
+    };
+    let in_time: Vec<usize> = (0..messages.len()).collect();
+    // The IMU a step ahead: each IMU message arrives before the joint
+    // state that precedes it in time.
+    let mut imu_ahead = in_time.clone();
+    for k in 1..imu_ahead.len() {
+        let (a, b) = (&messages[imu_ahead[k - 1]].1, &messages[imu_ahead[k]].1);
+        if matches!(a, RosMessage::JointState(_)) && matches!(b, RosMessage::Imu(_)) {
+            imu_ahead.swap(k - 1, k);
+        }
+    }
+    assert_ne!(imu_ahead, in_time);
+    let (a, b) = (run(&in_time), run(&imu_ahead));
+    assert_eq!(a.len(), 200);
+    assert!(
+        a.iter().all(Result::is_ok),
+        "{:?}",
+        a.iter().find(|r| r.is_err())
+    );
+    let differs = a.iter().zip(&b).position(|(x, y)| x != y);
+    assert_eq!(
+        differs, None,
+        "the outputs depend on which topic arrived first (from output {differs:?} on)"
+    );
+    // A joint state before any IMU reading of its time gives no output.
+    let mut model =
+        LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+    let mut feed = LiveFeed::new(&map, &rover, &mut model).unwrap();
+    let first_joint = messages
+        .iter()
+        .find_map(|(_, m)| match m {
+            RosMessage::JointState(j) => Some(j.clone()),
+            _ => None,
+        })
+        .unwrap();
+    let err = feed.joints(&first_joint, 0).unwrap_err();
+    assert!(err.contains("before the first IMU message"), "{err}");
 }

@@ -221,6 +221,40 @@ pub fn odometry_message(
     o.0
 }
 
+/// One `diagnostic_msgs/msg/DiagnosticStatus`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DiagnosticStatus {
+    /// 0 OK, 1 WARN, 2 ERROR, 3 STALE.
+    pub level: u8,
+    /// The component's name.
+    pub name: String,
+    /// A one-line summary of its state.
+    pub message: String,
+    /// The hardware it runs on (may be empty).
+    pub hardware_id: String,
+    /// Key-value pairs of figures.
+    pub values: Vec<(String, String)>,
+}
+
+/// A `diagnostic_msgs/msg/DiagnosticArray` in CDR, stamped `stamp_ns`.
+pub fn diagnostic_array_message(stamp_ns: u64, status: &[DiagnosticStatus]) -> Vec<u8> {
+    let mut d = Cdr::new();
+    d.header(stamp_ns, "");
+    d.u32(status.len() as u32);
+    for s in status {
+        d.0.push(s.level);
+        d.string(&s.name);
+        d.string(&s.message);
+        d.string(&s.hardware_id);
+        d.u32(s.values.len() as u32);
+        for (key, value) in &s.values {
+            d.string(key);
+            d.string(value);
+        }
+    }
+    d.0
+}
+
 /// An MCAP of ROS 2 `nav_msgs/msg/Odometry` topics, built in memory and
 /// written (to a temporary name, then renamed) when finished.
 pub struct OdometryMcap {
