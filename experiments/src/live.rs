@@ -89,6 +89,13 @@ fn replay(
     if let Some(rows) = rows {
         println!("wrote {} ({} rows)", rows.display(), summary.rows);
     }
+    if let Some((p50, p99)) = summary.latency_secs {
+        println!(
+            "latency of an output: p50 {:.3} ms, p99 {:.3} ms",
+            p50 * 1e3,
+            p99 * 1e3
+        );
+    }
     Ok(())
 }
 

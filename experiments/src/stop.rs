@@ -56,7 +56,7 @@ pub fn install_ctrl_c() -> Result<(), ctrlc::Error> {
         }
         request();
         eprintln!(
-            "stopping: fits end at their next iteration and unfinished runs record nothing (Ctrl-C again to quit at once)"
+            "stopping: fits end at their next iteration, unfinished runs record nothing, `gpodo live` leaves its topics (Ctrl-C again to quit at once)"
         );
     })
 }

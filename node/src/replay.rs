@@ -16,6 +16,7 @@ use gpodo_datasets::bags::write::{OdometryMcap, odometry_message};
 use gpodo_kinematics::RoverDescription;
 
 use crate::NodeError;
+use crate::diagnostics::percentile;
 use crate::feed::LiveFeed;
 use crate::pipeline::{LiveModel, LiveOutput};
 
@@ -37,6 +38,10 @@ pub struct ReplaySummary {
     pub skipped: Vec<String>,
     /// Per model input, how many rows had it outside the training range.
     pub out_of_range: std::collections::BTreeMap<String, usize>,
+    /// The latency of an output, p50 and p99 (s): from a joint-state
+    /// message in hand to its two odometry messages encoded, as on the
+    /// robot (writing the MCAP not included).
+    pub latency_secs: Option<(f64, f64)>,
 }
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
@@ -116,7 +121,9 @@ pub fn replay(
         rows: 0,
         skipped: Vec::new(),
         out_of_range: std::collections::BTreeMap::new(),
+        latency_secs: None,
     };
+    let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
     for (_, is_joint, k) in order {
         let stamped = &messages[1 - is_joint][k];
@@ -124,6 +131,7 @@ pub fn replay(
         match &stamped.message {
             RosMessage::Imu(m) if is_joint == 0 => feed.imu(m, receive_ns),
             RosMessage::JointState(m) if is_joint == 1 => {
+                let taken = std::time::Instant::now();
                 let fed = match feed.joints(m, receive_ns) {
                     Ok(f) => f,
                     Err(reason) => {
@@ -132,7 +140,12 @@ pub fn replay(
                     }
                 };
                 let output = &fed.output;
-                write_output(&mut mcap, fed.stamp_ns, output).map_err(|e| io_error(out, e))?;
+                let stamp = u64::try_from(fed.stamp_ns).unwrap_or(0);
+                let [gp, wheel] = output_messages(stamp, output);
+                latencies.push(taken.elapsed().as_secs_f64());
+                mcap.write(0, stamp, &gp)
+                    .and_then(|()| mcap.write(1, stamp, &wheel))
+                    .map_err(|e| io_error(out, e))?;
                 summary.outputs += 1;
                 for name in &output.out_of_range {
                     *summary.out_of_range.entry(name.clone()).or_default() += 1;
@@ -149,6 +162,7 @@ pub fn replay(
             _ => {}
         }
     }
+    summary.latency_secs = percentile(&latencies, 50.0).zip(percentile(&latencies, 99.0));
     mcap.finish().map_err(|e| io_error(out, e))?;
     if let Some(path) = rows {
         let tmp = path.with_extension("csv.partial");
@@ -157,18 +171,6 @@ pub fn replay(
             .map_err(|e| io_error(path, e))?;
     }
     Ok(summary)
-}
-
-/// The two odometry messages of one output, stamped as its input.
-fn write_output(
-    mcap: &mut OdometryMcap,
-    stamp_ns: i64,
-    o: &LiveOutput,
-) -> Result<(), gpodo_datasets::DatasetError> {
-    let stamp = u64::try_from(stamp_ns).unwrap_or(0);
-    let [gp, wheel] = output_messages(stamp, o);
-    mcap.write(0, stamp, &gp)?;
-    mcap.write(1, stamp, &wheel)
 }
 
 /// The CDR of the two odometry messages of one output, stamped
