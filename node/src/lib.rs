@@ -20,6 +20,7 @@
 //! (model files of version 3 fitted on logs, bags or the simulator) and
 //! this robot gives every column it reads.
 
+pub mod covariance;
 pub mod diagnostics;
 pub mod error;
 pub mod feed;

@@ -16,9 +16,10 @@ use gpodo_kinematics::RoverDescription;
 use gpodo_kinematics::spec::{AttitudeWithoutImu, MotionModelSpec};
 use gpodo_regressors::model_file::{ModelFile, Predictor, SavedState};
 use gpodo_traits::{BodyTwist, MotionModel, ProprioceptiveSample, SampleMatrix};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Matrix6, Vector3};
 
 use crate::NodeError;
+use crate::covariance::{propagate, row_major};
 use crate::rows::LiveRows;
 
 /// What the twist and its covariance are.
@@ -79,6 +80,10 @@ pub struct LiveOutput {
     pub variance: [f64; 6],
     /// `odom_from_body`, integrated from the published twists.
     pub pose: Isometry3<f64>,
+    /// The pose's covariance (row-major: x, y, z, then rotation about the
+    /// odom frame's x, y, z), propagated from the twists' (see
+    /// [`crate::covariance`]); no diagonal element below the floor.
+    pub pose_covariance: [f64; 36],
     /// The same integrated from the motion model's twists alone.
     pub uncorrected_pose: Isometry3<f64>,
     /// The model's inputs whose value in the row is outside the training
@@ -110,9 +115,11 @@ pub struct LiveModel {
     mode: OdometryMode,
     settings: LiveSettings,
     rows: LiveRows,
-    /// The previous sample's time, published and uncorrected twists.
-    last: Option<(f64, BodyTwist, BodyTwist)>,
+    /// The previous sample's time, published and uncorrected twists, and
+    /// the published twist's variances.
+    last: Option<(f64, BodyTwist, BodyTwist, [f64; 6])>,
     pose: Isometry3<f64>,
+    pose_covariance: Matrix6<f64>,
     uncorrected_pose: Isometry3<f64>,
 }
 
@@ -233,6 +240,7 @@ impl LiveModel {
             rows: LiveRows::new(recipe.window_secs),
             last: None,
             pose: Isometry3::identity(),
+            pose_covariance: Matrix6::zeros(),
             uncorrected_pose: Isometry3::identity(),
         })
     }
@@ -279,7 +287,7 @@ impl LiveModel {
         if let Some(k) = inputs.iter().position(|v| !v.is_finite()) {
             return Err(bad(format!("`{}` is not finite", self.columns[k])));
         }
-        let dt = self.last.map(|(t, _, _)| time_secs - t);
+        let dt = self.last.map(|(t, _, _, _)| time_secs - t);
         if dt.is_some_and(|dt| dt <= 0.0) {
             return Err(bad("its time is not after the previous sample's".into()));
         }
@@ -324,11 +332,18 @@ impl LiveModel {
             }
         };
         self.rows = rows;
-        if let (Some(dt), Some((_, previous, wheels))) = (dt, self.last) {
+        if let (Some(dt), Some((_, previous, wheels, previous_variance))) = (dt, self.last) {
+            self.pose_covariance = propagate(
+                &self.pose_covariance,
+                &self.pose,
+                &previous.linear_mps,
+                &previous.angular_radps,
+                &previous_variance,
+                dt,
+            );
             self.pose *= previous.pose_delta(dt);
             self.uncorrected_pose *= wheels.pose_delta(dt);
         }
-        self.last = Some((time_secs, twist, uncorrected));
         let variance = [
             linear[0].max(floor),
             linear[1].max(floor),
@@ -337,6 +352,7 @@ impl LiveModel {
             angular,
             angular,
         ];
+        self.last = Some((time_secs, twist, uncorrected, variance));
         let out_of_range = row.as_ref().map_or_else(Vec::new, |r| {
             self.ranges
                 .iter()
@@ -353,6 +369,7 @@ impl LiveModel {
             twist,
             variance,
             pose: self.pose,
+            pose_covariance: row_major(&self.pose_covariance, floor),
             uncorrected_pose: self.uncorrected_pose,
         })
     }

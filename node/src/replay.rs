@@ -187,7 +187,7 @@ pub fn output_messages(stamp: u64, o: &LiveOutput) -> [Vec<u8>; 2] {
         "odom",
         "base_link",
         &o.pose,
-        &[0.0; 36],
+        &o.pose_covariance,
         &o.twist,
         &twist_covariance,
     );
