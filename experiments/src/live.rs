@@ -20,6 +20,8 @@ pub struct LiveOptions {
     pub out: Option<PathBuf>,
     /// Where a replay writes its input rows (CSV).
     pub rows: Option<PathBuf>,
+    /// Replay at the recorded speed rather than as fast as it can.
+    pub realtime: bool,
     /// The DDS domain (default `$ROS_DOMAIN_ID`, else 0).
     pub domain_id: Option<u16>,
     /// On ROS 2, stop after this many outputs.
@@ -47,14 +49,22 @@ pub fn live(options: &LiveOptions) -> anyhow::Result<()> {
         gpodo_node::LiveSettings::default(),
     )?;
     match (&options.replay, &options.out) {
-        (Some(bag), Some(out)) => replay(
-            bag,
-            out,
-            options.rows.as_deref(),
-            &map,
-            &description,
-            &mut model,
-        ),
+        (Some(bag), Some(out)) => {
+            let pace = if options.realtime {
+                gpodo_node::replay::Pace::Recorded
+            } else {
+                gpodo_node::replay::Pace::Fast
+            };
+            replay(
+                bag,
+                out,
+                options.rows.as_deref(),
+                pace,
+                &map,
+                &description,
+                &mut model,
+            )
+        }
         (Some(_), None) => anyhow::bail!("`--replay` needs `--out`, the MCAP to write"),
         _ => on_ros2(options, &map, &description, &mut model),
     }
@@ -64,11 +74,12 @@ fn replay(
     bag: &Path,
     out: &Path,
     rows: Option<&Path>,
+    pace: gpodo_node::replay::Pace,
     map: &gpodo_datasets::bags::import::TopicMap,
     description: &gpodo_kinematics::RoverDescription,
     model: &mut gpodo_node::LiveModel,
 ) -> anyhow::Result<()> {
-    let summary = gpodo_node::replay::replay(bag, map, description, model, out, rows)?;
+    let summary = gpodo_node::replay::replay(bag, map, description, model, out, rows, pace)?;
     for reason in summary.skipped.iter().take(5) {
         tracing::warn!("joint state not used: {reason}");
     }

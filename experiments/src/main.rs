@@ -132,6 +132,9 @@ enum Command {
         /// Where a replay writes the input rows (CSV).
         #[arg(long, requires = "replay")]
         rows: Option<PathBuf>,
+        /// Replay at the recorded speed (default: as fast as it can).
+        #[arg(long, requires = "replay")]
+        realtime: bool,
         /// The DDS domain on ROS 2 (default: $ROS_DOMAIN_ID, else 0).
         #[arg(long, conflicts_with = "replay")]
         domain_id: Option<u16>,
@@ -598,6 +601,7 @@ fn main() -> anyhow::Result<()> {
             replay,
             out,
             rows,
+            realtime,
             domain_id,
             max_outputs,
             idle_exit_secs,
@@ -609,6 +613,7 @@ fn main() -> anyhow::Result<()> {
             replay,
             out,
             rows,
+            realtime,
             domain_id,
             max_outputs,
             idle_exit_secs,

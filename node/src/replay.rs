@@ -51,8 +51,20 @@ fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
     }
 }
 
+/// How fast a recording is replayed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Pace {
+    /// As fast as it can.
+    #[default]
+    Fast,
+    /// At the recorded speed: each message when its stamp says, counted
+    /// from the first.
+    Recorded,
+}
+
 /// Replays `bag` through `model` on the rover `rover`, reading its topics
-/// as `map` says; writes the odometry to `out` and the rows to `rows`.
+/// as `map` says, at `pace`; writes the odometry to `out` and the rows to
+/// `rows`.
 ///
 /// # Errors
 /// A bag, topic map or output that cannot be used, named; a message that
@@ -64,6 +76,7 @@ pub fn replay(
     model: &mut LiveModel,
     out: &Path,
     rows: Option<&Path>,
+    pace: Pace,
 ) -> Result<ReplaySummary, NodeError> {
     let joints = map
         .joints
@@ -125,7 +138,15 @@ pub fn replay(
     };
     let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
-    for (_, is_joint, k) in order {
+    let started = std::time::Instant::now();
+    let first_ns = order.first().map_or(0, |o| o.0);
+    for (ns, is_joint, k) in order {
+        if pace == Pace::Recorded {
+            let due = std::time::Duration::from_nanos(u64::try_from(ns - first_ns).unwrap_or(0));
+            if let Some(wait) = due.checked_sub(started.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
         let stamped = &messages[1 - is_joint][k];
         let receive_ns = stamped.log_time_ns as i64;
         match &stamped.message {

@@ -320,3 +320,43 @@ fn a_joint_state_gets_the_imu_reading_of_its_time_whichever_topic_arrives_first(
     let err = feed.joints(&first_joint, 0).unwrap_err();
     assert!(err.contains("before the first IMU message"), "{err}");
 }
+
+#[test]
+fn a_replay_at_the_recorded_speed_takes_the_recording_time_and_gives_the_same_odometry() {
+    use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
+    use gpodo_node::replay::{Pace, replay};
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    let mut log = testbed.test[0].clone();
+    let n = 30; // 2.32 s at 12.5 Hz
+    log.samples.truncate(n);
+    log.ground_truth.truncate(n);
+    log.camera_times_secs
+        .retain(|t| *t <= log.samples[n - 1].time_secs);
+    let span = log.samples[n - 1].time_secs - log.samples[0].time_secs;
+    let bag = write_mcap(&log, tmp.path()).unwrap().path;
+    let map = written_topic_map(&log, 1.0 / 0.08);
+    let rover = gpodo_kinematics::RoverDescription::from_path(&exoter_yaml()).unwrap();
+    let run = |pace: Pace, out: &str| {
+        let mut model =
+            LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+        let out = tmp.path().join(out);
+        let started = std::time::Instant::now();
+        let summary = replay(&bag, &map, &rover, &mut model, &out, None, pace).unwrap();
+        (
+            started.elapsed().as_secs_f64(),
+            summary,
+            std::fs::read(out).unwrap(),
+        )
+    };
+    let (fast_secs, fast, fast_bytes) = run(Pace::Fast, "fast.mcap");
+    let (paced_secs, paced, paced_bytes) = run(Pace::Recorded, "paced.mcap");
+    assert_eq!(fast.outputs, n);
+    assert_eq!(paced.outputs, n);
+    assert!(
+        paced_secs >= span,
+        "{paced_secs} s for a {span} s recording"
+    );
+    assert!(fast_secs < span, "{fast_secs} s as fast as it can");
+    assert_eq!(fast_bytes, paced_bytes);
+}

@@ -85,7 +85,16 @@ fn a_cyclone_dds_peer_gets_what_the_replay_writes() {
     };
 
     let replayed = dir.join("replay.mcap");
-    gpodo_node::replay::replay(&bag, &map, &rover, &mut load(), &replayed, None).unwrap();
+    gpodo_node::replay::replay(
+        &bag,
+        &map,
+        &rover,
+        &mut load(),
+        &replayed,
+        None,
+        gpodo_node::replay::Pace::Fast,
+    )
+    .unwrap();
     let expected = odometry(&replayed, "/odom/gp");
     assert_eq!(expected.len(), 300);
 
