@@ -1,0 +1,315 @@
+//! The streaming sparse GP's collapsed bound and its optimal posterior
+//! (Bui, Nguyen & Turner, "Streaming Gaussian process approximations",
+//! NeurIPS 2017, §3.1 with a Gaussian likelihood), for `p` outputs
+//! sharing kernel and noise.
+//!
+//! The old batches are summarised by a Gaussian `q_old(a) = N(m_a, S_a)`
+//! over the function at the old inducing inputs `Z_a`, with `K'_aa` the
+//! old prior covariance there (the old hyperparameters'). A new batch
+//! `(X, Y)` with new inducing inputs `Z_b` and the current hyperparameters
+//! gives, with `K_bb = L_b L_bᵀ`, `D_a⁻¹ = S_a⁻¹ − K'_aa⁻¹`,
+//!
+//! ```text
+//! c = K_bf Y / σ² + K_ba S_a⁻¹ m_a                       (M_b × p)
+//! D = I + L_b⁻¹ (K_bf K_fb / σ² + K_ba D_a⁻¹ K_ab) L_b⁻ᵀ   (M_b × M_b)
+//! ```
+//!
+//! the optimal `q(b) = N(L_b D⁻¹ L_b⁻¹ c, L_b D⁻¹ L_bᵀ)` and the bound
+//!
+//! ```text
+//! F = −(Np/2) log 2π − (Np/2) log σ² − ‖Y‖²/(2σ²) + ½‖L_D⁻¹ L_b⁻¹ c‖²
+//!     − (p/2) log|D| − p/(2σ²) Σ_i (k_ii − q_i)
+//!     − ½ Σ_k m_akᵀ S_a⁻¹ m_ak + (p/2)(log|K'_aa| − log|S_a|)
+//!     − (p/2) tr[D_a⁻¹ (K_aa − K_ab K_bb⁻¹ K_ba)]
+//! ```
+//!
+//! (`q_i = ‖L_b⁻¹ k_i‖²`; `D = L_D L_Dᵀ`).
+//!
+//! The summary is kept as what the old data told the inducing outputs,
+//! `Λ_a = D_a⁻¹ = S_a⁻¹ − K'_aa⁻¹` and `η_a = S_a⁻¹ m_a`, rather than as
+//! `(m_a, S_a)`: both come out of a batch without a difference of two
+//! inverses (`Λ_b = L_b⁻ᵀ (D − I) L_b⁻¹`, `η_b = K_bb⁻¹ c`), and the old
+//! terms of `F` are `−½ Σ_k η_akᵀ S_a η_ak`, `(p/2) log|I + L'ᵀ Λ_a L'|`
+//! (`K'_aa = L' L'ᵀ`) and the trace with `Λ_a`. Without old batches it is
+//! Titsias' VFE bound. With the hyperparameters and inducing inputs held
+//! fixed, `K_ba D_a⁻¹ K_ab` is the old batches' `K_bf K_fb / σ²`, and
+//! streaming gives the batch posterior over all the data. The authors'
+//! implementation (`OSGPR_VFE` in `thangbui/streaming_sparse_gp`) computes
+//! the same terms for one output.
+
+use faer::{Accum, Mat, MatRef};
+
+use crate::RegressorError;
+use crate::dense::gemm;
+use crate::exact_gp::cholesky::Cholesky;
+use crate::kernels::Kernel;
+use crate::sparse_gp::SparsePosterior;
+
+/// `log 2π`.
+const LN_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// What the old batches leave: what they told the function at their
+/// inducing inputs, a Gaussian `q(a) = N(m_a, S_a)` with
+/// `S_a⁻¹ = K'_aa⁻¹ + Λ_a` and `S_a⁻¹ m_a = η_a`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InducingSummary {
+    /// The inducing inputs `Z_a` (`M_a × d`).
+    pub inducing: Mat<f64>,
+    /// The prior covariance `K'_aa` under the hyperparameters it was
+    /// computed with, jitter included.
+    pub prior_covariance: Mat<f64>,
+    /// `Λ_a = S_a⁻¹ − K'_aa⁻¹` (`M_a × M_a`, shared by the outputs).
+    pub data_precision: Mat<f64>,
+    /// `η_a = S_a⁻¹ m_a` (`M_a × p`).
+    pub natural_mean: Mat<f64>,
+}
+
+impl InducingSummary {
+    /// `K'_aa = L' L'ᵀ` and `I + L'ᵀ Λ_a L' = L_B L_Bᵀ`.
+    fn factors(&self) -> Result<(Cholesky, Cholesky), RegressorError> {
+        let lk = Cholesky::factor(self.prior_covariance.clone())?;
+        let lt_lambda = product(lk.l.transpose(), self.data_precision.as_ref());
+        let mut b = Mat::<f64>::identity(lk.l.nrows(), lk.l.nrows());
+        gemm(
+            b.as_mut(),
+            Accum::Add,
+            lt_lambda.as_ref(),
+            lk.l.as_ref(),
+            1.0,
+        );
+        Ok((lk, Cholesky::factor(symmetric(b))?))
+    }
+
+    /// The covariance `S_a = L' (I + L'ᵀ Λ_a L')⁻¹ L'ᵀ`.
+    ///
+    /// # Errors
+    /// [`RegressorError::NotPositiveDefinite`] when a factor fails.
+    pub fn covariance(&self) -> Result<Mat<f64>, RegressorError> {
+        let (lk, lb) = self.factors()?;
+        let t = lb.solve_lower(lk.l.transpose());
+        Ok(symmetric(product(t.transpose(), t.as_ref())))
+    }
+
+    /// The mean `m_a = S_a η_a`.
+    ///
+    /// # Errors
+    /// As [`InducingSummary::covariance`].
+    pub fn mean(&self) -> Result<Mat<f64>, RegressorError> {
+        Ok(product(
+            self.covariance()?.as_ref(),
+            self.natural_mean.as_ref(),
+        ))
+    }
+}
+
+/// One batch of the streaming sparse GP.
+#[derive(Debug, Clone, Copy)]
+pub struct StreamingProblem<'a> {
+    /// The kernel with the current hyperparameters.
+    pub kernel: &'a Kernel,
+    /// The noise variance `σ²`.
+    pub noise_variance: f64,
+    /// The batch's inputs (`N × d`).
+    pub x: MatRef<'a, f64>,
+    /// The batch's targets (`N × p`).
+    pub y: MatRef<'a, f64>,
+    /// The new inducing inputs `Z_b` (`M_b × d`).
+    pub inducing: MatRef<'a, f64>,
+    /// The old batches' summary (none for the first batch).
+    pub old: Option<&'a InducingSummary>,
+    /// Diagonal jitter added to `K_bb` and `K_aa`.
+    pub jitter: f64,
+}
+
+/// The bound and the posterior after one batch.
+#[derive(Debug, Clone)]
+pub struct StreamingFit {
+    /// The collapsed bound `F`.
+    pub value: f64,
+    /// `q(b)`, the summary the next batch starts from.
+    pub summary: InducingSummary,
+    /// The posterior for prediction (weights `L_b⁻ᵀ D⁻¹ L_b⁻¹ c`,
+    /// variance matrix `L_b⁻ᵀ (I − D⁻¹) L_b⁻¹`).
+    pub posterior: SparsePosterior,
+}
+
+fn with_jitter(mut k: Mat<f64>, jitter: f64) -> Mat<f64> {
+    for i in 0..k.nrows() {
+        k[(i, i)] += jitter;
+    }
+    k
+}
+
+fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    gemm(out.as_mut(), Accum::Replace, a, b, 1.0);
+    out
+}
+
+/// Evaluates the bound of one batch and its optimal posterior.
+///
+/// # Errors
+/// [`RegressorError::NotPositiveDefinite`] when `K_bb`, `S_a`, `K'_aa` or
+/// `D` cannot be factorised.
+pub fn streaming_fit(problem: StreamingProblem<'_>) -> Result<StreamingFit, RegressorError> {
+    let StreamingProblem {
+        kernel,
+        noise_variance: s,
+        x,
+        y,
+        inducing: zb,
+        old,
+        jitter,
+    } = problem;
+    let (n, mb, p) = (x.nrows(), zb.nrows(), y.ncols());
+    let pf = p as f64;
+    let kbb = with_jitter(kernel.gram(zb), jitter);
+    let lb = Cholesky::factor(kbb.clone())?;
+    let kbf = kernel.cross(zb, x);
+    let lb_kbf = lb.solve_lower(kbf.as_ref());
+    // c = K_bf Y / σ² (+ K_ba S_a⁻¹ m_a); D = I + L_b⁻¹(...)L_b⁻ᵀ.
+    let mut c = product(kbf.as_ref(), y);
+    for v in c.col_iter_mut().flat_map(|col| col.iter_mut()) {
+        *v /= s;
+    }
+    // D − I, the data's part.
+    let mut dm = Mat::<f64>::zeros(mb, mb);
+    gemm(
+        dm.as_mut(),
+        Accum::Add,
+        lb_kbf.as_ref(),
+        lb_kbf.transpose(),
+        1.0 / s,
+    );
+    let yy: f64 = (0..p)
+        .map(|k| (0..n).map(|i| y[(i, k)].powi(2)).sum::<f64>())
+        .sum();
+    let trace_f: f64 = kernel
+        .diag(x)
+        .iter()
+        .enumerate()
+        .map(|(i, k)| k - lb_kbf.col(i).iter().map(|v| v * v).sum::<f64>())
+        .sum();
+    let mut value =
+        -0.5 * (n * p) as f64 * (LN_2PI + s.ln()) - 0.5 * yy / s - 0.5 * pf / s * trace_f;
+    if let Some(old) = old {
+        let za = old.inducing.as_ref();
+        let (lk, l_bracket) = old.factors()?;
+        let kba = cross_with_shared_jitter(kernel, zb, za, jitter);
+        gemm(
+            c.as_mut(),
+            Accum::Add,
+            kba.as_ref(),
+            old.natural_mean.as_ref(),
+            1.0,
+        );
+        // L_b⁻¹ K_ba Λ_a K_ab L_b⁻ᵀ.
+        let w = lb.solve_lower(kba.as_ref());
+        let w_lambda = product(w.as_ref(), old.data_precision.as_ref());
+        gemm(
+            dm.as_mut(),
+            Accum::Add,
+            w_lambda.as_ref(),
+            w.transpose(),
+            1.0,
+        );
+        // −½ Σ_k η_kᵀ S_a η_k = −½ ‖L_B⁻¹ L'ᵀ η‖².
+        let lt_eta = product(lk.l.transpose(), old.natural_mean.as_ref());
+        let u = l_bracket.solve_lower(lt_eta.as_ref());
+        let eta_s_eta: f64 = (0..p)
+            .map(|k| u.col(k).iter().map(|v| v * v).sum::<f64>())
+            .sum();
+        // tr[Λ_a (K_aa − K_ab K_bb⁻¹ K_ba)].
+        let mut kaa_diff = with_jitter(kernel.gram(za), jitter);
+        gemm(
+            kaa_diff.as_mut(),
+            Accum::Add,
+            w.transpose(),
+            w.as_ref(),
+            -1.0,
+        );
+        let ma = za.nrows();
+        let trace_a: f64 = (0..ma)
+            .map(|i| {
+                (0..ma)
+                    .map(|j| old.data_precision[(i, j)] * kaa_diff[(j, i)])
+                    .sum::<f64>()
+            })
+            .sum();
+        value += -0.5 * eta_s_eta + 0.5 * pf * l_bracket.log_det() - 0.5 * pf * trace_a;
+    }
+    let dm = symmetric(dm);
+    let mut d = dm.clone();
+    for i in 0..mb {
+        d[(i, i)] += 1.0;
+    }
+    let ld = Cholesky::factor(d)?;
+    let lb_c = lb.solve_lower(c.as_ref());
+    let e = ld.solve_lower(lb_c.as_ref());
+    let ee: f64 = (0..p)
+        .map(|k| e.col(k).iter().map(|v| v * v).sum::<f64>())
+        .sum();
+    value += 0.5 * ee - 0.5 * pf * ld.log_det();
+    if !value.is_finite() {
+        return Err(RegressorError::NotPositiveDefinite {
+            n: mb,
+            jitter_tried: ld.jitter,
+        });
+    }
+    // The summary of q(b): Λ_b = L_b⁻ᵀ (D − I) L_b⁻¹, η_b = L_b⁻ᵀ L_b⁻¹ c.
+    let t = lb.solve_upper(dm.as_ref());
+    let data_precision = symmetric(lb.solve_upper(t.transpose()));
+    let natural_mean = lb.solve_upper(lb_c.as_ref());
+    // Prediction: weights L_b⁻ᵀ D⁻¹ L_b⁻¹ c, variance matrix L_b⁻ᵀ (I − D⁻¹) L_b⁻¹.
+    let weights = lb.solve_upper(ld.solve_upper(e.as_ref()).as_ref());
+    let d_inv = ld.inverse();
+    let inner = Mat::from_fn(mb, mb, |i, j| {
+        (if i == j { 1.0 } else { 0.0 }) - d_inv[(i, j)]
+    });
+    let t = lb.solve_upper(inner.as_ref());
+    let variance_matrix = symmetric(lb.solve_upper(t.transpose()));
+    Ok(StreamingFit {
+        value,
+        summary: InducingSummary {
+            inducing: zb.to_owned(),
+            prior_covariance: with_jitter(kbb, lb.jitter),
+            data_precision,
+            natural_mean,
+        },
+        posterior: SparsePosterior {
+            kernel: kernel.clone(),
+            noise_variance: s,
+            inducing: zb.to_owned(),
+            weights,
+            variance_matrix,
+            objective: value,
+            extra_jitter: lb.jitter,
+        },
+    })
+}
+
+/// `K_ba`, with the jitter added where an old inducing input is kept as a
+/// new one (the same row, bit for bit): the jitter belongs to the
+/// inducing variable, as on `K_bb`'s and `K_aa`'s diagonals, so a kept
+/// inducing point is the same variable in both.
+fn cross_with_shared_jitter(
+    kernel: &Kernel,
+    zb: MatRef<'_, f64>,
+    za: MatRef<'_, f64>,
+    jitter: f64,
+) -> Mat<f64> {
+    let mut k = kernel.cross(zb, za);
+    for i in 0..zb.nrows() {
+        for j in 0..za.nrows() {
+            if (0..zb.ncols()).all(|c| zb[(i, c)].to_bits() == za[(j, c)].to_bits()) {
+                k[(i, j)] += jitter;
+            }
+        }
+    }
+    k
+}
+
+/// `(A + Aᵀ) / 2`.
+fn symmetric(a: Mat<f64>) -> Mat<f64> {
+    Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+}

@@ -1,0 +1,263 @@
+//! The streaming sparse GP's bound and posterior (Bui, Nguyen & Turner
+//! 2017) against the batch sparse GP: on the first batch its bound is
+//! Titsias' VFE bound and its posterior the VFE posterior; with the
+//! hyperparameters and inducing inputs held fixed, streaming the batches
+//! gives the batch VFE posterior over the inducing outputs on all the
+//! data (mean and covariance), with the same jitter, and the batches'
+//! bounds sum to the batch bound.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod support;
+
+use faer::{Mat, MatRef};
+use gpodo_regressors::exact_gp::cholesky::Cholesky;
+use gpodo_regressors::sparse_gp::bound::sparse_objective;
+use gpodo_regressors::sparse_gp::{Approximation, SparsePosterior};
+use gpodo_regressors::streaming_sparse_gp::{StreamingProblem, streaming_fit};
+use gpodo_regressors::{GpProblem, Kernel, SparseProblem};
+use support::*;
+
+const JITTER: f64 = 1e-8;
+
+fn rows(m: &Mat<f64>, from: usize, to: usize) -> Mat<f64> {
+    Mat::from_fn(to - from, m.ncols(), |i, j| m[(from + i, j)])
+}
+
+/// The batch VFE posterior over the inducing outputs, computed directly:
+/// with `Σ = K_uu + K_uf K_fu / σ²` (`K_uu` with the jitter), mean
+/// `K_uu Σ⁻¹ K_uf Y / σ²` and covariance `K_uu Σ⁻¹ K_uu`, through one
+/// Cholesky factor of `Σ`; and the batch sparse GP's posterior.
+fn batch_q_u(
+    kernel: &Kernel,
+    noise: f64,
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    z: &Mat<f64>,
+) -> (Mat<f64>, Mat<f64>, SparsePosterior) {
+    let posterior = SparsePosterior::new(SparseProblem {
+        gp: GpProblem::new(kernel, noise, x, y),
+        z: z.as_ref(),
+        approximation: Approximation::Vfe,
+        jitter: JITTER,
+    })
+    .unwrap();
+    assert_eq!(posterior.extra_jitter, 0.0);
+    let m = z.nrows();
+    let mut kuu = kernel.gram(z.as_ref());
+    for i in 0..m {
+        kuu[(i, i)] += JITTER;
+    }
+    let kuf = kernel.cross(z.as_ref(), x);
+    let sigma = &kuu + &kuf * kuf.transpose() * (1.0 / noise);
+    let l = Cholesky::factor(sigma).unwrap();
+    let lk = l.solve_lower(kuu.as_ref());
+    let covariance = lk.transpose() * &lk;
+    let ly = l.solve_lower((&kuf * y * (1.0 / noise)).as_ref());
+    let mean = lk.transpose() * &ly;
+    (mean, covariance, posterior)
+}
+
+fn max_abs_diff(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
+    assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
+    let mut worst = 0.0f64;
+    for i in 0..a.nrows() {
+        for j in 0..a.ncols() {
+            worst = worst.max((a[(i, j)] - b[(i, j)]).abs());
+        }
+    }
+    worst
+}
+
+fn max_abs(a: &Mat<f64>) -> f64 {
+    max_abs_diff(a, &Mat::zeros(a.nrows(), a.ncols()))
+}
+
+#[test]
+fn the_first_batch_is_the_vfe_bound_and_posterior() {
+    let mut rng = rng(5);
+    for expr in ["rbf", "matern52", "rbf + linear"] {
+        let (n, m, d) = (40, 9, 3);
+        let x = inputs(&mut rng, n, d);
+        let y = targets(&mut rng, &x, 0.1);
+        let z = inputs(&mut rng, m, d);
+        let kernel = random_kernel(&mut rng, expr, d);
+        let noise = 0.05;
+        let vfe = sparse_objective(
+            SparseProblem {
+                gp: GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+                z: z.as_ref(),
+                approximation: Approximation::Vfe,
+                jitter: JITTER,
+            },
+            false,
+            false,
+        )
+        .unwrap();
+        let fit = streaming_fit(StreamingProblem {
+            kernel: &kernel,
+            noise_variance: noise,
+            x: x.as_ref(),
+            y: y.as_ref(),
+            inducing: z.as_ref(),
+            old: None,
+            jitter: JITTER,
+        })
+        .unwrap();
+        assert!(
+            (fit.value - vfe.value).abs() <= 1e-10 * vfe.value.abs().max(1.0),
+            "{expr}: streaming {} against VFE {}",
+            fit.value,
+            vfe.value
+        );
+        let (mean, covariance, batch) = batch_q_u(&kernel, noise, x.as_ref(), y.as_ref(), &z);
+        let (m_a, s_a) = (
+            fit.summary.mean().unwrap(),
+            fit.summary.covariance().unwrap(),
+        );
+        assert!(max_abs_diff(&m_a, &mean) <= 1e-10 * max_abs(&mean));
+        assert!(max_abs_diff(&s_a, &covariance) <= 1e-10 * max_abs(&covariance));
+        let xs = inputs(&mut rng, 15, d);
+        let (a, b) = (
+            fit.posterior.predict(xs.as_ref()),
+            batch.predict(xs.as_ref()),
+        );
+        assert!(max_abs_diff(&a.mean, &b.mean) <= 1e-10 * max_abs(&b.mean));
+        for (u, v) in a.latent_variance.iter().zip(&b.latent_variance) {
+            assert!((u - v).abs() <= 1e-10 * v.max(1e-6), "{u} against {v}");
+        }
+    }
+}
+
+/// Streams `x, y` in `batches` through fixed hyperparameters and inducing
+/// inputs; returns the last summary's mean and covariance, and the worst
+/// relative disagreement with the batch posterior.
+fn stream(
+    kernel: &Kernel,
+    noise: f64,
+    x: &Mat<f64>,
+    y: &Mat<f64>,
+    z: &Mat<f64>,
+    batches: usize,
+) -> (f64, f64) {
+    let n = x.nrows();
+    let mut summary = None;
+    for b in 0..batches {
+        let (from, to) = (b * n / batches, (b + 1) * n / batches);
+        let (xb, yb) = (rows(x, from, to), rows(y, from, to));
+        let fit = streaming_fit(StreamingProblem {
+            kernel,
+            noise_variance: noise,
+            x: xb.as_ref(),
+            y: yb.as_ref(),
+            inducing: z.as_ref(),
+            old: summary.as_ref(),
+            jitter: JITTER,
+        })
+        .unwrap();
+        summary = Some(fit.summary);
+    }
+    let summary = summary.unwrap();
+    let (mean, covariance, _) = batch_q_u(kernel, noise, x.as_ref(), y.as_ref(), z);
+    let (m_a, s_a) = (summary.mean().unwrap(), summary.covariance().unwrap());
+    (
+        max_abs_diff(&m_a, &mean) / max_abs(&mean),
+        max_abs_diff(&s_a, &covariance) / max_abs(&covariance),
+    )
+}
+
+#[test]
+fn streaming_with_fixed_hyperparameters_is_the_batch_posterior() {
+    let mut rng = rng(17);
+    for (expr, m, d) in [("rbf", 8, 2), ("matern52", 12, 3), ("rbf", 20, 3)] {
+        let n = 90;
+        let x = inputs(&mut rng, n, d);
+        let y = targets(&mut rng, &x, 0.1);
+        let z = inputs(&mut rng, m, d);
+        let kernel = random_kernel(&mut rng, expr, d);
+        for batches in [2, 3, 9] {
+            let (mean, covariance) = stream(&kernel, 0.05, &x, &y, &z, batches);
+            assert!(
+                mean <= 1e-9 && covariance <= 1e-9,
+                "{expr}, M = {m}, d = {d}, {batches} batches: mean {mean:.1e}, covariance {covariance:.1e} (relative)"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_agreement_at_m_100_and_d_28() {
+    // The size gpodo runs on board: stated, with the bound it meets.
+    let (n, m, d) = (400, 100, 28);
+    let (x, y) = bench_data(n, d);
+    let mut rng = rng(3);
+    let z = Mat::from_fn(m, d, |i, j| {
+        x[((i * 37) % n, j)] + 0.01 * (rng_unit(&mut rng))
+    });
+    let mut kernel = random_kernel(&mut rng, "rbf", d);
+    let mut p = kernel.log_params();
+    for (k, v) in p.iter_mut().enumerate() {
+        // Lengthscales e^1.5 ≈ 4.5 on the ±1.7 inputs, unit variance.
+        *v = if k < d { 1.5 } else { 0.0 };
+    }
+    kernel.set_log_params(&p);
+    let (mean, covariance) = stream(&kernel, 0.01, &x, &y, &z, 10);
+    eprintln!(
+        "M = 100, d = 28, 10 batches of 40: mean {mean:.1e}, covariance {covariance:.1e} (relative)"
+    );
+    assert!(
+        mean <= 1e-10 && covariance <= 1e-10,
+        "mean {mean:.1e}, covariance {covariance:.1e}"
+    );
+}
+
+fn rng_unit(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
+    use rand::Rng;
+    rng.random_range(-1.0..1.0)
+}
+
+#[test]
+fn with_fixed_hyperparameters_the_batches_bounds_sum_to_the_batch_bound() {
+    // log p(y₁, y₂, y₃) = log p(y₁) + log p(y₂ | y₁) + log p(y₃ | y₁, y₂):
+    // each streaming bound is one factor, old-data terms included.
+    let mut rng = rng(23);
+    let (n, m, d) = (60, 10, 2);
+    let x = inputs(&mut rng, n, d);
+    let y = targets(&mut rng, &x, 0.1);
+    let z = inputs(&mut rng, m, d);
+    let kernel = random_kernel(&mut rng, "rbf", d);
+    let noise = 0.05;
+    let all = sparse_objective(
+        SparseProblem {
+            gp: GpProblem::new(&kernel, noise, x.as_ref(), y.as_ref()),
+            z: z.as_ref(),
+            approximation: Approximation::Vfe,
+            jitter: JITTER,
+        },
+        false,
+        false,
+    )
+    .unwrap()
+    .value;
+    let mut summary = None;
+    let mut total = 0.0;
+    for b in 0..3 {
+        let (xb, yb) = (rows(&x, b * 20, b * 20 + 20), rows(&y, b * 20, b * 20 + 20));
+        let fit = streaming_fit(StreamingProblem {
+            kernel: &kernel,
+            noise_variance: noise,
+            x: xb.as_ref(),
+            y: yb.as_ref(),
+            inducing: z.as_ref(),
+            old: summary.as_ref(),
+            jitter: JITTER,
+        })
+        .unwrap();
+        total += fit.value;
+        summary = Some(fit.summary);
+    }
+    assert!(
+        (total - all).abs() <= 1e-10 * all.abs(),
+        "sum of the streaming bounds {total}, batch VFE bound {all}"
+    );
+}
