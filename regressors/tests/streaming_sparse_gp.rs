@@ -261,3 +261,108 @@ fn with_fixed_hyperparameters_the_batches_bounds_sum_to_the_batch_bound() {
         "sum of the streaming bounds {total}, batch VFE bound {all}"
     );
 }
+
+#[test]
+fn the_streaming_bounds_gradients_match_finite_differences() {
+    use gpodo_regressors::streaming_sparse_gp::streaming_objective;
+    let mut rng = rng(41);
+    for expr in ["rbf", "matern52", "rbf + linear"] {
+        let (n, d) = (30, 3);
+        let x = inputs(&mut rng, 2 * n, d);
+        let y = targets(&mut rng, &x, 0.1);
+        let (x1, y1) = (rows(&x, 0, n), rows(&y, 0, n));
+        let (x2, y2) = (rows(&x, n, 2 * n), rows(&y, n, 2 * n));
+        // The old batch: its own hyperparameters and inducing inputs.
+        let old_kernel = random_kernel(&mut rng, expr, d);
+        let za = inputs(&mut rng, 6, d);
+        let old = streaming_fit(StreamingProblem {
+            kernel: &old_kernel,
+            noise_variance: 0.08,
+            x: x1.as_ref(),
+            y: y1.as_ref(),
+            inducing: za.as_ref(),
+            old: None,
+            jitter: JITTER,
+        })
+        .unwrap()
+        .summary;
+        // The new batch: other hyperparameters, two old inducing inputs
+        // kept and five new ones.
+        let kernel = random_kernel(&mut rng, expr, d);
+        let fresh = inputs(&mut rng, 5, d);
+        let zb = Mat::from_fn(
+            7,
+            d,
+            |i, j| if i < 2 { za[(i, j)] } else { fresh[(i - 2, j)] },
+        );
+        let noise = 0.05;
+        for old in [None, Some(&old)] {
+            let at = |k: &Kernel, s: f64, z: &Mat<f64>| {
+                streaming_fit(StreamingProblem {
+                    kernel: k,
+                    noise_variance: s,
+                    x: x2.as_ref(),
+                    y: y2.as_ref(),
+                    inducing: z.as_ref(),
+                    old,
+                    jitter: JITTER,
+                })
+                .unwrap()
+                .value
+            };
+            let eval = streaming_objective(
+                StreamingProblem {
+                    kernel: &kernel,
+                    noise_variance: noise,
+                    x: x2.as_ref(),
+                    y: y2.as_ref(),
+                    inducing: zb.as_ref(),
+                    old,
+                    jitter: JITTER,
+                },
+                true,
+            )
+            .unwrap();
+            assert!((eval.value - at(&kernel, noise, &zb)).abs() < 1e-12 * eval.value.abs());
+            let analytic = eval.gradient.unwrap();
+            let mut theta = kernel.log_params();
+            theta.push(noise.ln());
+            let h = 1e-5;
+            for (k, g) in analytic.iter().enumerate() {
+                let value = |delta: f64| {
+                    let mut t = theta.clone();
+                    t[k] += delta;
+                    let mut kk = kernel.clone();
+                    kk.set_log_params(&t[..t.len() - 1]);
+                    at(&kk, t[t.len() - 1].exp(), &zb)
+                };
+                let fd = (value(h) - value(-h)) / (2.0 * h);
+                assert!(
+                    rel_err(*g, fd, 1e-3) < 1e-5,
+                    "{expr}, old batch {}: ∂F/∂θ[{k}] analytic {g}, finite differences {fd}",
+                    old.is_some()
+                );
+            }
+            let dz = eval.inducing_gradient.unwrap();
+            // The kept inducing inputs carry the shared jitter, a constant
+            // that moves with them only when they stay put: check the new
+            // ones.
+            for i in 2..zb.nrows() {
+                for j in 0..d {
+                    let value = |delta: f64| {
+                        let mut z = zb.clone();
+                        z[(i, j)] += delta;
+                        at(&kernel, noise, &z)
+                    };
+                    let fd = (value(h) - value(-h)) / (2.0 * h);
+                    assert!(
+                        rel_err(dz[(i, j)], fd, 1e-3) < 1e-5,
+                        "{expr}, old batch {}: ∂F/∂Z[{i},{j}] analytic {}, finite differences {fd}",
+                        old.is_some(),
+                        dz[(i, j)]
+                    );
+                }
+            }
+        }
+    }
+}

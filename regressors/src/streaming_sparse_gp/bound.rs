@@ -313,3 +313,228 @@ fn cross_with_shared_jitter(
 fn symmetric(a: Mat<f64>) -> Mat<f64> {
     Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
 }
+
+/// The bound `F` with its gradient: `∂F/∂log θ` for the kernel's
+/// hyperparameters then the noise variance, and `∂F/∂Z_b` when
+/// `with_inducing_gradient`. The old summary is held fixed.
+///
+/// With `Σ = K_bb + K_bf K_fb/σ² + K_ba Λ_a K_ab` (so that
+/// `log|D| = log|Σ| − log|K_bb|`, `‖L_D⁻¹L_b⁻¹c‖² = cᵀΣ⁻¹c`),
+/// `A = Σ⁻¹c`, `G_Σ = −½AAᵀ − (p/2)Σ⁻¹`, `H_f = K_bb⁻¹K_bf`,
+/// `H_a = K_bb⁻¹K_ba`:
+///
+/// ```text
+/// ∂F/∂K_bb = G_Σ + (p/2)K_bb⁻¹ − p/(2σ²) H_f H_fᵀ − (p/2) H_a Λ_a H_aᵀ
+/// ∂F/∂K_bf = (2/σ²) G_Σ K_bf + A Yᵀ/σ² + (p/σ²) H_f
+/// ∂F/∂k_ii = −p/(2σ²)
+/// ∂F/∂K_ba = 2 G_Σ K_ba Λ_a + A η_aᵀ + p H_a Λ_a
+/// ∂F/∂K_aa = −(p/2) Λ_a
+/// ∂F/∂σ²  = −Np/(2σ²) + ‖Y‖²/(2σ⁴) + p/(2σ⁴) Σ_i (k_ii − q_i)
+///           − tr(G_Σ K_bf K_fb)/σ⁴ − tr(Aᵀ K_bf Y)/σ⁴
+/// ```
+///
+/// and the kernel turns these into hyperparameter and inducing-input
+/// gradients as for the batch sparse GP. A kept inducing input's shared
+/// jitter is a constant.
+///
+/// # Errors
+/// As [`streaming_fit`].
+pub fn streaming_objective(
+    problem: StreamingProblem<'_>,
+    with_inducing_gradient: bool,
+) -> Result<crate::sparse_gp::bound::BoundEvaluation, RegressorError> {
+    let value = streaming_fit(problem)?.value;
+    let StreamingProblem {
+        kernel,
+        noise_variance: s,
+        x,
+        y,
+        inducing: zb,
+        old,
+        jitter,
+    } = problem;
+    let (n, mb, p) = (x.nrows(), zb.nrows(), y.ncols());
+    let pf = p as f64;
+    let cache_bb = kernel.gram_with_cache(zb);
+    let lb = Cholesky::factor(with_jitter(cache_bb.k.clone(), jitter))?;
+    let kbb_inv = lb.inverse();
+    let cache_bf = kernel.cross_with_cache(zb, x);
+    let kbf = &cache_bf.k;
+    let h_f = product(kbb_inv.as_ref(), kbf.as_ref());
+    let mut sigma = with_jitter(cache_bb.k.clone(), jitter + lb.jitter);
+    gemm(
+        sigma.as_mut(),
+        Accum::Add,
+        kbf.as_ref(),
+        kbf.transpose(),
+        1.0 / s,
+    );
+    let mut c = product(kbf.as_ref(), y);
+    for v in c.col_iter_mut().flat_map(|col| col.iter_mut()) {
+        *v /= s;
+    }
+    // The old batches' parts: K_ba (with the shared jitter), H_a, K_ba Λ_a.
+    let old_parts = match old {
+        Some(old) => {
+            let za = old.inducing.as_ref();
+            let cache_ba = kernel.cross_with_cache(zb, za);
+            let kba = cross_with_shared_jitter(kernel, zb, za, jitter);
+            let kba_lambda = product(kba.as_ref(), old.data_precision.as_ref());
+            gemm(
+                sigma.as_mut(),
+                Accum::Add,
+                kba_lambda.as_ref(),
+                kba.transpose(),
+                1.0,
+            );
+            gemm(
+                c.as_mut(),
+                Accum::Add,
+                kba.as_ref(),
+                old.natural_mean.as_ref(),
+                1.0,
+            );
+            let h_a = product(kbb_inv.as_ref(), kba.as_ref());
+            Some((old, cache_ba, kba_lambda, h_a))
+        }
+        None => None,
+    };
+    let sigma = symmetric(sigma);
+    let ls = Cholesky::factor(sigma)?;
+    let sigma_inv = ls.inverse();
+    let a = ls.solve(c.as_ref());
+    // G_Σ = −½AAᵀ − (p/2)Σ⁻¹.
+    let mut g_sigma = Mat::from_fn(mb, mb, |i, j| -0.5 * pf * sigma_inv[(i, j)]);
+    gemm(
+        g_sigma.as_mut(),
+        Accum::Add,
+        a.as_ref(),
+        a.transpose(),
+        -0.5,
+    );
+    // ∂F/∂K_bb.
+    let mut g_bb = Mat::from_fn(mb, mb, |i, j| g_sigma[(i, j)] + 0.5 * pf * kbb_inv[(i, j)]);
+    gemm(
+        g_bb.as_mut(),
+        Accum::Add,
+        h_f.as_ref(),
+        h_f.transpose(),
+        -0.5 * pf / s,
+    );
+    // ∂F/∂K_bf.
+    let mut g_bf = product(g_sigma.as_ref(), kbf.as_ref());
+    for v in g_bf.col_iter_mut().flat_map(|col| col.iter_mut()) {
+        *v *= 2.0 / s;
+    }
+    gemm(
+        g_bf.as_mut(),
+        Accum::Add,
+        a.as_ref(),
+        y.transpose(),
+        1.0 / s,
+    );
+    for i in 0..mb {
+        for j in 0..n {
+            g_bf[(i, j)] += pf / s * h_f[(i, j)];
+        }
+    }
+    // ∂F/∂σ².
+    let yy: f64 = (0..p)
+        .map(|k| (0..n).map(|i| y[(i, k)].powi(2)).sum::<f64>())
+        .sum();
+    let kdiag = kernel.diag(x);
+    let q_sum: f64 = (0..mb)
+        .map(|i| (0..n).map(|j| h_f[(i, j)] * kbf[(i, j)]).sum::<f64>())
+        .sum();
+    let kff_kbf = product(kbf.transpose(), g_sigma.as_ref()); // K_fb G_Σ
+    let tr_g_kk: f64 = (0..n)
+        .map(|j| (0..mb).map(|i| kff_kbf[(j, i)] * kbf[(i, j)]).sum::<f64>())
+        .sum();
+    let kbf_y = product(kbf.as_ref(), y);
+    let tr_a_kbf_y: f64 = (0..mb)
+        .map(|i| (0..p).map(|k| a[(i, k)] * kbf_y[(i, k)]).sum::<f64>())
+        .sum();
+    let g_s = -0.5 * (n * p) as f64 / s
+        + 0.5 * yy / (s * s)
+        + 0.5 * pf / (s * s) * (kdiag.iter().sum::<f64>() - q_sum)
+        - tr_g_kk / (s * s)
+        - tr_a_kbf_y / (s * s);
+
+    let k = kernel.n_params();
+    let mut gradient = vec![0.0; k + 1];
+    let mut dz = with_inducing_gradient.then(|| Mat::<f64>::zeros(mb, zb.ncols()));
+    if let Some((old, cache_ba, kba_lambda, h_a)) = &old_parts {
+        let za = old.inducing.as_ref();
+        // ∂F/∂K_bb gets −(p/2) H_a Λ_a H_aᵀ.
+        let h_a_lambda = product(h_a.as_ref(), old.data_precision.as_ref());
+        gemm(
+            g_bb.as_mut(),
+            Accum::Add,
+            h_a_lambda.as_ref(),
+            h_a.transpose(),
+            -0.5 * pf,
+        );
+        // ∂F/∂K_ba = 2 G_Σ K_ba Λ_a + A η_aᵀ + p H_a Λ_a.
+        let mut g_ba = product(g_sigma.as_ref(), kba_lambda.as_ref());
+        for v in g_ba.col_iter_mut().flat_map(|col| col.iter_mut()) {
+            *v *= 2.0;
+        }
+        gemm(
+            g_ba.as_mut(),
+            Accum::Add,
+            a.as_ref(),
+            old.natural_mean.transpose(),
+            1.0,
+        );
+        for i in 0..mb {
+            for j in 0..za.nrows() {
+                g_ba[(i, j)] += pf * h_a_lambda[(i, j)];
+            }
+        }
+        kernel.accumulate_cross_gradient(
+            zb,
+            za,
+            cache_ba,
+            g_ba.as_ref(),
+            crate::kernels::GradientTargets {
+                params: Some(&mut gradient[..k]),
+                inputs: dz.as_mut().map(|d| (d, 1.0)),
+            },
+        );
+        // ∂F/∂K_aa = −(p/2) Λ_a.
+        let cache_aa = kernel.gram_with_cache(za);
+        let g_aa = Mat::from_fn(za.nrows(), za.nrows(), |i, j| {
+            -0.5 * pf * old.data_precision[(i, j)]
+        });
+        kernel.accumulate_gradient(za, &cache_aa, g_aa.as_ref(), &mut gradient[..k]);
+    }
+    let g_bb = symmetric(g_bb);
+    kernel.accumulate_gradient(zb, &cache_bb, g_bb.as_ref(), &mut gradient[..k]);
+    kernel.accumulate_cross_gradient(
+        zb,
+        x,
+        &cache_bf,
+        g_bf.as_ref(),
+        crate::kernels::GradientTargets {
+            params: Some(&mut gradient[..k]),
+            inputs: dz.as_mut().map(|d| (d, 1.0)),
+        },
+    );
+    kernel.accumulate_diag_gradient(x, &vec![-0.5 * pf / s; n], &mut gradient[..k]);
+    if let Some(d) = dz.as_mut() {
+        kernel.accumulate_cross_gradient(
+            zb,
+            zb,
+            &cache_bb,
+            g_bb.as_ref(),
+            crate::kernels::GradientTargets::inputs(d, 2.0),
+        );
+    }
+    gradient[k] = s * g_s;
+    Ok(crate::sparse_gp::bound::BoundEvaluation {
+        value,
+        gradient: Some(gradient),
+        inducing_gradient: dz,
+        extra_jitter: lb.jitter,
+    })
+}

@@ -1,8 +1,11 @@
 //! The streaming sparse GP (Bui, Nguyen & Turner, NeurIPS 2017): a
 //! variational posterior over inducing points updated batch by batch,
 //! never revisiting old data. [`bound`]: the collapsed streaming bound and
-//! its optimal posterior at given hyperparameters and inducing inputs.
+//! its optimal posterior at given hyperparameters and inducing inputs, and
+//! the bound's gradient for learning them.
 
 pub mod bound;
 
-pub use bound::{InducingSummary, StreamingFit, StreamingProblem, streaming_fit};
+pub use bound::{
+    InducingSummary, StreamingFit, StreamingProblem, streaming_fit, streaming_objective,
+};
