@@ -40,6 +40,8 @@ pub struct LiveFeed<'m> {
     /// one the last joint state used are dropped.
     imu: VecDeque<(i64, ImuSample)>,
     base_ns: Option<i64>,
+    /// The last joint state that gave an output (ns).
+    last_joint_ns: Option<i64>,
 }
 
 impl<'m> LiveFeed<'m> {
@@ -72,6 +74,7 @@ impl<'m> LiveFeed<'m> {
             with_imu: map.imu.is_some(),
             imu: VecDeque::new(),
             base_ns: None,
+            last_joint_ns: None,
         })
     }
 
@@ -113,6 +116,11 @@ impl<'m> LiveFeed<'m> {
     pub fn joints(&mut self, m: &JointState, receive_ns: i64) -> Result<Fed, String> {
         let ns = self.stamp(m.header.stamp_ns, receive_ns);
         let time_secs = self.secs(ns);
+        if self.last_joint_ns.is_some_and(|last| ns <= last) {
+            return Err(format!(
+                "{time_secs} s: its time is not after the previous joint state's"
+            ));
+        }
         let [wheels, steering, bogies] = self
             .decoder
             .joints(m)
@@ -136,6 +144,7 @@ impl<'m> LiveFeed<'m> {
         let output = self.model.process(&sample).map_err(|e| e.to_string())?;
         // Readings before the one used are no longer needed.
         self.imu.drain(..held.saturating_sub(1));
+        self.last_joint_ns = Some(ns);
         Ok(Fed {
             stamp_ns: ns,
             output,

@@ -320,6 +320,7 @@ pub fn run(
     };
     let mut last_input: Option<Instant> = None;
     let mut last_report = Instant::now();
+    let mut last_warning: Option<Instant> = None;
     let period = Duration::from_secs_f64(settings.diagnostics_period_secs.max(0.01));
     let status_name = format!("gpodo live: {}", OUTPUT_TOPICS[0]);
     loop {
@@ -367,7 +368,15 @@ pub fn run(
                     }
                     health.output(&fed, taken.elapsed().as_secs_f64());
                 }
-                Err(reason) => health.skipped(reason),
+                Err(reason) => {
+                    // At most one warning a second; every one is counted
+                    // in the diagnostics.
+                    if last_warning.is_none_or(|t: Instant| t.elapsed() >= Duration::from_secs(1)) {
+                        last_warning = Some(Instant::now());
+                        tracing::warn!("joint state not used: {reason}");
+                    }
+                    health.skipped(reason);
+                }
             }
         }
         if last_report.elapsed() >= period {

@@ -360,3 +360,72 @@ fn a_replay_at_the_recorded_speed_takes_the_recording_time_and_gives_the_same_od
     assert!(fast_secs < span, "{fast_secs} s as fast as it can");
     assert_eq!(fast_bytes, paced_bytes);
 }
+
+#[test]
+fn bad_messages_give_no_output_and_leave_the_node_as_it_was() {
+    use gpodo_datasets::bags::messages::RosMessage;
+    use gpodo_node::feed::LiveFeed;
+    let tmp = tempfile::tempdir().unwrap();
+    let (testbed, path) = fitted(tmp.path(), false);
+    let mut log = testbed.test[0].clone();
+    log.samples.truncate(60);
+    log.ground_truth.truncate(60);
+    log.camera_times_secs
+        .retain(|t| *t <= log.samples[59].time_secs);
+    let (map, messages) = bag_messages(tmp.path(), &log);
+    let rover = gpodo_kinematics::RoverDescription::from_path(&exoter_yaml()).unwrap();
+    let run = |faults: bool| {
+        let mut model =
+            LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
+        let mut feed = LiveFeed::new(&map, &rover, &mut model).unwrap();
+        let (mut outputs, mut refused) = (Vec::new(), Vec::new());
+        let mut last_joint = None;
+        for (k, (_, m)) in messages.iter().enumerate() {
+            match m {
+                RosMessage::Imu(m) => feed.imu(m, 0),
+                RosMessage::JointState(m) => {
+                    if faults && k % 10 == 5 {
+                        // A NaN, a joint missing, time going backwards, in turn.
+                        let mut bad = m.clone();
+                        match (k / 10) % 3 {
+                            0 => bad.velocity[0] = f64::NAN,
+                            1 => {
+                                bad.name.remove(0);
+                                bad.position.remove(0);
+                                bad.velocity.remove(0);
+                                if !bad.effort.is_empty() {
+                                    bad.effort.remove(0);
+                                }
+                            }
+                            _ => {
+                                let earlier: &gpodo_datasets::bags::messages::JointState =
+                                    last_joint.unwrap();
+                                bad.header.stamp_ns = earlier.header.stamp_ns - 40_000_000;
+                            }
+                        }
+                        refused.push(feed.joints(&bad, 0).unwrap_err());
+                    }
+                    outputs.push(feed.joints(m, 0).unwrap());
+                    last_joint = Some(m);
+                }
+                _ => unreachable!(),
+            }
+        }
+        (outputs, refused)
+    };
+    let (clean, none) = run(false);
+    let (faulted, refused) = run(true);
+    assert!(none.is_empty());
+    assert_eq!(refused.len(), 12, "{refused:?}");
+    for (k, reason) in refused.iter().enumerate() {
+        let expected = ["not finite", "no joint", "not after the previous"][k % 3];
+        assert!(reason.contains(expected), "{reason}");
+    }
+    // Every good message gives what it gives without the bad ones.
+    assert_eq!(clean, faulted);
+    assert!(
+        clean
+            .iter()
+            .all(|f| f.output.twist.linear_mps.iter().all(|v| v.is_finite()))
+    );
+}
