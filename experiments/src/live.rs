@@ -102,9 +102,10 @@ fn replay(
     }
     if let Some((p50, p99)) = summary.latency_secs {
         println!(
-            "latency of an output: p50 {:.3} ms, p99 {:.3} ms",
+            "latency of an output: p50 {:.3} ms, p99 {:.3} ms; the node's work sustains {:.0} joint states a second",
             p50 * 1e3,
-            p99 * 1e3
+            p99 * 1e3,
+            summary.outputs as f64 / summary.processing_secs.max(1e-12)
         );
     }
     Ok(())

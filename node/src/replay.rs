@@ -42,6 +42,9 @@ pub struct ReplaySummary {
     /// message in hand to its two odometry messages encoded, as on the
     /// robot (writing the MCAP not included).
     pub latency_secs: Option<(f64, f64)>,
+    /// The node's work summed over the outputs (s): outputs over this is
+    /// the highest joint-state rate it sustains on this machine.
+    pub processing_secs: f64,
 }
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
@@ -135,6 +138,7 @@ pub fn replay(
         skipped: Vec::new(),
         out_of_range: std::collections::BTreeMap::new(),
         latency_secs: None,
+        processing_secs: 0.0,
     };
     let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
@@ -184,6 +188,7 @@ pub fn replay(
         }
     }
     summary.latency_secs = percentile(&latencies, 50.0).zip(percentile(&latencies, 99.0));
+    summary.processing_secs = latencies.iter().sum();
     mcap.finish().map_err(|e| io_error(out, e))?;
     if let Some(path) = rows {
         let tmp = path.with_extension("csv.partial");
