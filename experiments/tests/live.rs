@@ -12,9 +12,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use gpodo_datasets::bags::OnDamage;
 use gpodo_datasets::bags::messages::{Odometry, RosMessage};
-use gpodo_datasets::bags::topic::{TopicRequest, read_topics};
+use gpodo_datasets::bags::topic::read_topic;
 use gpodo_datasets::bags::write::WheelUnits;
 use gpodo_datasets::sim::preset::Preset;
 use gpodo_experiments::simulate::{SimulateFormat, SimulateOptions, simulate_to};
@@ -34,15 +33,8 @@ fn gpodo(args: &[&std::ffi::OsStr]) -> std::process::Output {
 }
 
 fn odometry(bag: &Path, topic: &str) -> Vec<Odometry> {
-    let request = TopicRequest {
-        topic,
-        role: "odometry",
-        expected: &["nav_msgs/Odometry"],
-        optional: false,
-    };
-    let (mut topics, _) = read_topics(bag, &[request], OnDamage::Stop).unwrap();
-    topics
-        .remove(0)
+    let messages = read_topic(bag, topic, "odometry", &["nav_msgs/Odometry"]).unwrap();
+    messages
         .into_iter()
         .map(|s| match s.message {
             RosMessage::Odometry(o) => o,

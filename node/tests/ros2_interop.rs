@@ -18,9 +18,8 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use gpodo_datasets::bags::OnDamage;
 use gpodo_datasets::bags::messages::{Odometry, RosMessage};
-use gpodo_datasets::bags::topic::{TopicRequest, read_topics};
+use gpodo_datasets::bags::topic::read_topic;
 use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
 use gpodo_node::ros2::{Ros2Settings, run};
 use gpodo_node::{LiveModel, LiveSettings};
@@ -32,15 +31,8 @@ use common::{exoter_yaml, fitted};
 const CYCLONE_LOOPBACK: &str = r#"<CycloneDDS><Domain id="any"><General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>"#;
 
 fn odometry(bag: &Path, topic: &str) -> Vec<Odometry> {
-    let request = TopicRequest {
-        topic,
-        role: "odometry",
-        expected: &["nav_msgs/Odometry"],
-        optional: false,
-    };
-    let (mut topics, _) = read_topics(bag, &[request], OnDamage::Stop).unwrap();
-    topics
-        .remove(0)
+    let messages = read_topic(bag, topic, "odometry", &["nav_msgs/Odometry"]).unwrap();
+    messages
         .into_iter()
         .map(|s| match s.message {
             RosMessage::Odometry(o) => o,

@@ -14,7 +14,9 @@ use faer::{Mat, MatRef};
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::{Approximation, SparsePosterior};
-use gpodo_regressors::streaming_sparse_gp::{StreamingProblem, streaming_fit};
+use gpodo_regressors::streaming_sparse_gp::{
+    InducingSummary, StreamingFit, StreamingProblem, streaming_fit,
+};
 use gpodo_regressors::{GpProblem, Kernel, SparseProblem};
 use support::*;
 
@@ -58,6 +60,27 @@ fn batch_q_u(
     (mean, covariance, posterior)
 }
 
+/// One batch's streaming fit at the tests' jitter.
+fn fit_batch(
+    kernel: &Kernel,
+    noise: f64,
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    z: MatRef<'_, f64>,
+    old: Option<&InducingSummary>,
+) -> StreamingFit {
+    streaming_fit(StreamingProblem {
+        kernel,
+        noise_variance: noise,
+        x,
+        y,
+        inducing: z,
+        old,
+        jitter: JITTER,
+    })
+    .unwrap()
+}
+
 fn max_abs_diff(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
     assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
     let mut worst = 0.0f64;
@@ -94,16 +117,7 @@ fn the_first_batch_is_the_vfe_bound_and_posterior() {
             false,
         )
         .unwrap();
-        let fit = streaming_fit(StreamingProblem {
-            kernel: &kernel,
-            noise_variance: noise,
-            x: x.as_ref(),
-            y: y.as_ref(),
-            inducing: z.as_ref(),
-            old: None,
-            jitter: JITTER,
-        })
-        .unwrap();
+        let fit = fit_batch(&kernel, noise, x.as_ref(), y.as_ref(), z.as_ref(), None);
         assert!(
             (fit.value - vfe.value).abs() <= 1e-10 * vfe.value.abs().max(1.0),
             "{expr}: streaming {} against VFE {}",
@@ -145,16 +159,14 @@ fn stream(
     for b in 0..batches {
         let (from, to) = (b * n / batches, (b + 1) * n / batches);
         let (xb, yb) = (rows(x, from, to), rows(y, from, to));
-        let fit = streaming_fit(StreamingProblem {
+        let fit = fit_batch(
             kernel,
-            noise_variance: noise,
-            x: xb.as_ref(),
-            y: yb.as_ref(),
-            inducing: z.as_ref(),
-            old: summary.as_ref(),
-            jitter: JITTER,
-        })
-        .unwrap();
+            noise,
+            xb.as_ref(),
+            yb.as_ref(),
+            z.as_ref(),
+            summary.as_ref(),
+        );
         summary = Some(fit.summary);
     }
     let summary = summary.unwrap();
@@ -243,16 +255,14 @@ fn with_fixed_hyperparameters_the_batches_bounds_sum_to_the_batch_bound() {
     let mut total = 0.0;
     for b in 0..3 {
         let (xb, yb) = (rows(&x, b * 20, b * 20 + 20), rows(&y, b * 20, b * 20 + 20));
-        let fit = streaming_fit(StreamingProblem {
-            kernel: &kernel,
-            noise_variance: noise,
-            x: xb.as_ref(),
-            y: yb.as_ref(),
-            inducing: z.as_ref(),
-            old: summary.as_ref(),
-            jitter: JITTER,
-        })
-        .unwrap();
+        let fit = fit_batch(
+            &kernel,
+            noise,
+            xb.as_ref(),
+            yb.as_ref(),
+            z.as_ref(),
+            summary.as_ref(),
+        );
         total += fit.value;
         summary = Some(fit.summary);
     }
@@ -275,16 +285,14 @@ fn the_streaming_bounds_gradients_match_finite_differences() {
         // The old batch: its own hyperparameters and inducing inputs.
         let old_kernel = random_kernel(&mut rng, expr, d);
         let za = inputs(&mut rng, 6, d);
-        let old = streaming_fit(StreamingProblem {
-            kernel: &old_kernel,
-            noise_variance: 0.08,
-            x: x1.as_ref(),
-            y: y1.as_ref(),
-            inducing: za.as_ref(),
-            old: None,
-            jitter: JITTER,
-        })
-        .unwrap()
+        let old = fit_batch(
+            &old_kernel,
+            0.08,
+            x1.as_ref(),
+            y1.as_ref(),
+            za.as_ref(),
+            None,
+        )
         .summary;
         // The new batch: other hyperparameters, two old inducing inputs
         // kept and five new ones.
@@ -298,17 +306,7 @@ fn the_streaming_bounds_gradients_match_finite_differences() {
         let noise = 0.05;
         for old in [None, Some(&old)] {
             let at = |k: &Kernel, s: f64, z: &Mat<f64>| {
-                streaming_fit(StreamingProblem {
-                    kernel: k,
-                    noise_variance: s,
-                    x: x2.as_ref(),
-                    y: y2.as_ref(),
-                    inducing: z.as_ref(),
-                    old,
-                    jitter: JITTER,
-                })
-                .unwrap()
-                .value
+                fit(k, s, x2.as_ref(), y2.as_ref(), z.as_ref(), old).value
             };
             let eval = streaming_objective(
                 StreamingProblem {
