@@ -306,7 +306,7 @@ fn the_streaming_bounds_gradients_match_finite_differences() {
         let noise = 0.05;
         for old in [None, Some(&old)] {
             let at = |k: &Kernel, s: f64, z: &Mat<f64>| {
-                fit(k, s, x2.as_ref(), y2.as_ref(), z.as_ref(), old).value
+                fit_batch(k, s, x2.as_ref(), y2.as_ref(), z.as_ref(), old).value
             };
             let eval = streaming_objective(
                 StreamingProblem {
