@@ -2,7 +2,9 @@
 //! PyPI, no ROS): a Python peer publishes a simulated recording's joint
 //! states and IMU messages as ROS 2 does, and receives the node's odometry
 //! and diagnostics. What it receives equals the replay of the same
-//! recording, message for message and bit for bit.
+//! recording, message for message and bit for bit, though the peer
+//! restarts its publishers half way and sends a tenth of the recording in
+//! a burst as fast as it can.
 //!
 //! Loopback only: both sides use 127.0.0.1 alone and find each other by
 //! unicast (the loopback interface has no multicast here), on a domain id

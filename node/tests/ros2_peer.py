@@ -4,6 +4,9 @@ It publishes a recording's joint states and IMU messages as ROS 2 does
 (topics `rt/...`, types `sensor_msgs::msg::dds_::JointState_` and `Imu_`,
 final types in XCDR1, best effort), in the recording's order, and writes
 what it receives on `rt/odom/gp` and `rt/diagnostics` to a JSON file.
+Half way it restarts its publishers (new writers, as a driver that
+restarts), and for a tenth of the recording it publishes as fast as it
+can (a burst, about ten times the recorded rate and more).
 
     ros2_peer.py DOMAIN BAG JOINT_TOPIC IMU_TOPIC OUT.json
 
@@ -194,18 +197,30 @@ def main():
         xcdr1,
     )
     ros = lambda t: "rt/" + t.lstrip("/")
-    joints_w = DataWriter(dp, Topic(dp, ros(joint_topic), JointState), qos=sensors)
-    imu_w = DataWriter(dp, Topic(dp, ros(imu_topic), Imu), qos=sensors)
+    joint_topic_dds = Topic(dp, ros(joint_topic), JointState)
+    imu_topic_dds = Topic(dp, ros(imu_topic), Imu)
+
+    def publishers():
+        return (
+            DataWriter(dp, joint_topic_dds, qos=sensors),
+            DataWriter(dp, imu_topic_dds, qos=sensors),
+        )
+
+    joints_w, imu_w = publishers()
     odom_r = DataReader(dp, Topic(dp, "rt/odom/gp", Odometry), qos=outputs)
     diag_r = DataReader(dp, Topic(dp, "rt/diagnostics", DiagnosticArray), qos=outputs)
-    wait(
-        lambda: joints_w.get_matched_subscriptions()
-        and imu_w.get_matched_subscriptions()
-        and odom_r.get_matched_publications()
-        and diag_r.get_matched_publications(),
-        60,
-        "gpodo live's readers and writers",
-    )
+
+    def matched():
+        wait(
+            lambda: joints_w.get_matched_subscriptions()
+            and imu_w.get_matched_subscriptions()
+            and odom_r.get_matched_publications()
+            and diag_r.get_matched_publications(),
+            60,
+            "gpodo live's readers and writers",
+        )
+
+    matched()
     received, diagnostics = [], []
 
     def drain():
@@ -240,10 +255,18 @@ def main():
                     }
                 )
 
-    for _, _, message in messages:
+    total = len(messages)
+    burst = range(total // 5, total // 5 + total // 10)
+    for k, (_, _, message) in enumerate(messages):
+        if k == total // 2:
+            # The driver restarts: its writers go, new ones come.
+            del joints_w, imu_w
+            joints_w, imu_w = publishers()
+            matched()
         (joints_w if isinstance(message, JointState) else imu_w).write(message)
-        # Paced, so that a best-effort reader keeps up on a loaded machine.
-        time.sleep(0.002)
+        if k not in burst:
+            # Paced at about 500 messages a second elsewhere.
+            time.sleep(0.002)
         drain()
     end = time.time() + 30
     while (len(received) < expected or not diagnostics) and time.time() < end:
