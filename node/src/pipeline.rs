@@ -295,8 +295,8 @@ impl LiveModel {
             .motion
             .estimate(sample, dt.unwrap_or(0.0))
             .map_err(|e| bad(format!("the motion model: {e}")))?;
-        let mut rows = self.rows.clone();
-        let row = rows.push(time_secs, inputs)?;
+        // The row is committed only once the sample has gone through.
+        let row = self.rows.peek(time_secs, &inputs)?;
         let floor = self.settings.min_variance;
         let angular = self.settings.angular_variance.max(floor);
         let uncorrected = estimate.twist;
@@ -331,7 +331,7 @@ impl LiveModel {
                 }
             }
         };
-        self.rows = rows;
+        self.rows.commit(time_secs, inputs);
         if let (Some(dt), Some((_, previous, wheels, previous_variance))) = (dt, self.last) {
             self.pose_covariance = propagate(
                 &self.pose_covariance,

@@ -48,10 +48,19 @@ impl LiveRows {
     /// first sample of a windowed stream).
     ///
     /// # Errors
-    /// [`NodeError::Sample`] for a time that does not move forward, or
-    /// inputs of another length than the earlier samples'; the stream is
-    /// left as it was.
+    /// As [`LiveRows::peek`]; the stream is left as it was.
     pub fn push(&mut self, time_secs: f64, inputs: Vec<f64>) -> Result<Option<LiveRow>, NodeError> {
+        let row = self.peek(time_secs, &inputs)?;
+        self.commit(time_secs, inputs);
+        Ok(row)
+    }
+
+    /// The row [`LiveRows::push`] would return, without adding the sample.
+    ///
+    /// # Errors
+    /// [`NodeError::Sample`] for a time that does not move forward, or
+    /// inputs of another length than the earlier samples'.
+    pub fn peek(&self, time_secs: f64, inputs: &[f64]) -> Result<Option<LiveRow>, NodeError> {
         let bad = |detail: String| NodeError::Sample { time_secs, detail };
         if !time_secs.is_finite() {
             return Err(bad("its time is not finite".into()));
@@ -71,11 +80,46 @@ impl LiveRows {
             }
         }
         let Some(window) = self.window_secs else {
-            self.newest = Some((time_secs, inputs.clone()));
             return Ok(Some(LiveRow {
-                inputs,
+                inputs: inputs.to_vec(),
                 covered_secs: 0.0,
             }));
+        };
+        // The finished steps that start in the window, the newest sample's
+        // (which this sample ends) last.
+        let finished = self
+            .newest
+            .as_ref()
+            .map(|(start, x)| (*start, time_secs - start, x.as_slice()));
+        let in_window = || {
+            self.steps
+                .iter()
+                .map(|(start, dt, x)| (*start, *dt, x.as_slice()))
+                .chain(finished)
+                .filter(move |(start, _, _)| *start >= time_secs - window)
+        };
+        let covered: f64 = in_window().map(|(_, dt, _)| dt).sum();
+        let Some((_, _, first)) = in_window().next() else {
+            return Ok(None);
+        };
+        let mut mean = vec![0.0; first.len()];
+        for (_, dt, x) in in_window() {
+            let w = dt / covered;
+            for (m, v) in mean.iter_mut().zip(x) {
+                *m += w * v;
+            }
+        }
+        Ok(Some(LiveRow {
+            inputs: mean,
+            covered_secs: covered,
+        }))
+    }
+
+    /// Adds a sample that [`LiveRows::peek`] accepted.
+    pub(crate) fn commit(&mut self, time_secs: f64, inputs: Vec<f64>) {
+        let Some(window) = self.window_secs else {
+            self.newest = Some((time_secs, inputs));
+            return;
         };
         if let Some((start, x)) = self.newest.replace((time_secs, inputs)) {
             self.steps.push_back((start, time_secs - start, x));
@@ -87,21 +131,6 @@ impl LiveRows {
         {
             self.steps.pop_front();
         }
-        let covered: f64 = self.steps.iter().map(|(_, dt, _)| dt).sum();
-        let Some((_, _, first)) = self.steps.front() else {
-            return Ok(None);
-        };
-        let mut mean = vec![0.0; first.len()];
-        for (_, dt, x) in &self.steps {
-            let w = dt / covered;
-            for (m, v) in mean.iter_mut().zip(x) {
-                *m += w * v;
-            }
-        }
-        Ok(Some(LiveRow {
-            inputs: mean,
-            covered_secs: covered,
-        }))
     }
 }
 
