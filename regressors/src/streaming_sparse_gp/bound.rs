@@ -194,7 +194,6 @@ pub fn streaming_fit(problem: StreamingProblem<'_>) -> Result<StreamingFit, Regr
         -0.5 * (n * p) as f64 * (LN_2PI + s.ln()) - 0.5 * yy / s - 0.5 * pf / s * trace_f;
     if let Some(old) = old {
         let za = old.inducing.as_ref();
-        let (lk, l_bracket) = old.factors()?;
         let kba = cross_with_shared_jitter(kernel, zb, za, jitter);
         gemm(
             c.as_mut(),
@@ -213,30 +212,9 @@ pub fn streaming_fit(problem: StreamingProblem<'_>) -> Result<StreamingFit, Regr
             w.transpose(),
             1.0,
         );
-        // −½ Σ_k η_kᵀ S_a η_k = −½ ‖L_B⁻¹ L'ᵀ η‖².
-        let lt_eta = product(lk.l.transpose(), old.natural_mean.as_ref());
-        let u = l_bracket.solve_lower(lt_eta.as_ref());
-        let eta_s_eta: f64 = (0..p)
-            .map(|k| u.col(k).iter().map(|v| v * v).sum::<f64>())
-            .sum();
-        // tr[Λ_a (K_aa − K_ab K_bb⁻¹ K_ba)].
-        let mut kaa_diff = with_jitter(kernel.gram(za), jitter);
-        gemm(
-            kaa_diff.as_mut(),
-            Accum::Add,
-            w.transpose(),
-            w.as_ref(),
-            -1.0,
-        );
-        let ma = za.nrows();
-        let trace_a: f64 = (0..ma)
-            .map(|i| {
-                (0..ma)
-                    .map(|j| old.data_precision[(i, j)] * kaa_diff[(j, i)])
-                    .sum::<f64>()
-            })
-            .sum();
-        value += -0.5 * eta_s_eta + 0.5 * pf * l_bracket.log_det() - 0.5 * pf * trace_a;
+        // K_ab K_bb⁻¹ K_ba = Wᵀ W.
+        let qaa = product(w.transpose(), w.as_ref());
+        value += old_terms(kernel, old, &qaa, jitter, p)?;
     }
     let dm = symmetric(dm);
     let mut d = dm.clone();
@@ -286,6 +264,35 @@ pub fn streaming_fit(problem: StreamingProblem<'_>) -> Result<StreamingFit, Regr
             extra_jitter: lb.jitter,
         },
     })
+}
+
+/// The old batches' terms of `F`: `−½ Σ_k η_akᵀ S_a η_ak`
+/// (`= −½ ‖L_B⁻¹ L'ᵀ η‖²`), `(p/2) log|I + L'ᵀ Λ_a L'|` and
+/// `−(p/2) tr[Λ_a (K_aa − Q_aa)]`, given `Q_aa = K_ab K_bb⁻¹ K_ba`.
+fn old_terms(
+    kernel: &Kernel,
+    old: &InducingSummary,
+    qaa: &Mat<f64>,
+    jitter: f64,
+    p: usize,
+) -> Result<f64, RegressorError> {
+    let (lk, l_bracket) = old.factors()?;
+    let lt_eta = product(lk.l.transpose(), old.natural_mean.as_ref());
+    let u = l_bracket.solve_lower(lt_eta.as_ref());
+    let eta_s_eta: f64 = (0..p)
+        .map(|k| u.col(k).iter().map(|v| v * v).sum::<f64>())
+        .sum();
+    let kaa = with_jitter(kernel.gram(old.inducing.as_ref()), jitter);
+    let ma = kaa.nrows();
+    let trace_a: f64 = (0..ma)
+        .map(|i| {
+            (0..ma)
+                .map(|j| old.data_precision[(i, j)] * (kaa[(j, i)] - qaa[(j, i)]))
+                .sum::<f64>()
+        })
+        .sum();
+    let pf = p as f64;
+    Ok(-0.5 * eta_s_eta + 0.5 * pf * l_bracket.log_det() - 0.5 * pf * trace_a)
 }
 
 /// `K_ba`, with the jitter added where an old inducing input is kept as a
@@ -343,7 +350,6 @@ pub fn streaming_objective(
     problem: StreamingProblem<'_>,
     with_inducing_gradient: bool,
 ) -> Result<crate::sparse_gp::bound::BoundEvaluation, RegressorError> {
-    let value = streaming_fit(problem)?.value;
     let StreamingProblem {
         kernel,
         noise_variance: s,
@@ -395,7 +401,9 @@ pub fn streaming_objective(
                 1.0,
             );
             let h_a = product(kbb_inv.as_ref(), kba.as_ref());
-            Some((old, cache_ba, kba_lambda, h_a))
+            // K_ab K_bb⁻¹ K_ba.
+            let qaa = product(kba.transpose(), h_a.as_ref());
+            Some((old, cache_ba, kba_lambda, h_a, qaa))
         }
         None => None,
     };
@@ -403,6 +411,15 @@ pub fn streaming_objective(
     let ls = Cholesky::factor(sigma)?;
     let sigma_inv = ls.inverse();
     let a = ls.solve(c.as_ref());
+    // F, with log|D| = log|Σ| − log|K_bb| and ‖L_D⁻¹L_b⁻¹c‖² = cᵀΣ⁻¹c.
+    let ca: f64 = (0..mb)
+        .map(|i| (0..p).map(|k| c[(i, k)] * a[(i, k)]).sum::<f64>())
+        .sum();
+    let mut value = -0.5 * (n * p) as f64 * (LN_2PI + s.ln()) + 0.5 * ca
+        - 0.5 * pf * (ls.log_det() - lb.log_det());
+    if let Some((old, _, _, _, qaa)) = &old_parts {
+        value += old_terms(kernel, old, qaa, jitter, p)?;
+    }
     // G_Σ = −½AAᵀ − (p/2)Σ⁻¹.
     let mut g_sigma = Mat::from_fn(mb, mb, |i, j| -0.5 * pf * sigma_inv[(i, j)]);
     gemm(
@@ -454,6 +471,13 @@ pub fn streaming_objective(
     let tr_a_kbf_y: f64 = (0..mb)
         .map(|i| (0..p).map(|k| a[(i, k)] * kbf_y[(i, k)]).sum::<f64>())
         .sum();
+    value += -0.5 * yy / s - 0.5 * pf / s * (kdiag.iter().sum::<f64>() - q_sum);
+    if !value.is_finite() {
+        return Err(RegressorError::NotPositiveDefinite {
+            n: mb,
+            jitter_tried: ls.jitter,
+        });
+    }
     let g_s = -0.5 * (n * p) as f64 / s
         + 0.5 * yy / (s * s)
         + 0.5 * pf / (s * s) * (kdiag.iter().sum::<f64>() - q_sum)
@@ -463,7 +487,7 @@ pub fn streaming_objective(
     let k = kernel.n_params();
     let mut gradient = vec![0.0; k + 1];
     let mut dz = with_inducing_gradient.then(|| Mat::<f64>::zeros(mb, zb.ncols()));
-    if let Some((old, cache_ba, kba_lambda, h_a)) = &old_parts {
+    if let Some((old, cache_ba, kba_lambda, h_a, _)) = &old_parts {
         let za = old.inducing.as_ref();
         // ∂F/∂K_bb gets −(p/2) H_a Λ_a H_aᵀ.
         let h_a_lambda = product(h_a.as_ref(), old.data_precision.as_ref());
