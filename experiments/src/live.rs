@@ -79,7 +79,21 @@ fn replay(
     description: &gpodo_kinematics::RoverDescription,
     model: &mut gpodo_node::LiveModel,
 ) -> anyhow::Result<()> {
-    let summary = gpodo_node::replay::replay(bag, map, description, model, out, rows, pace)?;
+    let summary = gpodo_node::replay::replay(
+        bag,
+        map,
+        description,
+        model,
+        out,
+        rows,
+        gpodo_node::replay::Playback {
+            pace,
+            stop: &crate::stop::requested,
+        },
+    )?;
+    if summary.stopped {
+        println!("stopped before the recording's end; what was replayed is kept");
+    }
     for reason in summary.skipped.iter().take(5) {
         tracing::warn!("joint state not used: {reason}");
     }

@@ -162,6 +162,60 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
         assert!(g.twist_covariance.iter().step_by(7).all(|v| *v >= 1e-8));
     }
 
+    // SIGINT and SIGTERM stop a replay at recorded speed cleanly: the
+    // process exits successfully, says it stopped, and what it wrote is a
+    // finished MCAP holding the first outputs of the full replay, unchanged.
+    #[cfg(unix)]
+    for signal in ["-INT", "-TERM"] {
+        let stopped = dir.join(format!("stopped{signal}.mcap"));
+        let (rover, test_bag) = (exoter(), dir.join("mcap/test.mcap"));
+        let args: [&std::ffi::OsStr; 12] = [
+            "--quiet".as_ref(),
+            "live".as_ref(),
+            "--model".as_ref(),
+            model.as_os_str(),
+            "--rover".as_ref(),
+            rover.as_os_str(),
+            "--topics".as_ref(),
+            topics.as_os_str(),
+            "--replay".as_ref(),
+            test_bag.as_os_str(),
+            "--out".as_ref(),
+            stopped.as_os_str(),
+        ];
+        let child = Command::new(GPODO)
+            .args(args)
+            .arg("--realtime")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_secs(4));
+        let killed = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let out = child.wait_with_output().unwrap();
+        assert_succeeded(
+            &out,
+            &format!("gpodo live, stopped by SIG{}: ", &signal[1..]),
+        );
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            said.contains("stopped before the recording's end"),
+            "{said}"
+        );
+        let kept = odometry(&stopped, "/odom/gp");
+        assert!(
+            !kept.is_empty() && kept.len() < gp.len() / 2,
+            "{} outputs kept of {}",
+            kept.len(),
+            gp.len()
+        );
+        assert_eq!(kept[..], gp[..kept.len()]);
+    }
+
     // Without `--replay`, a build without the `ros2` feature says how to
     // get one.
     if !cfg!(feature = "ros2") {

@@ -45,6 +45,9 @@ pub struct ReplaySummary {
     /// The node's work summed over the outputs (s): outputs over this is
     /// the highest joint-state rate it sustains on this machine.
     pub processing_secs: f64,
+    /// Whether `stop` ended the replay before the recording's end (what was
+    /// written up to then is kept, finished as a readable MCAP).
+    pub stopped: bool,
 }
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
@@ -65,9 +68,30 @@ pub enum Pace {
     Recorded,
 }
 
+/// How a replay runs: its pace, and what it asks before each message
+/// whether to stop there (at recorded speed, also while it waits).
+#[derive(Clone, Copy)]
+pub struct Playback<'a> {
+    /// As fast as it can, or at recorded speed.
+    pub pace: Pace,
+    /// Whether to stop now (the CLI's Ctrl-C and SIGTERM).
+    pub stop: &'a dyn Fn() -> bool,
+}
+
+impl Playback<'static> {
+    /// At `pace`, to the recording's end.
+    pub fn to_the_end(pace: Pace) -> Self {
+        fn never() -> bool {
+            false
+        }
+        Self { pace, stop: &never }
+    }
+}
+
 /// Replays `bag` through `model` on the rover `rover`, reading its topics
 /// as `map` says, at `pace`; writes the odometry to `out` and the rows to
-/// `rows`.
+/// `rows`, as `playback` says: once its `stop` says so, the replay ends
+/// there and finishes what it wrote.
 ///
 /// # Errors
 /// A bag, topic map or output that cannot be used, named; a message that
@@ -79,8 +103,9 @@ pub fn replay(
     model: &mut LiveModel,
     out: &Path,
     rows: Option<&Path>,
-    pace: Pace,
+    playback: Playback<'_>,
 ) -> Result<ReplaySummary, NodeError> {
+    let Playback { pace, stop } = playback;
     let joints = map
         .joints
         .as_ref()
@@ -139,17 +164,27 @@ pub fn replay(
         out_of_range: std::collections::BTreeMap::new(),
         latency_secs: None,
         processing_secs: 0.0,
+        stopped: false,
     };
     let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
     let started = std::time::Instant::now();
     let first_ns = order.first().map_or(0, |o| o.0);
+    // The longest sleep between two looks at `stop` at recorded speed.
+    const STOP_POLL: std::time::Duration = std::time::Duration::from_millis(20);
     for (ns, is_joint, k) in order {
         if pace == Pace::Recorded {
             let due = std::time::Duration::from_nanos(u64::try_from(ns - first_ns).unwrap_or(0));
-            if let Some(wait) = due.checked_sub(started.elapsed()) {
-                std::thread::sleep(wait);
+            while let Some(wait) = due.checked_sub(started.elapsed()) {
+                if stop() {
+                    break;
+                }
+                std::thread::sleep(wait.min(STOP_POLL));
             }
+        }
+        if stop() {
+            summary.stopped = true;
+            break;
         }
         let stamped = &messages[1 - is_joint][k];
         let receive_ns = stamped.log_time_ns as i64;

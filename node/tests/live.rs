@@ -324,7 +324,7 @@ fn a_joint_state_gets_the_imu_reading_of_its_time_whichever_topic_arrives_first(
 #[test]
 fn a_replay_at_the_recorded_speed_takes_the_recording_time_and_gives_the_same_odometry() {
     use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
-    use gpodo_node::replay::{Pace, replay};
+    use gpodo_node::replay::{Pace, Playback, replay};
     let tmp = tempfile::tempdir().unwrap();
     let (testbed, path) = fitted(tmp.path(), false);
     let mut log = testbed.test[0].clone();
@@ -342,7 +342,16 @@ fn a_replay_at_the_recorded_speed_takes_the_recording_time_and_gives_the_same_od
             LiveModel::load(&path, &exoter_yaml(), true, false, LiveSettings::default()).unwrap();
         let out = tmp.path().join(out);
         let started = std::time::Instant::now();
-        let summary = replay(&bag, &map, &rover, &mut model, &out, None, pace).unwrap();
+        let summary = replay(
+            &bag,
+            &map,
+            &rover,
+            &mut model,
+            &out,
+            None,
+            Playback::to_the_end(pace),
+        )
+        .unwrap();
         (
             started.elapsed().as_secs_f64(),
             summary,

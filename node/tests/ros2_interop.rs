@@ -86,7 +86,7 @@ fn a_cyclone_dds_peer_gets_what_the_replay_writes() {
         &mut load(),
         &replayed,
         None,
-        gpodo_node::replay::Pace::Fast,
+        gpodo_node::replay::Playback::to_the_end(gpodo_node::replay::Pace::Fast),
     )
     .unwrap();
     let expected = odometry(&replayed, "/odom/gp");

@@ -194,6 +194,18 @@ pub fn par() -> faer::Par {
     faer::get_global_parallelism()
 }
 
+/// Multiply-adds below which [`gemm`] runs sequentially, and entries below
+/// which [`for_column_blocks`] does: handing work to Rayon's pool and
+/// waiting for it costs microseconds, tens of them when the caller is not
+/// one of the pool's threads (a ROS node's callback, a Python call) or the
+/// pool's threads are asleep, more than such a product takes on one core.
+/// A one-row prediction with 100 inducing points is far below both.
+const SEQUENTIAL_WORK: usize = 1 << 18;
+
+/// Entries below which [`for_column_blocks`] runs sequentially (each entry
+/// costs a kernel profile, an `exp` or so: about 10 ns).
+const SEQUENTIAL_ENTRIES: usize = 1 << 12;
+
 /// Columns per block of [`for_column_blocks`].
 const COLUMN_BLOCK: usize = 64;
 
@@ -220,7 +232,12 @@ pub fn for_column_blocks<T: Send>(
         debug_assert_eq!(columns.len(), per_column.len());
         f(b * COLUMN_BLOCK, &mut columns, per_column);
     };
-    match par() {
+    let parallelism = if out.nrows() * out.ncols() < SEQUENTIAL_ENTRIES {
+        faer::Par::Seq
+    } else {
+        par()
+    };
+    match parallelism {
         faer::Par::Seq => {
             let n = out.ncols();
             for (b, j0) in (0..n).step_by(COLUMN_BLOCK).enumerate() {
@@ -243,10 +260,11 @@ pub fn for_column_blocks<T: Send>(
 }
 
 /// `dst = alpha·a·b` (or `dst += …` with [`Accum::Add`]) with faer's GEMM,
-/// run sequentially when the inner dimension dwarfs the output (e.g.
-/// `K_uf K_fu`, `m × n` by `n × m` with `n ≫ m`): faer's parallel GEMM splits
-/// the output only, and on such shapes it is far slower than its
-/// sequential kernel (`bench/README.md`, "Sparse GP").
+/// run sequentially when the product is small (see [`SEQUENTIAL_WORK`]) or
+/// the inner dimension dwarfs the output (e.g. `K_uf K_fu`, `m × n` by
+/// `n × m` with `n ≫ m`): faer's parallel GEMM splits the output only, and
+/// on such shapes it is far slower than its sequential kernel
+/// (`bench/README.md`, "Sparse GP").
 pub fn gemm(
     dst: MatMut<'_, f64>,
     accum: Accum,
@@ -255,7 +273,8 @@ pub fn gemm(
     alpha: f64,
 ) {
     let inner = a.ncols();
-    let parallelism = if inner > 4 * dst.nrows().max(dst.ncols()) {
+    let work = dst.nrows() * dst.ncols() * inner;
+    let parallelism = if work < SEQUENTIAL_WORK || inner > 4 * dst.nrows().max(dst.ncols()) {
         faer::Par::Seq
     } else {
         par()

@@ -72,19 +72,22 @@ impl SparsePosterior {
             self.weights.as_ref(),
             1.0,
         );
-        let mut kp = Mat::<f64>::zeros(xs.nrows(), self.inducing.nrows());
+        // `P k_*ᵀ` (`m × q`, `P` symmetric): with the queries as columns a
+        // one-row query is a matrix-vector product, not a GEMM that packs
+        // `P` for a single row.
+        let mut pk = Mat::<f64>::zeros(self.inducing.nrows(), xs.nrows());
         gemm(
-            kp.as_mut(),
+            pk.as_mut(),
             Accum::Replace,
-            k_star.as_ref(),
             self.variance_matrix.as_ref(),
+            k_star.as_ref().transpose(),
             1.0,
         );
         let prior = self.kernel.diag(xs);
         let latent_variance = (0..xs.nrows())
             .map(|i| {
                 let explained: f64 = (0..k_star.ncols())
-                    .map(|j| kp[(i, j)] * k_star[(i, j)])
+                    .map(|j| pk[(j, i)] * k_star[(i, j)])
                     .sum();
                 (prior[i] - explained).max(0.0)
             })
