@@ -219,6 +219,7 @@ impl LiveModel {
             SavedState::SparseGp(_) => "sparse_gp",
             SavedState::Ilgr(_) => "ilgr",
             SavedState::SparseSpectrum(_) => "sparse_spectrum",
+            SavedState::StreamingSparseGp(_) => "streaming_sparse_gp",
         };
         Ok(Self {
             summary: ModelSummary {

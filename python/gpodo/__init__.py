@@ -9,7 +9,8 @@ models with the ``gpodo`` command line::
     gp.save("model.gpodo")                 # what `gpodo predict --model` reads
     again = gpodo.load_model("model.gpodo")
 
-See ``help(gpodo.ExactGP)``, ``help(gpodo.SparseGP)``, ``help(gpodo.ILGR)``.
+See ``help(gpodo.ExactGP)``, ``help(gpodo.SparseGP)``, ``help(gpodo.ILGR)``,
+``help(gpodo.StreamingSparseGP)``.
 """
 
 import json
@@ -17,11 +18,16 @@ import json
 import numpy as np
 
 from . import _native
-from ._estimators import ILGR, ExactGP, SparseGP
+from ._estimators import ILGR, ExactGP, SparseGP, StreamingSparseGP
 
-__all__ = ["ExactGP", "SparseGP", "ILGR", "load_model", "kernel_names"]
+__all__ = ["ExactGP", "SparseGP", "ILGR", "StreamingSparseGP", "load_model", "kernel_names"]
 
-_KINDS = {"exact_gp": ExactGP, "sparse_gp": SparseGP, "ilgr": ILGR}
+_KINDS = {
+    "exact_gp": ExactGP,
+    "sparse_gp": SparseGP,
+    "ilgr": ILGR,
+    "streaming_sparse_gp": StreamingSparseGP,
+}
 
 
 def kernel_names():
@@ -49,6 +55,12 @@ def load_model(path):
             kernel=params["kernel"],
             approximation=params["approximation"],
             n_inducing=params["inducing"]["count"],
+        )
+    elif kind == "streaming_sparse_gp":
+        estimator.set_params(
+            kernel=params["kernel"],
+            n_inducing=params["inducing"]["count"],
+            batch_rows=params["batch_rows"],
         )
     estimator.model_ = model
     estimator.n_features_in_ = len(model.input_names)

@@ -1,13 +1,15 @@
 """scikit-learn estimators over gpodo's regressors.
 
 Each estimator's parameters are the settings of a `regressors:` entry of a
-gpodo experiment file (``kind: exact_gp``, ``sparse_gp``, ``ilgr``), under
+gpodo experiment file (``kind: exact_gp``, ``sparse_gp``, ``ilgr``,
+``streaming_sparse_gp``), under
 the same names, with these exceptions:
 
 ===========================  ==========================================
 Python                       YAML
 ===========================  ==========================================
-``SparseGP(n_inducing=m)``   ``inducing: {count: m}``
+``SparseGP(n_inducing=m)``   ``inducing: {count: m}`` (and for
+                             ``StreamingSparseGP``)
 ``hyperopt={...}``           the ``hyperopt:`` block, e.g. ``{"max_iters": 50}``
 ``init={...}``               the ``init:`` block (initial hyperparameters)
 ``settings={...}``           any other field, as written in YAML
@@ -26,7 +28,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from . import _native
 
-__all__ = ["ExactGP", "SparseGP", "ILGR"]
+__all__ = ["ExactGP", "SparseGP", "ILGR", "StreamingSparseGP"]
 
 
 def _input_names(estimator, n_features):
@@ -279,7 +281,32 @@ class SparseGP(_GpodoRegressor):
         )
 
 
-class ILGR(_GpodoRegressor):
+class _OnlineRegressor(_GpodoRegressor):
+    """An estimator that goes on learning from new rows."""
+
+    def partial_fit(self, X, y):
+        """Learns from more rows, one at a time, in order (fits first when
+        not fitted yet); a streaming sparse GP learns them in its batches,
+        keeping the rows of an unfinished batch until it is complete.
+        Returns the estimator."""
+        if not hasattr(self, "model_"):
+            return self.fit(X, y)
+        X, y = validate_data(
+            self, X, y, reset=False, multi_output=True, y_numeric=True, dtype=np.float64
+        )
+        Y = y.reshape(-1, 1) if y.ndim == 1 else y
+        if Y.shape[1] != len(self.model_.target_names):
+            raise ValueError(
+                f"y has {Y.shape[1]} outputs, the model was fitted on {len(self.model_.target_names)}"
+            )
+        self.model_.update(
+            np.ascontiguousarray(X, dtype=np.float64),
+            np.ascontiguousarray(Y, dtype=np.float64),
+        )
+        return self
+
+
+class ILGR(_OnlineRegressor):
     """Incremental local Gaussian regression (``kind: ilgr``), which goes on
     learning from new rows with ``partial_fit``.
 
@@ -327,25 +354,6 @@ class ILGR(_GpodoRegressor):
             }
         )
 
-    def partial_fit(self, X, y):
-        """Learns from more rows, one at a time, in order (fits first when
-        not fitted yet). Returns the estimator."""
-        if not hasattr(self, "model_"):
-            return self.fit(X, y)
-        X, y = validate_data(
-            self, X, y, reset=False, multi_output=True, y_numeric=True, dtype=np.float64
-        )
-        Y = y.reshape(-1, 1) if y.ndim == 1 else y
-        if Y.shape[1] != len(self.model_.target_names):
-            raise ValueError(
-                f"y has {Y.shape[1]} outputs, the model was fitted on {len(self.model_.target_names)}"
-            )
-        self.model_.update(
-            np.ascontiguousarray(X, dtype=np.float64),
-            np.ascontiguousarray(Y, dtype=np.float64),
-        )
-        return self
-
 
 def _check_kernel(kernel, allow_auto):
     if not isinstance(kernel, str):
@@ -360,3 +368,78 @@ def _check_kernel(kernel, allow_auto):
                 f"unknown kernel `{word}` in {kernel!r}; known kernels: {', '.join(known)}"
                 + (", or `auto`" if allow_auto else "")
             )
+
+
+class StreamingSparseGP(_OnlineRegressor):
+    """The streaming sparse GP (``kind: streaming_sparse_gp``; Bui, Nguyen
+    & Turner, NeurIPS 2017): a variational posterior over inducing points,
+    learned in batches that are never revisited, with the hyperparameters
+    and inducing inputs climbing the streaming bound on each batch. It goes
+    on learning with ``partial_fit``.
+
+    Parameters
+    ----------
+    kernel : str, default "rbf"
+        A kernel expression of the names ``gpodo.kernel_names()``.
+    n_inducing : int, default 100
+        The most inducing points a batch keeps (``inducing: {count: ...}``).
+    kept_inducing, warmup_rows, batch_rows, batch_iters, standardize,
+    noise_variance, seed
+        As in YAML; None takes gpodo's default.
+    init, hyperopt, settings, verbose
+        As for ``ExactGP``.
+    """
+
+    _kind = "streaming_sparse_gp"
+
+    def __init__(
+        self,
+        kernel="rbf",
+        n_inducing=100,
+        kept_inducing=None,
+        warmup_rows=None,
+        batch_rows=None,
+        batch_iters=None,
+        standardize=None,
+        noise_variance=None,
+        seed=None,
+        init=None,
+        hyperopt=None,
+        settings=None,
+        verbose=False,
+    ):
+        self.kernel = kernel
+        self.n_inducing = n_inducing
+        self.kept_inducing = kept_inducing
+        self.warmup_rows = warmup_rows
+        self.batch_rows = batch_rows
+        self.batch_iters = batch_iters
+        self.standardize = standardize
+        self.noise_variance = noise_variance
+        self.seed = seed
+        self.init = init
+        self.hyperopt = hyperopt
+        self.settings = settings
+        self.verbose = verbose
+
+    def _spec(self):
+        _check_kernel(self.kernel, allow_auto=False)
+        settings = dict(self.settings or {})
+        inducing = dict(settings.pop("inducing", {}) or {})
+        inducing["count"] = int(self.n_inducing)
+        return _drop_none(
+            {
+                **settings,
+                "kernel": self.kernel,
+                "inducing": inducing,
+                "kept_inducing": self.kept_inducing,
+                "warmup_rows": self.warmup_rows,
+                "batch_rows": self.batch_rows,
+                "batch_iters": self.batch_iters,
+                "standardize": self.standardize,
+                "noise_variance": self.noise_variance,
+                "seed": self.seed,
+                "init": self.init,
+                "hyperopt": self.hyperopt,
+            }
+        )

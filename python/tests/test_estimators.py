@@ -18,7 +18,7 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
 import gpodo
-from gpodo import ILGR, ExactGP, SparseGP
+from gpodo import ILGR, ExactGP, SparseGP, StreamingSparseGP
 
 
 def data(n=120, d=3, outputs=3, seed=0):
@@ -139,6 +139,24 @@ def test_ilgr_learns_on_with_partial_fit():
     assert after < before
     with pytest.raises(ValueError, match="features"):
         online.partial_fit(X[:5, :2], y[:5])
+
+
+def test_the_streaming_sparse_gp_learns_on_in_batches_and_pickles_mid_batch():
+    X, Y = data(n=300, outputs=1)
+    y = Y[:, 0]
+    online = StreamingSparseGP(n_inducing=20, warmup_rows=50, batch_rows=10).fit(X[:50], y[:50])
+    before = np.mean((online.predict(X[200:]) - y[200:]) ** 2)
+    for start in range(50, 195, 25):
+        online.partial_fit(X[start : start + 25], y[start : start + 25])
+    after = np.mean((online.predict(X[200:]) - y[200:]) ** 2)
+    assert after < before
+    # 145 rows after the first batch: 14 batches learned, 5 rows pending,
+    # which a pickled copy keeps and completes as the original does.
+    again = pickle.loads(pickle.dumps(online))
+    online.partial_fit(X[195:200], y[195:200])
+    again.partial_fit(X[195:200], y[195:200])
+    assert np.array_equal(online.predict(X[200:]), again.predict(X[200:]))
+    assert json.loads(online.model_.to_json())["state"]["batches"] == 16
 
 
 def test_a_dataframes_column_names_are_recorded_and_saved(tmp_path):
@@ -313,7 +331,8 @@ def test_progress_goes_to_sys_stderr_only_when_verbose(capsys):
 def test_every_public_name_has_a_docstring():
     for name in gpodo.__all__:
         assert getattr(gpodo, name).__doc__, name
-    for cls in (ExactGP, SparseGP, ILGR):
+    for cls in (ExactGP, SparseGP, ILGR, StreamingSparseGP):
         for method in ("fit", "predict", "save"):
             assert getattr(cls, method).__doc__, (cls, method)
     assert ILGR.partial_fit.__doc__
+    assert StreamingSparseGP.partial_fit.__doc__

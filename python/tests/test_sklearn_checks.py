@@ -3,7 +3,7 @@ checks that are expected to fail are listed with the reason."""
 
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from gpodo import ILGR, ExactGP, SparseGP
+from gpodo import ILGR, ExactGP, SparseGP, StreamingSparseGP
 
 # Small optimiser budgets keep the ~50 checks per estimator fast; the
 # checks test conventions, not accuracy.
@@ -11,6 +11,7 @@ ESTIMATORS = [
     ExactGP(hyperopt={"max_iters": 20}),
     SparseGP(n_inducing=10, hyperopt={"max_iters": 20}),
     ILGR(),
+    StreamingSparseGP(n_inducing=10, batch_iters=5, hyperopt={"max_iters": 20}),
 ]
 
 # Every check passes: no estimator has an expected failure to list (the

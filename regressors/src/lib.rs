@@ -54,4 +54,5 @@ pub use problem::{GpProblem, SparseProblem};
 pub use sparse_gp::{SparseGp, SparseGpParams};
 pub use sparse_spectrum::{SparseSpectrumGp, SparseSpectrumParams};
 pub use spec::RegressorSpec;
+pub use streaming_sparse_gp::{StreamingSparseGp, StreamingSparseGpParams};
 pub use zero::ZeroResidual;

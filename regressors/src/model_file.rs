@@ -30,6 +30,7 @@ use crate::exact_gp::{ExactGp, ExactGpState};
 use crate::ilgr::{Ilgr, IlgrState};
 use crate::sparse_gp::{SparseGp, SparseGpState};
 use crate::sparse_spectrum::{SparseSpectrumGp, SparseSpectrumState};
+use crate::streaming_sparse_gp::{StreamingSparseGp, StreamingSparseGpState};
 use crate::{RegressorError, RegressorSpec};
 
 /// What the first field of every model file says.
@@ -52,6 +53,9 @@ pub enum SavedState {
     Ilgr(IlgrState),
     /// A sparse-spectrum GP (which can go on learning online after loading).
     SparseSpectrum(Box<SparseSpectrumState>),
+    /// A streaming sparse GP (which can go on learning online after
+    /// loading, the unfinished batch's rows included).
+    StreamingSparseGp(Box<StreamingSparseGpState>),
 }
 
 /// Where a saved model came from.
@@ -231,12 +235,21 @@ impl ModelFile {
                         .map(|s| SavedState::SparseSpectrum(Box::new(s)));
                     (state, Box::new(m), report)
                 }
+                RegressorSpec::StreamingSparseGp(p) => {
+                    let mut m = StreamingSparseGp::new(p.clone())?;
+                    m.set_progress(progress);
+                    let report = m.fit(train)?;
+                    let state = m
+                        .state()
+                        .cloned()
+                        .map(|s| SavedState::StreamingSparseGp(Box::new(s)));
+                    (state, Box::new(m), report)
+                }
                 _ => {
                     return Err(ModelFileError::NotSavable {
                         label: spec.label(),
-                        why:
-                            "only exact_gp, sparse_gp, ilgr and sparse_spectrum models can be saved"
-                                .into(),
+                        why: "only exact_gp, sparse_gp, ilgr, sparse_spectrum and streaming_sparse_gp models can be saved"
+                            .into(),
                     });
                 }
             };
@@ -351,6 +364,9 @@ impl ModelFile {
             SavedState::SparseSpectrum(s) => {
                 Rebuilt::SparseSpectrum(Box::new(SparseSpectrumGp::from_state(s.as_ref().clone())?))
             }
+            SavedState::StreamingSparseGp(s) => Rebuilt::StreamingSparseGp(Box::new(
+                StreamingSparseGp::from_state(s.as_ref().clone())?,
+            )),
         };
         Ok(Predictor {
             model,
@@ -366,6 +382,7 @@ enum Rebuilt {
     SparseGp(Box<SparseGp>),
     Ilgr(Box<Ilgr>),
     SparseSpectrum(Box<SparseSpectrumGp>),
+    StreamingSparseGp(Box<StreamingSparseGp>),
 }
 
 /// A loaded model that predicts from raw input rows.
@@ -407,6 +424,7 @@ impl Predictor {
             Rebuilt::SparseGp(m) => m.predict_full(&inputs)?,
             Rebuilt::Ilgr(m) => return Ok((m.predict(&inputs)?, None)),
             Rebuilt::SparseSpectrum(m) => return Ok((m.predict(&inputs)?, None)),
+            Rebuilt::StreamingSparseGp(m) => return Ok((m.predict(&inputs)?, None)),
         };
         let predictions = Predictions {
             mean: full.mean,
@@ -426,6 +444,10 @@ impl Predictor {
                 .state()
                 .cloned()
                 .map(|s| SavedState::SparseSpectrum(Box::new(s))),
+            Rebuilt::StreamingSparseGp(m) => m
+                .state()
+                .cloned()
+                .map(|s| SavedState::StreamingSparseGp(Box::new(s))),
         }
     }
 
@@ -444,6 +466,7 @@ impl Predictor {
             Rebuilt::SparseGp(m) => m.as_ref(),
             Rebuilt::Ilgr(m) => m.as_ref(),
             Rebuilt::SparseSpectrum(m) => m.as_ref(),
+            Rebuilt::StreamingSparseGp(m) => m.as_ref(),
         }
     }
 
@@ -488,6 +511,7 @@ impl Predictor {
             Rebuilt::SparseGp(m) => m.as_mut(),
             Rebuilt::Ilgr(m) => m.as_mut(),
             Rebuilt::SparseSpectrum(m) => m.as_mut(),
+            Rebuilt::StreamingSparseGp(m) => m.as_mut(),
         }
     }
 }

@@ -11,6 +11,7 @@ use crate::ilgr::{Ilgr, IlgrParams};
 use crate::knn::{Knn, KnnParams};
 use crate::sparse_gp::{Approximation, SparseGp, SparseGpParams};
 use crate::sparse_spectrum::{SparseSpectrumGp, SparseSpectrumParams};
+use crate::streaming_sparse_gp::{StreamingSparseGp, StreamingSparseGpParams};
 use crate::{RegressorError, ZeroResidual};
 
 /// A regressor as written in an experiment file.
@@ -33,6 +34,9 @@ pub enum RegressorSpec {
     /// The sparse-spectrum GP learned online (I-SSGP): random Fourier
     /// features of a stationary kernel, exact rank-one updates.
     SparseSpectrum(SparseSpectrumParams),
+    /// The streaming sparse GP (Bui, Nguyen & Turner 2017), learning
+    /// online in batches from a variational posterior over inducing points.
+    StreamingSparseGp(StreamingSparseGpParams),
     /// k-nearest-neighbour regression (the worked example of adding a
     /// regressor).
     Knn(KnnParams),
@@ -82,6 +86,15 @@ impl RegressorSpec {
                 &["kernel", "features"][..],
                 to_json(p),
                 to_json(&SparseSpectrumParams::default()),
+            ),
+            Self::StreamingSparseGp(p) => (
+                format!(
+                    "streaming sparse GP (m={}, batch={}): {}",
+                    p.inducing.count, p.batch_rows, p.kernel
+                ),
+                &["kernel", "inducing.count", "batch_rows"][..],
+                to_json(p),
+                to_json(&StreamingSparseGpParams::default()),
             ),
             Self::Ilgr(p) => (
                 "ILGR".to_string(),
@@ -134,6 +147,7 @@ impl RegressorSpec {
             Self::SparseGp(p) => p.check(),
             Self::Ilgr(p) => p.check(),
             Self::SparseSpectrum(p) => p.check(),
+            Self::StreamingSparseGp(p) => p.check(),
             Self::Knn(p) => p.check(),
             Self::External(p) => p.check(),
         }
@@ -181,6 +195,12 @@ impl RegressorSpec {
                     5 * w * w + features * (features + p) + 4 * n * (d + p),
                 ))
             }
+            // Its first batch's sparse GP, and one batch's at a time after.
+            Self::StreamingSparseGp(s) => {
+                let w = (s.warmup_rows.max(s.batch_rows) as u128).min(n);
+                let m = s.inducing.count as u128;
+                Some(f64s(8 * m * w + 10 * m * m + 4 * n * (d + p)))
+            }
             Self::Zero { .. } | Self::Ilgr(_) | Self::Knn(_) | Self::External(_) => None,
         }
     }
@@ -206,6 +226,7 @@ impl RegressorSpec {
             Self::SparseSpectrum(p) => {
                 (p.warmup_rows.min(n) as f64).powi(3) + n_rows * (p.features as f64).powi(2)
             }
+            Self::StreamingSparseGp(p) => n_rows * (p.inducing.count as f64).powi(2),
             Self::External(_) => n_rows.powi(3),
             Self::Zero { .. } | Self::Ilgr(_) | Self::Knn(_) => n_rows,
         }
@@ -223,6 +244,7 @@ impl RegressorSpec {
             Self::SparseGp(p) => Box::new(SparseGp::new(p.clone())?),
             Self::Ilgr(p) => Box::new(Ilgr::new(p.clone())?),
             Self::SparseSpectrum(p) => Box::new(SparseSpectrumGp::new(p.clone())?),
+            Self::StreamingSparseGp(p) => Box::new(StreamingSparseGp::new(p.clone())?),
             Self::Knn(p) => Box::new(Knn::new(p.clone())?),
             Self::External(p) => Box::new(ExternalRegressor::new(p.clone())?),
         })

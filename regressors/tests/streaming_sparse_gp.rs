@@ -14,10 +14,15 @@ use faer::{Mat, MatRef};
 use gpodo_regressors::exact_gp::cholesky::Cholesky;
 use gpodo_regressors::sparse_gp::bound::sparse_objective;
 use gpodo_regressors::sparse_gp::{Approximation, SparsePosterior};
+use gpodo_regressors::sparse_gp::{InducingParams, SparseGp, SparseGpParams};
 use gpodo_regressors::streaming_sparse_gp::{
     InducingSummary, StreamingFit, StreamingProblem, streaming_fit,
 };
+use gpodo_regressors::streaming_sparse_gp::{
+    StreamingSparseGp, StreamingSparseGpParams, StreamingSparseGpState,
+};
 use gpodo_regressors::{GpProblem, Kernel, SparseProblem};
+use gpodo_traits::ResidualRegressor;
 use support::*;
 
 const JITTER: f64 = 1e-8;
@@ -362,5 +367,184 @@ fn the_streaming_bounds_gradients_match_finite_differences() {
                 }
             }
         }
+    }
+}
+
+/// A small stream: 40 warm-up rows, then batches of 8, 12 inducing points.
+fn stream_params() -> StreamingSparseGpParams {
+    StreamingSparseGpParams {
+        inducing: InducingParams {
+            count: 12,
+            ..Default::default()
+        },
+        warmup_rows: 40,
+        batch_rows: 8,
+        batch_iters: 8,
+        hyperopt: gpodo_regressors::hyperopt::HyperoptParams {
+            max_iters: 30,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn feed(model: &mut StreamingSparseGp, x: &Mat<f64>, y: &Mat<f64>, rows: std::ops::Range<usize>) {
+    for i in rows {
+        let xi: Vec<f64> = (0..x.ncols()).map(|q| x[(i, q)]).collect();
+        let yi: Vec<f64> = (0..y.ncols()).map(|q| y[(i, q)]).collect();
+        model.update(&xi, &yi).unwrap();
+    }
+}
+
+#[test]
+fn streaming_row_by_row_is_fitting_the_same_rows_and_a_saved_model_goes_on_identically() {
+    let mut rng = rng(71);
+    let (x, y) = {
+        let x = inputs(&mut rng, 120, 3);
+        let y = targets(&mut rng, &x, 0.05);
+        (x, y)
+    };
+    let queries = sample_matrix(&inputs(&mut rng, 7, 3));
+    // 40 + 5 × 8 = 80 rows: every batch complete.
+    let mut fitted = StreamingSparseGp::new(stream_params()).unwrap();
+    let head = Mat::from_fn(80, 3, |i, q| x[(i, q)]);
+    let head_y = Mat::from_fn(80, y.ncols(), |i, q| y[(i, q)]);
+    fitted.fit(&dataset(&head, &head_y)).unwrap();
+    let mut streamed = StreamingSparseGp::new(stream_params()).unwrap();
+    feed(&mut streamed, &x, &y, 0..39);
+    assert!(
+        streamed.state().is_none(),
+        "the first batch is not complete"
+    );
+    feed(&mut streamed, &x, &y, 39..80);
+    assert_eq!(streamed.state().unwrap().batches, 6);
+    assert_eq!(
+        fitted.predict(&queries).unwrap(),
+        streamed.predict(&queries).unwrap()
+    );
+
+    // Three rows of the next batch pending: saved, loaded, and both go on.
+    feed(&mut streamed, &x, &y, 80..83);
+    let json = serde_json::to_string(streamed.state().unwrap()).unwrap();
+    let state: StreamingSparseGpState = serde_json::from_str(&json).unwrap();
+    assert_eq!(state.pending.len(), 3);
+    let mut loaded = StreamingSparseGp::from_state(state).unwrap();
+    assert_eq!(
+        loaded.predict(&queries).unwrap(),
+        streamed.predict(&queries).unwrap()
+    );
+    feed(&mut streamed, &x, &y, 83..120);
+    feed(&mut loaded, &x, &y, 83..120);
+    assert_eq!(
+        loaded.predict(&queries).unwrap(),
+        streamed.predict(&queries).unwrap()
+    );
+    assert_eq!(loaded.state().unwrap().batches, 11);
+}
+
+#[test]
+fn the_stream_gives_the_same_numbers_at_one_and_two_threads() {
+    let mut rng = rng(72);
+    let x = inputs(&mut rng, 100, 3);
+    let y = targets(&mut rng, &x, 0.05);
+    let queries = sample_matrix(&inputs(&mut rng, 5, 3));
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut model = StreamingSparseGp::new(stream_params()).unwrap();
+            feed(&mut model, &x, &y, 0..100);
+            model.predict(&queries).unwrap()
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn the_stream_learns_the_function_nearly_as_the_batch_sparse_gp_does() {
+    let mut rng = rng(73);
+    let x = inputs(&mut rng, 400, 2);
+    let y = targets(&mut rng, &x, 0.05);
+    let xt = inputs(&mut rng, 200, 2);
+    let yt = targets(&mut rng, &xt, 0.0);
+    let rmse = |p: &gpodo_traits::Predictions| {
+        let mut s = 0.0;
+        for i in 0..yt.nrows() {
+            for j in 0..yt.ncols() {
+                s += (p.mean.get(i, j) - yt[(i, j)]).powi(2);
+            }
+        }
+        (s / (yt.nrows() * yt.ncols()) as f64).sqrt()
+    };
+    let zero = {
+        let mut s = 0.0;
+        for i in 0..yt.nrows() {
+            for j in 0..yt.ncols() {
+                s += yt[(i, j)].powi(2);
+            }
+        }
+        (s / (yt.nrows() * yt.ncols()) as f64).sqrt()
+    };
+    let mut streamed = StreamingSparseGp::new(StreamingSparseGpParams {
+        inducing: InducingParams {
+            count: 30,
+            ..Default::default()
+        },
+        warmup_rows: 50,
+        batch_rows: 10,
+        ..Default::default()
+    })
+    .unwrap();
+    feed(&mut streamed, &x, &y, 0..400);
+    let mut batch = SparseGp::new(SparseGpParams {
+        inducing: InducingParams {
+            count: 30,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+    .unwrap();
+    batch.fit(&dataset(&x, &y)).unwrap();
+    let queries = sample_matrix(&xt);
+    let (s, b) = (
+        rmse(&streamed.predict(&queries).unwrap()),
+        rmse(&batch.predict(&queries).unwrap()),
+    );
+    eprintln!("held-out RMSE: streamed {s:.4}, batch sparse GP {b:.4}, zero {zero:.4}");
+    assert!(
+        s < 1.5 * b && s < 0.3 * zero,
+        "streamed {s}, batch {b}, zero {zero}"
+    );
+}
+
+#[test]
+fn bad_streaming_settings_are_named() {
+    for (params, field) in [
+        (
+            StreamingSparseGpParams {
+                kept_inducing: 1.0,
+                ..Default::default()
+            },
+            "kept_inducing",
+        ),
+        (
+            StreamingSparseGpParams {
+                batch_rows: 0,
+                ..Default::default()
+            },
+            "batch_rows",
+        ),
+        (
+            StreamingSparseGpParams {
+                warmup_rows: 1,
+                ..Default::default()
+            },
+            "warmup_rows",
+        ),
+    ] {
+        let err = StreamingSparseGp::new(params).unwrap_err().to_string();
+        assert!(err.contains(field), "{err}");
     }
 }

@@ -2,10 +2,15 @@
 //! variational posterior over inducing points updated batch by batch,
 //! never revisiting old data. [`bound`]: the collapsed streaming bound and
 //! its optimal posterior at given hyperparameters and inducing inputs, and
-//! the bound's gradient for learning them.
+//! the bound's gradient for learning them; [`model`]: the regressor that
+//! learns a stream in batches with them.
 
 pub mod bound;
+pub mod model;
+pub mod params;
 
 pub use bound::{
     InducingSummary, StreamingFit, StreamingProblem, streaming_fit, streaming_objective,
 };
+pub use model::{SavedSummary, StreamingSparseGp, StreamingSparseGpState};
+pub use params::StreamingSparseGpParams;

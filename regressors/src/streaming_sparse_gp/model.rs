@@ -1,0 +1,635 @@
+//! The streaming sparse GP as a regressor (`kind: streaming_sparse_gp`):
+//! rows arrive one at a time and are learned in batches, each batch's
+//! posterior over its inducing outputs the prior of the next, no row ever
+//! seen twice.
+//!
+//! - **First batch** (`warmup_rows` rows): z-scoring from its statistics,
+//!   inducing inputs placed by k-means, hyperparameters and inducing inputs
+//!   learned with the sparse GP's `hyperopt` recipe on its bound (the batch
+//!   VFE bound, since nothing came before).
+//! - **Each later batch** (`batch_rows` rows): the inducing inputs are kept
+//!   and added to (every old one while there are fewer than
+//!   `inducing.count`; then a seeded random `kept_inducing` share of the
+//!   old ones and the rest drawn from the batch's inputs, as the authors'
+//!   experiments do); L-BFGS climbs the streaming bound over the
+//!   hyperparameters and those inducing inputs for `batch_iters`
+//!   iterations from where the previous batch ended; the optimal `q(b)`
+//!   there becomes the new summary.
+
+use std::time::Instant;
+
+use faer::{Mat, MatRef};
+use gpodo_traits::{
+    Error, FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
+    Standardizer,
+};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::bound::{InducingSummary, StreamingProblem, streaming_fit, streaming_objective};
+use super::params::StreamingSparseGpParams;
+use crate::RegressorError;
+use crate::dense::{from_faer, to_faer};
+use crate::hyperopt::{
+    Coordinates, HyperProblem, Objective, ProgressSink, SearchSpace, learn, maximize, starts,
+};
+use crate::kernels::Kernel;
+use crate::scaling::{ScaledTraining, check_finite, scale_queries, unscale_predictions};
+use crate::sparse_gp::SparsePosterior;
+use crate::sparse_gp::inducing::place_inducing;
+
+/// The old batches' summary as saved: what they told the function at their
+/// inducing inputs ([`InducingSummary`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SavedSummary {
+    /// Inducing inputs `Z_a` (`M × d`, standardised units).
+    pub inducing: SampleMatrix,
+    /// `K'_aa` under the hyperparameters it was computed with.
+    pub prior_covariance: SampleMatrix,
+    /// `Λ_a` (`M × M`).
+    pub data_precision: SampleMatrix,
+    /// `η_a` (`M × p`).
+    pub natural_mean: SampleMatrix,
+}
+
+/// Everything needed to predict and go on learning, serialisable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StreamingSparseGpState {
+    /// The settings.
+    pub params: StreamingSparseGpParams,
+    /// Input column names.
+    pub input_names: Vec<String>,
+    /// Output column names.
+    pub target_names: Vec<String>,
+    /// The first batch's input scaling (None when `standardize` is off or
+    /// the inputs came z-scored).
+    pub input_scaler: Option<Standardizer>,
+    /// The first batch's target scaling.
+    pub output_scaler: Option<Standardizer>,
+    /// Kernel with the last batch's hyperparameters (standardised units).
+    pub kernel: Kernel,
+    /// The last batch's noise variance (standardised units).
+    pub noise_variance: f64,
+    /// The summary the next batch starts from.
+    pub summary: SavedSummary,
+    /// The posterior's weights `β` (`M × p`), as the sparse GP's.
+    pub weights: SampleMatrix,
+    /// The posterior's `P` (`M × M`), as the sparse GP's.
+    pub variance_matrix: SampleMatrix,
+    /// The last batch's bound.
+    pub objective: f64,
+    /// Batches learned.
+    pub batches: usize,
+    /// Rows learned.
+    pub rows_seen: usize,
+    /// Rows of the batch not yet complete (raw units), learned with it.
+    pub pending: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+/// The streaming sparse GP regressor.
+#[derive(Debug, Clone)]
+pub struct StreamingSparseGp {
+    params: StreamingSparseGpParams,
+    learned: Option<(StreamingSparseGpState, SparsePosterior)>,
+    /// Rows of a stream kept until the first batch is complete.
+    buffer: Vec<(Vec<f64>, Vec<f64>)>,
+    progress: ProgressSink,
+}
+
+/// The bound of one batch over `(log θ, log σ², Z_b)` (`Z_b` only when
+/// learned).
+struct BatchObjective<'a> {
+    template: &'a Kernel,
+    x: MatRef<'a, f64>,
+    y: MatRef<'a, f64>,
+    inducing: &'a Mat<f64>,
+    learn_inducing: bool,
+    old: Option<&'a InducingSummary>,
+    jitter: f64,
+}
+
+impl BatchObjective<'_> {
+    fn unpack(&self, coords: &[f64]) -> (Kernel, f64, Mat<f64>) {
+        let k = self.template.n_params();
+        let mut kernel = self.template.clone();
+        kernel.set_log_params(&coords[..k]);
+        let (m, d) = (self.inducing.nrows(), self.inducing.ncols());
+        let z = if self.learn_inducing {
+            Mat::from_fn(m, d, |i, q| coords[k + 1 + i * d + q])
+        } else {
+            self.inducing.clone()
+        };
+        (kernel, coords[k].exp(), z)
+    }
+
+    /// The coordinates of `kernel`, `noise` and (when learned) `Z_b`.
+    fn pack(&self, kernel: &Kernel, noise: f64) -> Vec<f64> {
+        let mut coords = kernel.log_params();
+        coords.push(noise.ln());
+        if self.learn_inducing {
+            coords.extend(flat(self.inducing.as_ref()));
+        }
+        coords
+    }
+
+    fn problem<'b>(
+        &'b self,
+        kernel: &'b Kernel,
+        noise: f64,
+        z: &'b Mat<f64>,
+    ) -> StreamingProblem<'b> {
+        StreamingProblem {
+            kernel,
+            noise_variance: noise,
+            x: self.x,
+            y: self.y,
+            inducing: z.as_ref(),
+            old: self.old,
+            jitter: self.jitter,
+        }
+    }
+
+    fn space(&self, bounds: &crate::hyperopt::Bounds) -> SearchSpace {
+        let free = if self.learn_inducing {
+            self.inducing.nrows() * self.inducing.ncols()
+        } else {
+            0
+        };
+        SearchSpace::kernel(self.template, bounds).with_free(free)
+    }
+}
+
+impl Objective for BatchObjective<'_> {
+    fn evaluate(&self, coords: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
+        let (kernel, noise, z) = self.unpack(coords);
+        let eval = streaming_objective(self.problem(&kernel, noise, &z), self.learn_inducing)?;
+        let mut gradient = eval.gradient.unwrap_or_default();
+        if let Some(dz) = eval.inducing_gradient {
+            gradient.extend(flat(dz.as_ref()));
+        }
+        Ok((eval.value, gradient))
+    }
+}
+
+/// The rows of `m`, one after another.
+fn flat(m: MatRef<'_, f64>) -> Vec<f64> {
+    (0..m.nrows())
+        .flat_map(|i| (0..m.ncols()).map(move |q| m[(i, q)]))
+        .collect()
+}
+
+/// `k` of `0..n` drawn without replacement, in increasing order.
+fn draw(rng: &mut ChaCha8Rng, n: usize, k: usize) -> Vec<usize> {
+    let mut picked = rand::seq::index::sample(rng, n, k.min(n)).into_vec();
+    picked.sort_unstable();
+    picked
+}
+
+/// A batch's first inducing inputs: the old ones kept and the batch's
+/// inputs added, at most `count` in all (see the module's description).
+fn keep_and_add(
+    old: MatRef<'_, f64>,
+    x: MatRef<'_, f64>,
+    count: usize,
+    kept_share: f64,
+    rng: &mut ChaCha8Rng,
+) -> Mat<f64> {
+    let (m_old, n) = (old.nrows(), x.nrows());
+    let fresh = count
+        .saturating_sub(m_old)
+        .max(count - (kept_share * count as f64).floor() as usize);
+    let added = draw(rng, n, fresh.min(n));
+    let kept = draw(rng, m_old, count.saturating_sub(added.len()).min(m_old));
+    let rows: Vec<MatRef<'_, f64>> = kept
+        .iter()
+        .map(|&i| old.subrows(i, 1))
+        .chain(added.iter().map(|&i| x.subrows(i, 1)))
+        .collect();
+    Mat::from_fn(rows.len(), x.ncols(), |i, q| rows[i][(0, q)])
+}
+
+fn summary_to_saved(s: &InducingSummary) -> SavedSummary {
+    SavedSummary {
+        inducing: from_faer(s.inducing.as_ref()),
+        prior_covariance: from_faer(s.prior_covariance.as_ref()),
+        data_precision: from_faer(s.data_precision.as_ref()),
+        natural_mean: from_faer(s.natural_mean.as_ref()),
+    }
+}
+
+fn saved_to_summary(s: &SavedSummary) -> InducingSummary {
+    InducingSummary {
+        inducing: to_faer(&s.inducing),
+        prior_covariance: to_faer(&s.prior_covariance),
+        data_precision: to_faer(&s.data_precision),
+        natural_mean: to_faer(&s.natural_mean),
+    }
+}
+
+/// `rows` as a dataset with placeholder column names.
+fn rows_dataset(rows: &[(Vec<f64>, Vec<f64>)]) -> Result<ResidualDataset, Error> {
+    let (d, p) = (rows[0].0.len(), rows[0].1.len());
+    let inputs: Vec<&[f64]> = rows.iter().map(|r| r.0.as_slice()).collect();
+    let targets: Vec<&[f64]> = rows.iter().map(|r| r.1.as_slice()).collect();
+    ResidualDataset::new(
+        SampleMatrix::from_rows(d, &inputs)?,
+        SampleMatrix::from_rows(p, &targets)?,
+        (0..d).map(|j| format!("x{j}")).collect(),
+        (0..p).map(|j| format!("y{j}")).collect(),
+    )
+}
+
+impl StreamingSparseGp {
+    /// A model with checked settings.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidSpec`] naming the bad field.
+    pub fn new(params: StreamingSparseGpParams) -> Result<Self, RegressorError> {
+        params.check()?;
+        Ok(Self {
+            params,
+            learned: None,
+            buffer: Vec::new(),
+            progress: ProgressSink::default(),
+        })
+    }
+
+    /// The learned state (None before the first batch).
+    pub fn state(&self) -> Option<&StreamingSparseGpState> {
+        self.learned.as_ref().map(|(s, _)| s)
+    }
+
+    /// The posterior predictions come from (None before the first batch).
+    pub fn posterior(&self) -> Option<&SparsePosterior> {
+        self.learned.as_ref().map(|(_, p)| p)
+    }
+
+    /// Rebuilds a model from its saved state; it predicts and goes on
+    /// learning as the model that was saved would have.
+    ///
+    /// # Errors
+    /// [`RegressorError::InvalidData`] when the state is inconsistent.
+    pub fn from_state(state: StreamingSparseGpState) -> Result<Self, RegressorError> {
+        state.params.check()?;
+        let s = &state.summary;
+        for (what, m) in [
+            ("saved inducing inputs", &s.inducing),
+            ("saved prior covariance", &s.prior_covariance),
+            ("saved data precision", &s.data_precision),
+            ("saved natural mean", &s.natural_mean),
+            ("saved weights", &state.weights),
+            ("saved variance matrix", &state.variance_matrix),
+        ] {
+            check_finite(what, m)?;
+        }
+        let m = s.inducing.nrows();
+        let consistent = [
+            &s.prior_covariance,
+            &s.data_precision,
+            &state.variance_matrix,
+        ]
+        .iter()
+        .all(|a| a.nrows() == m && a.ncols() == m)
+            && s.natural_mean.nrows() == m
+            && s.natural_mean.ncols() == state.target_names.len()
+            && state.weights.nrows() == m
+            && state.weights.ncols() == state.target_names.len()
+            && s.inducing.ncols() == state.input_names.len();
+        if !consistent {
+            return Err(RegressorError::InvalidData {
+                detail: "saved streaming sparse GP state: its summary's shapes disagree with each other or with its columns".into(),
+            });
+        }
+        let posterior = SparsePosterior {
+            kernel: state.kernel.clone(),
+            noise_variance: state.noise_variance,
+            inducing: to_faer(&s.inducing),
+            weights: to_faer(&state.weights),
+            variance_matrix: to_faer(&state.variance_matrix),
+            objective: state.objective,
+            extra_jitter: 0.0,
+        };
+        Ok(Self {
+            params: state.params.clone(),
+            learned: Some((state, posterior)),
+            buffer: Vec::new(),
+            progress: ProgressSink::default(),
+        })
+    }
+
+    /// The first batch: scaling, placement and the full recipe.
+    fn first_batch(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        let p = &self.params;
+        let scaled = ScaledTraining::new(data, p.standardize)?;
+        let (x, y) = (to_faer(&scaled.x), to_faer(&scaled.y));
+        let z0 = place_inducing(x.as_ref(), &p.inducing, p.seed);
+        let template = p.kernel.build(x.ncols(), &p.init);
+        let objective = BatchObjective {
+            template: &template,
+            x: x.as_ref(),
+            y: y.as_ref(),
+            inducing: &z0,
+            learn_inducing: !p.inducing.fixed,
+            old: None,
+            jitter: p.jitter,
+        };
+        let z_coords = if objective.learn_inducing {
+            flat(z0.as_ref())
+        } else {
+            Vec::new()
+        };
+        let bases = starts::kernel_bases(&p.kernel, &p.init, objective.x, p.noise_variance)
+            .into_iter()
+            .map(|(label, mut c)| {
+                c.extend_from_slice(&z_coords);
+                (label, c)
+            })
+            .collect();
+        let score = |c: &[f64]| objective.evaluate(c).map(|(v, _)| v);
+        let problem = HyperProblem {
+            objective: &objective,
+            score: &score,
+            space: objective.space(&p.hyperopt.bounds),
+            bases,
+            value_scale: 1.0 / (y.nrows() * y.ncols()) as f64,
+        };
+        let (out, starts) = learn(&problem, &p.hyperopt, p.seed, &self.progress)?;
+        let (kernel, noise, z) = objective.unpack(&out.coords);
+        let fit = streaming_fit(objective.problem(&kernel, noise, &z))?;
+        let state = StreamingSparseGpState {
+            params: self.params.clone(),
+            input_names: data.input_names.clone(),
+            target_names: data.target_names.clone(),
+            input_scaler: scaled.input_scaler,
+            output_scaler: scaled.output_scaler,
+            kernel,
+            noise_variance: noise,
+            summary: summary_to_saved(&fit.summary),
+            weights: from_faer(fit.posterior.weights.as_ref()),
+            variance_matrix: from_faer(fit.posterior.variance_matrix.as_ref()),
+            objective: fit.value,
+            batches: 1,
+            rows_seen: data.len(),
+            pending: Vec::new(),
+        };
+        let report = FitReport {
+            n_samples: data.len(),
+            duration_secs: start.elapsed().as_secs_f64(),
+            objective: Some(fit.value),
+            evaluations: Some(out.evaluations),
+            iterations: Some(out.iterations),
+            starts,
+            ..FitReport::default()
+        };
+        self.learned = Some((state, fit.posterior));
+        Ok(report)
+    }
+
+    /// Learns a later batch of raw rows from the summary.
+    fn next_batch(&mut self, rows: &[(Vec<f64>, Vec<f64>)]) -> Result<(), RegressorError> {
+        let Some((state, _)) = &self.learned else {
+            return Err(RegressorError::InvalidData {
+                detail: "streaming_sparse_gp: a later batch before the first".into(),
+            });
+        };
+        let p = &self.params;
+        let data = rows_dataset(rows)?;
+        let scale = |m: &SampleMatrix, s: &Option<Standardizer>| match s {
+            Some(s) => s.transform(m).map(|m| to_faer(&m)),
+            None => Ok(to_faer(m)),
+        };
+        let x = scale(&data.inputs, &state.input_scaler)?;
+        let y = scale(&data.targets, &state.output_scaler)?;
+        let old = saved_to_summary(&state.summary);
+        // A stream of its own per batch, so that a saved model goes on as
+        // the one that was saved.
+        let mut rng = ChaCha8Rng::seed_from_u64(
+            p.seed ^ (state.batches as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        );
+        let zb0 = keep_and_add(
+            old.inducing.as_ref(),
+            x.as_ref(),
+            p.inducing.count,
+            p.kept_inducing,
+            &mut rng,
+        );
+        let objective = BatchObjective {
+            template: &state.kernel,
+            x: x.as_ref(),
+            y: y.as_ref(),
+            inducing: &zb0,
+            learn_inducing: !p.inducing.fixed,
+            old: Some(&old),
+            jitter: p.jitter,
+        };
+        let start = objective.pack(&state.kernel, state.noise_variance);
+        let (kernel, noise, z) = if p.batch_iters == 0 {
+            objective.unpack(&start)
+        } else {
+            let space = objective.space(&p.hyperopt.bounds);
+            let coords = Coordinates {
+                start,
+                bounds: space.bounds,
+                perturb: space.perturb,
+            };
+            let mut settings = p.hyperopt.settings(p.seed);
+            settings.max_iters = p.batch_iters;
+            settings.restarts = 0;
+            match maximize(
+                &objective,
+                &coords,
+                1.0 / (y.nrows() * y.ncols()) as f64,
+                &settings,
+                self.progress.0.as_ref(),
+            ) {
+                Ok(out) => objective.unpack(&out.coords),
+                Err(RegressorError::Stopped) => return Err(RegressorError::Stopped),
+                Err(e) => {
+                    tracing::warn!(
+                        batch = state.batches + 1,
+                        "streaming_sparse_gp: the batch's hyperparameter step failed ({e}); \
+                         the previous hyperparameters are kept"
+                    );
+                    objective.unpack(&coords.start)
+                }
+            }
+        };
+        let fit = streaming_fit(objective.problem(&kernel, noise, &z))?;
+        let Some((state, posterior)) = &mut self.learned else {
+            return Ok(());
+        };
+        state.kernel = kernel;
+        state.noise_variance = noise;
+        state.summary = summary_to_saved(&fit.summary);
+        state.weights = from_faer(fit.posterior.weights.as_ref());
+        state.variance_matrix = from_faer(fit.posterior.variance_matrix.as_ref());
+        state.objective = fit.value;
+        state.batches += 1;
+        state.rows_seen += rows.len();
+        *posterior = fit.posterior;
+        Ok(())
+    }
+
+    fn fit_impl(&mut self, data: &ResidualDataset) -> Result<FitReport, RegressorError> {
+        let start = Instant::now();
+        self.learned = None;
+        self.buffer.clear();
+        let n = data.len();
+        if n < 2 {
+            return Err(RegressorError::InvalidData {
+                detail: "streaming_sparse_gp needs at least 2 rows".into(),
+            });
+        }
+        let w = self.params.warmup_rows.min(n);
+        let mut report = self.first_batch(&data.select(&(0..w).collect::<Vec<_>>()))?;
+        let rows: Vec<(Vec<f64>, Vec<f64>)> = (w..n)
+            .map(|i| (data.inputs.row(i).to_vec(), data.targets.row(i).to_vec()))
+            .collect();
+        for batch in rows.chunks(self.params.batch_rows) {
+            if self.progress.stop_requested() {
+                return Err(RegressorError::Stopped);
+            }
+            self.next_batch(batch)?;
+        }
+        if let Some((state, posterior)) = &self.learned {
+            report.objective = Some(state.objective);
+            report.parameters = state
+                .kernel
+                .param_names(&data.input_names)
+                .into_iter()
+                .zip(state.kernel.log_params().into_iter().map(f64::exp))
+                .chain([
+                    ("noise_variance".to_string(), state.noise_variance),
+                    (
+                        "inducing_points".to_string(),
+                        posterior.inducing.nrows() as f64,
+                    ),
+                    ("batches".to_string(), state.batches as f64),
+                ])
+                .collect();
+        }
+        report.n_samples = n;
+        report.duration_secs = start.elapsed().as_secs_f64();
+        Ok(report)
+    }
+
+    /// A stream's row: kept until its batch is complete, then learned.
+    fn learn_row(&mut self, x: &[f64], y: &[f64]) -> Result<(), Error> {
+        let width = match &self.learned {
+            Some((s, _)) => Some((s.input_names.len(), s.target_names.len())),
+            None => self.buffer.first().map(|(x0, y0)| (x0.len(), y0.len())),
+        };
+        if let Some((d, p)) = width
+            && (x.len() != d || y.len() != p)
+        {
+            return Err(Error::DimensionMismatch {
+                what: "streaming_sparse_gp inputs and targets".into(),
+                expected: d + p,
+                found: x.len() + y.len(),
+            });
+        }
+        if x.iter().chain(y).any(|v| !v.is_finite()) {
+            return Err(Error::InvalidInput(
+                "streaming_sparse_gp: a non-finite input or target".into(),
+            ));
+        }
+        match &mut self.learned {
+            None => {
+                self.buffer.push((x.to_vec(), y.to_vec()));
+                if self.buffer.len() >= self.params.warmup_rows {
+                    let rows = std::mem::take(&mut self.buffer);
+                    self.first_batch(&rows_dataset(&rows)?)?;
+                }
+            }
+            Some((state, _)) => {
+                state.pending.push((x.to_vec(), y.to_vec()));
+                if state.pending.len() >= self.params.batch_rows {
+                    let rows = std::mem::take(&mut state.pending);
+                    self.next_batch(&rows)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Before the first batch: the kept rows' mean and variance per output
+    /// (an error before any row).
+    fn predict_before_first_batch(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let Some((_, y0)) = self.buffer.first() else {
+            return Err(Error::NotFitted {
+                model: self.name().into(),
+            });
+        };
+        let (n, p) = (self.buffer.len() as f64, y0.len());
+        let mean: Vec<f64> = (0..p)
+            .map(|j| self.buffer.iter().map(|r| r.1[j]).sum::<f64>() / n)
+            .collect();
+        let variance: Vec<f64> = (0..p)
+            .map(|j| {
+                let spread: f64 = self.buffer.iter().map(|r| (r.1[j] - mean[j]).powi(2)).sum();
+                if n > 1.0 {
+                    spread / (n - 1.0)
+                } else {
+                    mean[j] * mean[j]
+                }
+            })
+            .collect();
+        let q = inputs.nrows();
+        Ok(Predictions {
+            mean: SampleMatrix::from_row_major(q, p, mean.repeat(q))?,
+            variance: SampleMatrix::from_row_major(q, p, variance.repeat(q))?,
+        })
+    }
+}
+
+impl ResidualRegressor for StreamingSparseGp {
+    fn name(&self) -> &str {
+        "streaming_sparse_gp"
+    }
+
+    fn fit(&mut self, data: &ResidualDataset) -> Result<FitReport, Error> {
+        self.fit_impl(data).map_err(Error::from)
+    }
+
+    fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+        let Some((state, posterior)) = &self.learned else {
+            return self.predict_before_first_batch(inputs);
+        };
+        let xs = scale_queries(
+            self.name(),
+            inputs,
+            state.input_names.len(),
+            state.input_scaler.as_ref(),
+        )?;
+        let moments = posterior.predict(xs.as_ref());
+        let (q, p) = (xs.nrows(), moments.mean.ncols());
+        let latent = Mat::from_fn(q, p, |i, _| moments.latent_variance[i]);
+        let noisy = Mat::from_fn(q, p, |i, _| {
+            moments.latent_variance[i] + moments.noise_variance
+        });
+        let full = unscale_predictions(
+            moments.mean.as_ref(),
+            latent.as_ref(),
+            noisy.as_ref(),
+            state.output_scaler.as_ref(),
+        )?;
+        Ok(Predictions {
+            mean: full.mean,
+            variance: full.variance,
+        })
+    }
+
+    fn set_progress(&mut self, progress: Option<std::sync::Arc<dyn FitProgress>>) {
+        self.progress = ProgressSink(progress);
+    }
+
+    fn supports_online_update(&self) -> bool {
+        true
+    }
+
+    fn update(&mut self, inputs: &[f64], targets: &[f64]) -> Result<(), Error> {
+        self.learn_row(inputs, targets)
+    }
+}
