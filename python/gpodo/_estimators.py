@@ -126,8 +126,11 @@ class _GpodoRegressor(RegressorMixin, BaseEstimator):
         self.__dict__.update(state)
 
 
-def _drop_none(settings):
-    return {k: v for k, v in settings.items() if v is not None}
+def _with_settings(settings, explicit):
+    """``settings`` (any field, as in YAML) overridden by the explicit
+    parameters that are not None: a parameter left at None neither sets
+    nor hides its field."""
+    return {**(settings or {}), **{k: v for k, v in explicit.items() if v is not None}}
 
 
 class ExactGP(_GpodoRegressor):
@@ -192,9 +195,9 @@ class ExactGP(_GpodoRegressor):
 
     def _spec(self):
         _check_kernel(self.kernel, allow_auto=True)
-        return _drop_none(
+        return _with_settings(
+            self.settings,
             {
-                **(self.settings or {}),
                 "kernel": self.kernel,
                 "outputs": self.outputs,
                 "standardize": self.standardize,
@@ -265,9 +268,9 @@ class SparseGP(_GpodoRegressor):
         settings = dict(self.settings or {})
         inducing = dict(settings.pop("inducing", {}) or {})
         inducing["count"] = int(self.n_inducing)
-        return _drop_none(
+        return _with_settings(
+            settings,
             {
-                **settings,
                 "kernel": self.kernel,
                 "approximation": self.approximation,
                 "inducing": inducing,
@@ -342,9 +345,9 @@ class ILGR(_OnlineRegressor):
         self.verbose = verbose
 
     def _spec(self):
-        return _drop_none(
+        return _with_settings(
+            self.settings,
             {
-                **(self.settings or {}),
                 "w_gen": self.w_gen,
                 "init_lengthscale": self.init_lengthscale,
                 "forgetting": self.forgetting,
@@ -427,9 +430,9 @@ class StreamingSparseGP(_OnlineRegressor):
         settings = dict(self.settings or {})
         inducing = dict(settings.pop("inducing", {}) or {})
         inducing["count"] = int(self.n_inducing)
-        return _drop_none(
+        return _with_settings(
+            settings,
             {
-                **settings,
                 "kernel": self.kernel,
                 "inducing": inducing,
                 "kept_inducing": self.kept_inducing,

@@ -159,6 +159,13 @@ def test_the_streaming_sparse_gp_learns_on_in_batches_and_pickles_mid_batch():
     assert json.loads(online.model_.to_json())["state"]["batches"] == 16
 
 
+def test_settings_reach_the_spec_unless_a_parameter_overrides_them():
+    spec = StreamingSparseGP(settings={"batch_iters": 0, "batch_rows": 5}, batch_rows=7)._spec()
+    assert spec["batch_iters"] == 0 and spec["batch_rows"] == 7
+    assert SparseGP(settings={"standardize": False})._spec()["standardize"] is False
+    assert ILGR(settings={"forgetting": 0.9})._spec()["forgetting"] == 0.9
+
+
 def test_a_dataframes_column_names_are_recorded_and_saved(tmp_path):
     pd = pytest.importorskip("pandas")
     X, Y = data(outputs=1)

@@ -12,5 +12,5 @@ pub mod params;
 pub use bound::{
     InducingSummary, StreamingFit, StreamingProblem, streaming_fit, streaming_objective,
 };
-pub use model::{SavedSummary, StreamingSparseGp, StreamingSparseGpState};
+pub use model::{BatchTiming, SavedSummary, StreamingSparseGp, StreamingSparseGpState};
 pub use params::StreamingSparseGpParams;

@@ -87,6 +87,17 @@ pub struct StreamingSparseGpState {
     pub pending: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
+/// What one later batch cost (s): the hyperparameter step (L-BFGS on
+/// the bound) and the posterior update (placing its inducing inputs and
+/// the optimal `q(b)` at the hyperparameters it ended with).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BatchTiming {
+    /// The hyperparameter step.
+    pub hyperparameter_secs: f64,
+    /// The posterior update.
+    pub update_secs: f64,
+}
+
 /// The streaming sparse GP regressor.
 #[derive(Debug, Clone)]
 pub struct StreamingSparseGp {
@@ -95,6 +106,7 @@ pub struct StreamingSparseGp {
     /// Rows of a stream kept until the first batch is complete.
     buffer: Vec<(Vec<f64>, Vec<f64>)>,
     progress: ProgressSink,
+    timings: Vec<BatchTiming>,
 }
 
 /// The bound of one batch over `(log θ, log σ², Z_b)` (`Z_b` only when
@@ -186,8 +198,14 @@ fn draw(rng: &mut ChaCha8Rng, n: usize, k: usize) -> Vec<usize> {
     picked
 }
 
+/// Squared distance (standardised units) under which a batch input is
+/// the same point as an inducing input already chosen: two equal inducing
+/// inputs make `K_bb` singular (a robot at rest repeats its input rows).
+const SAME_POINT: f64 = 1e-12;
+
 /// A batch's first inducing inputs: the old ones kept and the batch's
 /// inputs added, at most `count` in all (see the module's description).
+/// A batch input equal to one already chosen is passed over.
 fn keep_and_add(
     old: MatRef<'_, f64>,
     x: MatRef<'_, f64>,
@@ -198,15 +216,33 @@ fn keep_and_add(
     let (m_old, n) = (old.nrows(), x.nrows());
     let fresh = count
         .saturating_sub(m_old)
-        .max(count - (kept_share * count as f64).floor() as usize);
-    let added = draw(rng, n, fresh.min(n));
-    let kept = draw(rng, m_old, count.saturating_sub(added.len()).min(m_old));
-    let rows: Vec<MatRef<'_, f64>> = kept
+        .max(count - (kept_share * count as f64).floor() as usize)
+        .min(n);
+    let kept = draw(rng, m_old, count.saturating_sub(fresh).min(m_old));
+    let mut chosen: Vec<Vec<f64>> = kept
         .iter()
-        .map(|&i| old.subrows(i, 1))
-        .chain(added.iter().map(|&i| x.subrows(i, 1)))
+        .map(|&i| (0..old.ncols()).map(|q| old[(i, q)]).collect())
         .collect();
-    Mat::from_fn(rows.len(), x.ncols(), |i, q| rows[i][(0, q)])
+    let order = rand::seq::index::sample(rng, n, n).into_vec();
+    let mut added = 0;
+    for i in order {
+        if added == fresh {
+            break;
+        }
+        let row: Vec<f64> = (0..x.ncols()).map(|q| x[(i, q)]).collect();
+        let repeated = chosen.iter().any(|c| {
+            c.iter()
+                .zip(&row)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                < SAME_POINT
+        });
+        if !repeated {
+            chosen.push(row);
+            added += 1;
+        }
+    }
+    Mat::from_fn(chosen.len(), x.ncols(), |i, q| chosen[i][q])
 }
 
 fn summary_to_saved(s: &InducingSummary) -> SavedSummary {
@@ -252,12 +288,19 @@ impl StreamingSparseGp {
             learned: None,
             buffer: Vec::new(),
             progress: ProgressSink::default(),
+            timings: Vec::new(),
         })
     }
 
     /// The learned state (None before the first batch).
     pub fn state(&self) -> Option<&StreamingSparseGpState> {
         self.learned.as_ref().map(|(s, _)| s)
+    }
+
+    /// What each later batch learned since this model was built cost, in
+    /// order (for latency measurements; not saved).
+    pub fn batch_timings(&self) -> &[BatchTiming] {
+        &self.timings
     }
 
     /// The posterior predictions come from (None before the first batch).
@@ -315,6 +358,7 @@ impl StreamingSparseGp {
             learned: Some((state, posterior)),
             buffer: Vec::new(),
             progress: ProgressSink::default(),
+            timings: Vec::new(),
         })
     }
 
@@ -395,6 +439,7 @@ impl StreamingSparseGp {
             });
         };
         let p = &self.params;
+        let placed = Instant::now();
         let data = rows_dataset(rows)?;
         let scale = |m: &SampleMatrix, s: &Option<Standardizer>| match s {
             Some(s) => s.transform(m).map(|m| to_faer(&m)),
@@ -425,6 +470,8 @@ impl StreamingSparseGp {
             jitter: p.jitter,
         };
         let start = objective.pack(&state.kernel, state.noise_variance);
+        let placing_secs = placed.elapsed().as_secs_f64();
+        let stepped = Instant::now();
         let (kernel, noise, z) = if p.batch_iters == 0 {
             objective.unpack(&start)
         } else {
@@ -456,7 +503,28 @@ impl StreamingSparseGp {
                 }
             }
         };
-        let fit = streaming_fit(objective.problem(&kernel, noise, &z))?;
+        let hyperparameter_secs = stepped.elapsed().as_secs_f64();
+        let updated = Instant::now();
+        // Where the step ended cannot be factorised (it went too far): the
+        // batch is learned at the previous hyperparameters instead.
+        let (kernel, noise, fit) = match streaming_fit(objective.problem(&kernel, noise, &z)) {
+            Ok(fit) => (kernel, noise, fit),
+            Err(e) => {
+                tracing::warn!(
+                    batch = state.batches + 1,
+                    "streaming_sparse_gp: the batch's posterior failed where its hyperparameter \
+                     step ended ({e}); it is learned at the previous hyperparameters"
+                );
+                let (kernel, noise, z) =
+                    objective.unpack(&objective.pack(&state.kernel, state.noise_variance));
+                let fit = streaming_fit(objective.problem(&kernel, noise, &z))?;
+                (kernel, noise, fit)
+            }
+        };
+        self.timings.push(BatchTiming {
+            hyperparameter_secs,
+            update_secs: placing_secs + updated.elapsed().as_secs_f64(),
+        });
         let Some((state, posterior)) = &mut self.learned else {
             return Ok(());
         };
