@@ -548,3 +548,54 @@ fn bad_streaming_settings_are_named() {
         assert!(err.contains(field), "{err}");
     }
 }
+
+#[test]
+fn a_robot_at_rest_neither_repeats_inducing_inputs_nor_moves_a_batch_past_its_step() {
+    // Half the rows repeat the row before (a rover standing still).
+    let mut rng = rng(74);
+    let x = inputs(&mut rng, 200, 3);
+    let x = Mat::from_fn(200, 3, |i, q| x[(i - i % 2, q)]);
+    let y = targets(&mut rng, &x, 0.05);
+    for fixed in [true, false] {
+        let params = StreamingSparseGpParams {
+            inducing: InducingParams {
+                count: 20,
+                fixed,
+                ..Default::default()
+            },
+            ..stream_params()
+        };
+        let step = params.batch_log_step;
+        let mut model = StreamingSparseGp::new(params).unwrap();
+        feed(&mut model, &x, &y, 0..40);
+        let mut before = model.state().unwrap().clone();
+        for b in 0..20 {
+            let first = 40 + 8 * b;
+            feed(&mut model, &x, &y, first..first + 8);
+            let after = model.state().unwrap();
+            let mut moved: Vec<f64> = after
+                .kernel
+                .log_params()
+                .iter()
+                .zip(before.kernel.log_params())
+                .map(|(a, b)| (a - b).abs())
+                .collect();
+            moved.push((after.noise_variance.ln() - before.noise_variance.ln()).abs());
+            assert!(
+                moved.iter().all(|m| *m <= step + 1e-9),
+                "fixed {fixed}, batch {b}: moved {moved:?}"
+            );
+            let z = &after.summary.inducing;
+            for i in 0..z.nrows() {
+                for j in 0..i {
+                    let d2: f64 = (0..3).map(|q| (z.get(i, q) - z.get(j, q)).powi(2)).sum();
+                    assert!(
+                        d2 > 0.0,
+                        "fixed {fixed}, batch {b}: inducing inputs {i} and {j} coincide"
+                    );
+                }
+            }
+            before = after.clone();
+        }
+    }
+}

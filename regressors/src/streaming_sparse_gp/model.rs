@@ -32,7 +32,8 @@ use super::params::StreamingSparseGpParams;
 use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
 use crate::hyperopt::{
-    Coordinates, HyperProblem, Objective, ProgressSink, SearchSpace, learn, maximize, starts,
+    Coordinates, HyperProblem, LogBounds, Objective, ProgressSink, SearchSpace, learn, maximize,
+    starts,
 };
 use crate::kernels::Kernel;
 use crate::scaling::{ScaledTraining, check_finite, scale_queries, unscale_predictions};
@@ -198,51 +199,58 @@ fn draw(rng: &mut ChaCha8Rng, n: usize, k: usize) -> Vec<usize> {
     picked
 }
 
-/// Squared distance (standardised units) under which a batch input is
-/// the same point as an inducing input already chosen: two equal inducing
-/// inputs make `K_bb` singular (a robot at rest repeats its input rows).
-const SAME_POINT: f64 = 1e-12;
+/// Prior correlation `k(x, z)/√(k(x, x) k(z, z))` above which a batch
+/// input is the same point as an inducing input already chosen, to the
+/// kernel: two such inducing inputs make `K_bb` nearly singular (a robot
+/// at rest repeats its input rows, up to its sensors' noise).
+const SAME_POINT_CORRELATION: f64 = 0.9999;
 
 /// A batch's first inducing inputs: the old ones kept and the batch's
 /// inputs added, at most `count` in all (see the module's description).
-/// A batch input equal to one already chosen is passed over.
+/// A batch input that `kernel` finds the same point as one already chosen
+/// is passed over.
 fn keep_and_add(
+    kernel: &Kernel,
     old: MatRef<'_, f64>,
     x: MatRef<'_, f64>,
     count: usize,
     kept_share: f64,
     rng: &mut ChaCha8Rng,
 ) -> Mat<f64> {
-    let (m_old, n) = (old.nrows(), x.nrows());
+    let (m_old, n, d) = (old.nrows(), x.nrows(), x.ncols());
     let fresh = count
         .saturating_sub(m_old)
         .max(count - (kept_share * count as f64).floor() as usize)
         .min(n);
     let kept = draw(rng, m_old, count.saturating_sub(fresh).min(m_old));
-    let mut chosen: Vec<Vec<f64>> = kept
-        .iter()
-        .map(|&i| (0..old.ncols()).map(|q| old[(i, q)]).collect())
-        .collect();
+    let mut chosen = Mat::from_fn(kept.len(), d, |i, q| old[(kept[i], q)]);
     let order = rand::seq::index::sample(rng, n, n).into_vec();
     let mut added = 0;
     for i in order {
         if added == fresh {
             break;
         }
-        let row: Vec<f64> = (0..x.ncols()).map(|q| x[(i, q)]).collect();
-        let repeated = chosen.iter().any(|c| {
-            c.iter()
-                .zip(&row)
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>()
-                < SAME_POINT
-        });
+        let candidate = x.subrows(i, 1);
+        let repeated = chosen.nrows() > 0 && {
+            let prior = kernel.diag(candidate)[0];
+            let priors = kernel.diag(chosen.as_ref());
+            let cross = kernel.cross(candidate, chosen.as_ref());
+            (0..chosen.nrows())
+                .any(|j| cross[(0, j)] > SAME_POINT_CORRELATION * (prior * priors[j]).sqrt())
+        };
         if !repeated {
-            chosen.push(row);
+            let m = chosen.nrows();
+            chosen = Mat::from_fn(m + 1, d, |r, q| {
+                if r < m {
+                    chosen[(r, q)]
+                } else {
+                    candidate[(0, q)]
+                }
+            });
             added += 1;
         }
     }
-    Mat::from_fn(chosen.len(), x.ncols(), |i, q| chosen[i][q])
+    chosen
 }
 
 fn summary_to_saved(s: &InducingSummary) -> SavedSummary {
@@ -454,6 +462,7 @@ impl StreamingSparseGp {
             p.seed ^ (state.batches as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
         );
         let zb0 = keep_and_add(
+            &state.kernel,
             old.inducing.as_ref(),
             x.as_ref(),
             p.inducing.count,
@@ -475,7 +484,16 @@ impl StreamingSparseGp {
         let (kernel, noise, z) = if p.batch_iters == 0 {
             objective.unpack(&start)
         } else {
-            let space = objective.space(&p.hyperopt.bounds);
+            let mut space = objective.space(&p.hyperopt.bounds);
+            // A trust region around the previous batch's hyperparameters.
+            let hyper = state.kernel.n_params() + 1;
+            for (b, c) in space.bounds.iter_mut().zip(&start).take(hyper) {
+                let (lo, hi) = (
+                    b.lower().max(c - p.batch_log_step),
+                    b.upper().min(c + p.batch_log_step),
+                );
+                *b = LogBounds::new([lo.exp(), hi.exp()]);
+            }
             let coords = Coordinates {
                 start,
                 bounds: space.bounds,

@@ -38,6 +38,13 @@ pub struct StreamingSparseGpParams {
     /// `hyperopt`'s tolerances and bounds (default 20; 0 keeps the
     /// hyperparameters and the inducing inputs as placed).
     pub batch_iters: u64,
+    /// The most one later batch moves each log-hyperparameter (the noise
+    /// variance's included) from where the previous batch left it, within
+    /// `hyperopt.bounds` (default 0.5: a factor of 1.65). Ten rows say
+    /// little about a kernel: unbounded, the signal variance and the
+    /// lengthscales of a batch run to their bounds, and the summary's
+    /// precision with them.
+    pub batch_log_step: f64,
     /// Z-score inputs and outputs with the first batch's statistics
     /// (default true).
     pub standardize: bool,
@@ -65,6 +72,7 @@ impl Default for StreamingSparseGpParams {
             warmup_rows: 100,
             batch_rows: 10,
             batch_iters: 20,
+            batch_log_step: 0.5,
             standardize: true,
             init: KernelInit::default(),
             noise_variance: 0.01,
@@ -102,6 +110,9 @@ impl StreamingSparseGpParams {
         }
         if self.batch_rows == 0 {
             return bad("batch_rows", "at least 1 row");
+        }
+        if !(self.batch_log_step.is_finite() && self.batch_log_step > 0.0) {
+            return bad("batch_log_step", "a positive step in log units");
         }
         if !(self.jitter.is_finite() && self.jitter >= 0.0) {
             return bad("jitter", "a non-negative number");
