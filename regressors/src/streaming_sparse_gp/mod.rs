@@ -6,11 +6,15 @@
 //! learns a stream in batches with them.
 
 pub mod bound;
+mod inducing;
 pub mod model;
+mod objective;
 pub mod params;
+pub mod state;
 
 pub use bound::{
     InducingSummary, StreamingFit, StreamingProblem, streaming_fit, streaming_objective,
 };
-pub use model::{BatchTiming, SavedSummary, StreamingSparseGp, StreamingSparseGpState};
+pub use model::{BatchTiming, StreamingSparseGp};
 pub use params::StreamingSparseGpParams;
+pub use state::{SavedSummary, StreamingSparseGpState};

@@ -18,75 +18,27 @@
 
 use std::time::Instant;
 
-use faer::{Mat, MatRef};
+use faer::Mat;
 use gpodo_traits::{
     Error, FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
     Standardizer,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
-use super::bound::{InducingSummary, StreamingProblem, streaming_fit, streaming_objective};
+use super::bound::streaming_fit;
+use super::inducing::keep_and_add;
+use super::objective::{BatchObjective, flat};
 use super::params::StreamingSparseGpParams;
+use super::state::{StreamingSparseGpState, saved_to_summary, summary_to_saved};
 use crate::RegressorError;
 use crate::dense::{from_faer, to_faer};
 use crate::hyperopt::{
-    Coordinates, HyperProblem, LogBounds, Objective, ProgressSink, SearchSpace, learn, maximize,
-    starts,
+    Coordinates, HyperProblem, LogBounds, Objective, ProgressSink, learn, maximize, starts,
 };
-use crate::kernels::Kernel;
 use crate::scaling::{ScaledTraining, check_finite, scale_queries, unscale_predictions};
 use crate::sparse_gp::SparsePosterior;
 use crate::sparse_gp::inducing::place_inducing;
-
-/// The old batches' summary as saved: what they told the function at their
-/// inducing inputs ([`InducingSummary`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SavedSummary {
-    /// Inducing inputs `Z_a` (`M × d`, standardised units).
-    pub inducing: SampleMatrix,
-    /// `K'_aa` under the hyperparameters it was computed with.
-    pub prior_covariance: SampleMatrix,
-    /// `Λ_a` (`M × M`).
-    pub data_precision: SampleMatrix,
-    /// `η_a` (`M × p`).
-    pub natural_mean: SampleMatrix,
-}
-
-/// Everything needed to predict and go on learning, serialisable.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StreamingSparseGpState {
-    /// The settings.
-    pub params: StreamingSparseGpParams,
-    /// Input column names.
-    pub input_names: Vec<String>,
-    /// Output column names.
-    pub target_names: Vec<String>,
-    /// The first batch's input scaling (None when `standardize` is off or
-    /// the inputs came z-scored).
-    pub input_scaler: Option<Standardizer>,
-    /// The first batch's target scaling.
-    pub output_scaler: Option<Standardizer>,
-    /// Kernel with the last batch's hyperparameters (standardised units).
-    pub kernel: Kernel,
-    /// The last batch's noise variance (standardised units).
-    pub noise_variance: f64,
-    /// The summary the next batch starts from.
-    pub summary: SavedSummary,
-    /// The posterior's weights `β` (`M × p`), as the sparse GP's.
-    pub weights: SampleMatrix,
-    /// The posterior's `P` (`M × M`), as the sparse GP's.
-    pub variance_matrix: SampleMatrix,
-    /// The last batch's bound.
-    pub objective: f64,
-    /// Batches learned.
-    pub batches: usize,
-    /// Rows learned.
-    pub rows_seen: usize,
-    /// Rows of the batch not yet complete (raw units), learned with it.
-    pub pending: Vec<(Vec<f64>, Vec<f64>)>,
-}
 
 /// What one later batch cost (s): the hyperparameter step (L-BFGS on
 /// the bound) and the posterior update (placing its inducing inputs and
@@ -108,167 +60,6 @@ pub struct StreamingSparseGp {
     buffer: Vec<(Vec<f64>, Vec<f64>)>,
     progress: ProgressSink,
     timings: Vec<BatchTiming>,
-}
-
-/// The bound of one batch over `(log θ, log σ², Z_b)` (`Z_b` only when
-/// learned).
-struct BatchObjective<'a> {
-    template: &'a Kernel,
-    x: MatRef<'a, f64>,
-    y: MatRef<'a, f64>,
-    inducing: &'a Mat<f64>,
-    learn_inducing: bool,
-    old: Option<&'a InducingSummary>,
-    jitter: f64,
-}
-
-impl BatchObjective<'_> {
-    fn unpack(&self, coords: &[f64]) -> (Kernel, f64, Mat<f64>) {
-        let k = self.template.n_params();
-        let mut kernel = self.template.clone();
-        kernel.set_log_params(&coords[..k]);
-        let (m, d) = (self.inducing.nrows(), self.inducing.ncols());
-        let z = if self.learn_inducing {
-            Mat::from_fn(m, d, |i, q| coords[k + 1 + i * d + q])
-        } else {
-            self.inducing.clone()
-        };
-        (kernel, coords[k].exp(), z)
-    }
-
-    /// The coordinates of `kernel`, `noise` and (when learned) `Z_b`.
-    fn pack(&self, kernel: &Kernel, noise: f64) -> Vec<f64> {
-        let mut coords = kernel.log_params();
-        coords.push(noise.ln());
-        if self.learn_inducing {
-            coords.extend(flat(self.inducing.as_ref()));
-        }
-        coords
-    }
-
-    fn problem<'b>(
-        &'b self,
-        kernel: &'b Kernel,
-        noise: f64,
-        z: &'b Mat<f64>,
-    ) -> StreamingProblem<'b> {
-        StreamingProblem {
-            kernel,
-            noise_variance: noise,
-            x: self.x,
-            y: self.y,
-            inducing: z.as_ref(),
-            old: self.old,
-            jitter: self.jitter,
-        }
-    }
-
-    fn space(&self, bounds: &crate::hyperopt::Bounds) -> SearchSpace {
-        let free = if self.learn_inducing {
-            self.inducing.nrows() * self.inducing.ncols()
-        } else {
-            0
-        };
-        SearchSpace::kernel(self.template, bounds).with_free(free)
-    }
-}
-
-impl Objective for BatchObjective<'_> {
-    fn evaluate(&self, coords: &[f64]) -> Result<(f64, Vec<f64>), RegressorError> {
-        let (kernel, noise, z) = self.unpack(coords);
-        let eval = streaming_objective(self.problem(&kernel, noise, &z), self.learn_inducing)?;
-        let mut gradient = eval.gradient.unwrap_or_default();
-        if let Some(dz) = eval.inducing_gradient {
-            gradient.extend(flat(dz.as_ref()));
-        }
-        Ok((eval.value, gradient))
-    }
-}
-
-/// The rows of `m`, one after another.
-fn flat(m: MatRef<'_, f64>) -> Vec<f64> {
-    (0..m.nrows())
-        .flat_map(|i| (0..m.ncols()).map(move |q| m[(i, q)]))
-        .collect()
-}
-
-/// `k` of `0..n` drawn without replacement, in increasing order.
-fn draw(rng: &mut ChaCha8Rng, n: usize, k: usize) -> Vec<usize> {
-    let mut picked = rand::seq::index::sample(rng, n, k.min(n)).into_vec();
-    picked.sort_unstable();
-    picked
-}
-
-/// Prior correlation `k(x, z)/√(k(x, x) k(z, z))` above which a batch
-/// input is the same point as an inducing input already chosen, to the
-/// kernel: two such inducing inputs make `K_bb` nearly singular (a robot
-/// at rest repeats its input rows, up to its sensors' noise).
-const SAME_POINT_CORRELATION: f64 = 0.9999;
-
-/// A batch's first inducing inputs: the old ones kept and the batch's
-/// inputs added, at most `count` in all (see the module's description).
-/// A batch input that `kernel` finds the same point as one already chosen
-/// is passed over.
-fn keep_and_add(
-    kernel: &Kernel,
-    old: MatRef<'_, f64>,
-    x: MatRef<'_, f64>,
-    count: usize,
-    kept_share: f64,
-    rng: &mut ChaCha8Rng,
-) -> Mat<f64> {
-    let (m_old, n, d) = (old.nrows(), x.nrows(), x.ncols());
-    let fresh = count
-        .saturating_sub(m_old)
-        .max(count - (kept_share * count as f64).floor() as usize)
-        .min(n);
-    let kept = draw(rng, m_old, count.saturating_sub(fresh).min(m_old));
-    let mut chosen = Mat::from_fn(kept.len(), d, |i, q| old[(kept[i], q)]);
-    let order = rand::seq::index::sample(rng, n, n).into_vec();
-    let mut added = 0;
-    for i in order {
-        if added == fresh {
-            break;
-        }
-        let candidate = x.subrows(i, 1);
-        let repeated = chosen.nrows() > 0 && {
-            let prior = kernel.diag(candidate)[0];
-            let priors = kernel.diag(chosen.as_ref());
-            let cross = kernel.cross(candidate, chosen.as_ref());
-            (0..chosen.nrows())
-                .any(|j| cross[(0, j)] > SAME_POINT_CORRELATION * (prior * priors[j]).sqrt())
-        };
-        if !repeated {
-            let m = chosen.nrows();
-            chosen = Mat::from_fn(m + 1, d, |r, q| {
-                if r < m {
-                    chosen[(r, q)]
-                } else {
-                    candidate[(0, q)]
-                }
-            });
-            added += 1;
-        }
-    }
-    chosen
-}
-
-fn summary_to_saved(s: &InducingSummary) -> SavedSummary {
-    SavedSummary {
-        inducing: from_faer(s.inducing.as_ref()),
-        prior_covariance: from_faer(s.prior_covariance.as_ref()),
-        data_precision: from_faer(s.data_precision.as_ref()),
-        natural_mean: from_faer(s.natural_mean.as_ref()),
-    }
-}
-
-fn saved_to_summary(s: &SavedSummary) -> InducingSummary {
-    InducingSummary {
-        inducing: to_faer(&s.inducing),
-        prior_covariance: to_faer(&s.prior_covariance),
-        data_precision: to_faer(&s.data_precision),
-        natural_mean: to_faer(&s.natural_mean),
-    }
 }
 
 /// `rows` as a dataset with placeholder column names.
