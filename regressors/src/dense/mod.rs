@@ -194,12 +194,12 @@ pub fn par() -> faer::Par {
     faer::get_global_parallelism()
 }
 
-/// Multiply-adds below which [`gemm`] runs sequentially, and entries below
-/// which [`for_column_blocks`] does: handing work to Rayon's pool and
-/// waiting for it costs microseconds, tens of them when the caller is not
-/// one of the pool's threads (a ROS node's callback, a Python call) or the
-/// pool's threads are asleep, more than such a product takes on one core.
-/// A one-row prediction with 100 inducing points is far below both.
+/// Multiply-adds below which [`gemm`] runs sequentially: handing work to
+/// Rayon's pool and waiting for it costs microseconds, tens of them when
+/// the caller is not one of the pool's threads (a ROS node's callback, a
+/// Python call) or the pool's threads are asleep, more than such a product
+/// takes on one core. A one-row prediction with 100 inducing points is far
+/// below it, and below [`SEQUENTIAL_ENTRIES`].
 const SEQUENTIAL_WORK: usize = 1 << 18;
 
 /// Entries below which [`for_column_blocks`] runs sequentially (each entry
@@ -260,7 +260,7 @@ pub fn for_column_blocks<T: Send>(
 }
 
 /// `dst = alpha·a·b` (or `dst += …` with [`Accum::Add`]) with faer's GEMM,
-/// run sequentially when the product is small (see [`SEQUENTIAL_WORK`]) or
+/// run sequentially when the product is small (under 2¹⁸ multiply-adds) or
 /// the inner dimension dwarfs the output (e.g. `K_uf K_fu`, `m × n` by
 /// `n × m` with `n ≫ m`): faer's parallel GEMM splits the output only, and
 /// on such shapes it is far slower than its sequential kernel
