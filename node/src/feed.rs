@@ -99,6 +99,17 @@ impl<'m> LiveFeed<'m> {
         (ns - self.base_ns.unwrap_or(0)) as f64 * 1e-9
     }
 
+    /// Whether the IMU reading a joint-state message stamped `header_ns`
+    /// should get can no longer come: a reading stamped at or after it has
+    /// been held (or the robot has no IMU, or the clock is the receive
+    /// time, by which every later reading is later). Until then a reading
+    /// stamped before it may still be on its way on its own topic.
+    pub fn imu_reached(&self, header_ns: i64) -> bool {
+        !self.with_imu
+            || self.time == TimeSource::Receive
+            || self.imu.back().is_some_and(|(t, _)| *t >= header_ns)
+    }
+
     /// Holds an IMU message received at `receive_ns`.
     pub fn imu(&mut self, m: &Imu, receive_ns: i64) {
         let ns = self.stamp(m.header.stamp_ns, receive_ns);

@@ -57,6 +57,13 @@ pub struct Ros2Settings {
     /// How long the loop sleeps when no message is waiting (default
     /// 0.5 ms): an input waits at most this long before it is taken.
     pub poll: Duration,
+    /// How long a joint state may wait for the IMU reading of its own
+    /// time (default 20 ms): DDS delivers the two topics independently, so
+    /// a joint state can come before the IMU reading stamped with it; it
+    /// waits until a reading at or after its stamp has come, or this long,
+    /// and then takes the latest one before it (the stale-IMU warning
+    /// says when that is old).
+    pub imu_wait: Duration,
     /// Stop after this many outputs (none: run until stopped).
     pub max_outputs: Option<usize>,
     /// Stop when no input came for this long after the first one (s).
@@ -72,6 +79,7 @@ impl Default for Ros2Settings {
             domain_id: 0,
             diagnostics_period_secs: 1.0,
             poll: Duration::from_micros(500),
+            imu_wait: Duration::from_millis(20),
             max_outputs: None,
             idle_exit_secs: None,
             interfaces: Vec::new(),
@@ -323,6 +331,7 @@ pub fn run(
     let mut last_warning: Option<Instant> = None;
     let period = Duration::from_secs_f64(settings.diagnostics_period_secs.max(0.01));
     let status_name = format!("gpodo live: {}", OUTPUT_TOPICS[0]);
+    let mut waiting = Vec::new();
     loop {
         if stop() {
             break;
@@ -342,8 +351,8 @@ pub fn run(
                 }
             }
         }
-        // Joint states taken in one go are run in their stamps' order.
-        let mut joints = Vec::new();
+        // Joint states wait, in their stamps' order, for the IMU reading of
+        // their own time (at most `imu_wait`).
         while let Some(s) = joint_reader
             .take_next_sample()
             .map_err(|e| dds_error("joint states", e))?
@@ -352,11 +361,18 @@ pub fn run(
             let taken = Instant::now();
             last_input = Some(taken);
             match decode("sensor_msgs/msg/JointState", "cdr", &s.value().encoded()) {
-                Ok(RosMessage::JointState(m)) => joints.push((m, now_ns(), taken)),
+                Ok(RosMessage::JointState(m)) => waiting.push((m, now_ns(), taken)),
                 _ => summary.undecodable += 1,
             }
         }
-        joints.sort_by_key(|(m, _, _)| m.header.stamp_ns);
+        waiting.sort_by_key(|(m, _, _)| m.header.stamp_ns);
+        let ready = waiting
+            .iter()
+            .take_while(|(m, _, taken)| {
+                feed.imu_reached(m.header.stamp_ns) || taken.elapsed() >= settings.imu_wait
+            })
+            .count();
+        let joints: Vec<_> = waiting.drain(..ready).collect();
         for (m, receive_ns, taken) in joints {
             summary.joint_messages += 1;
             match feed.joints(&m, receive_ns) {

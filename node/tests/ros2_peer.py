@@ -219,6 +219,11 @@ def main():
             60,
             "gpodo live's readers and writers",
         )
+        # A writer that sees its reader is not yet seen by the reader: the
+        # node's reader drops best-effort samples of a writer it has not
+        # discovered. Give its discovery time (more than enough on a
+        # loaded machine) before the first sample.
+        time.sleep(1.0)
 
     matched()
     received, diagnostics = [], []
