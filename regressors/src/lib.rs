@@ -41,6 +41,7 @@ pub mod scaling;
 pub mod sparse_gp;
 pub mod sparse_spectrum;
 pub mod spec;
+mod stream_rows;
 pub mod streaming_sparse_gp;
 pub mod zero;
 

@@ -20,9 +20,7 @@ use super::posterior::SparsePosterior;
 use crate::dense::{from_faer, to_faer};
 use crate::hyperopt::{HyperProblem, Objective, ProgressSink, SearchSpace, learn, starts};
 use crate::kernels::Kernel;
-use crate::scaling::{
-    GpPredictions, ScaledTraining, check_finite, scale_queries, unscale_predictions,
-};
+use crate::scaling::{GpPredictions, ScaledTraining, check_finite};
 use crate::{GpProblem, RegressorError, SparseProblem};
 
 /// Everything needed to predict with a trained sparse GP: `O(m²)` numbers,
@@ -323,22 +321,11 @@ impl SparseGp {
                 model: self.name().into(),
             });
         };
-        let xs = scale_queries(
+        posterior.predict_scaled(
             self.name(),
             inputs,
             state.inducing.ncols(),
             state.input_scaler.as_ref(),
-        )?;
-        let moments = posterior.predict(xs.as_ref());
-        let (q, p) = (xs.nrows(), moments.mean.ncols());
-        let latent = Mat::from_fn(q, p, |i, _| moments.latent_variance[i]);
-        let noisy = Mat::from_fn(q, p, |i, _| {
-            moments.latent_variance[i] + moments.noise_variance
-        });
-        unscale_predictions(
-            moments.mean.as_ref(),
-            latent.as_ref(),
-            noisy.as_ref(),
             state.output_scaler.as_ref(),
         )
     }

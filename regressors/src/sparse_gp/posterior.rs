@@ -10,7 +10,9 @@ use super::bound::factorize;
 use crate::dense::gemm;
 use crate::exact_gp::posterior::Moments;
 use crate::kernels::Kernel;
+use crate::scaling::{GpPredictions, scale_queries, unscale_predictions};
 use crate::{RegressorError, SparseProblem};
+use gpodo_traits::{Error, SampleMatrix, Standardizer};
 
 /// A conditioned sparse GP.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,5 +99,35 @@ impl SparsePosterior {
             latent_variance,
             noise_variance: self.noise_variance,
         }
+    }
+
+    /// Mean, latent and noisy variance at raw `inputs` (`d` columns), in
+    /// target units: z-scored by `input_scaler`, predicted, and scaled back
+    /// by `output_scaler`; `model` names the regressor in errors.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for a wrong input width;
+    /// [`Error::InvalidInput`] for non-finite inputs.
+    pub fn predict_scaled(
+        &self,
+        model: &str,
+        inputs: &SampleMatrix,
+        d: usize,
+        input_scaler: Option<&Standardizer>,
+        output_scaler: Option<&Standardizer>,
+    ) -> Result<GpPredictions, Error> {
+        let xs = scale_queries(model, inputs, d, input_scaler)?;
+        let moments = self.predict(xs.as_ref());
+        let (q, p) = (xs.nrows(), moments.mean.ncols());
+        let latent = Mat::from_fn(q, p, |i, _| moments.latent_variance[i]);
+        let noisy = Mat::from_fn(q, p, |i, _| {
+            moments.latent_variance[i] + moments.noise_variance
+        });
+        unscale_predictions(
+            moments.mean.as_ref(),
+            latent.as_ref(),
+            noisy.as_ref(),
+            output_scaler,
+        )
     }
 }

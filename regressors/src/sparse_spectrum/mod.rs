@@ -431,49 +431,14 @@ impl SparseSpectrumGp {
             return Ok(());
         }
         let rows = std::mem::take(&mut self.buffer);
-        let (d, p) = (rows[0].0.len(), rows[0].1.len());
-        let inputs: Vec<&[f64]> = rows.iter().map(|r| r.0.as_slice()).collect();
-        let targets: Vec<&[f64]> = rows.iter().map(|r| r.1.as_slice()).collect();
-        let data = ResidualDataset::new(
-            SampleMatrix::from_rows(d, &inputs)?,
-            SampleMatrix::from_rows(p, &targets)?,
-            (0..d).map(|j| format!("x{j}")).collect(),
-            (0..p).map(|j| format!("y{j}")).collect(),
-        )?;
+        let data = crate::stream_rows::rows_dataset(&rows)?;
         self.fit_impl(&data).map(|_| ()).map_err(Error::from)
     }
 
     /// Before the warm-up: the kept rows' mean and variance per output (an
     /// error before any row).
     fn predict_before_warm_up(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
-        let Some((_, y0)) = self.buffer.first() else {
-            return Err(Error::NotFitted {
-                model: self.name().into(),
-            });
-        };
-        let (n, p) = (self.buffer.len() as f64, y0.len());
-        let mean: Vec<f64> = (0..p)
-            .map(|j| self.buffer.iter().map(|r| r.1[j]).sum::<f64>() / n)
-            .collect();
-        let variance: Vec<f64> = (0..p)
-            .map(|j| {
-                let spread = self
-                    .buffer
-                    .iter()
-                    .map(|r| (r.1[j] - mean[j]).powi(2))
-                    .sum::<f64>();
-                if n > 1.0 {
-                    spread / (n - 1.0)
-                } else {
-                    mean[j] * mean[j]
-                }
-            })
-            .collect();
-        let q = inputs.nrows();
-        Ok(Predictions {
-            mean: SampleMatrix::from_row_major(q, p, mean.repeat(q))?,
-            variance: SampleMatrix::from_row_major(q, p, variance.repeat(q))?,
-        })
+        crate::stream_rows::running_moments(self.name(), &self.buffer, inputs)
     }
 }
 

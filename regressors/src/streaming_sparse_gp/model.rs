@@ -18,7 +18,6 @@
 
 use std::time::Instant;
 
-use faer::Mat;
 use gpodo_traits::{
     Error, FitProgress, FitReport, Predictions, ResidualDataset, ResidualRegressor, SampleMatrix,
     Standardizer,
@@ -36,9 +35,10 @@ use crate::dense::{from_faer, to_faer};
 use crate::hyperopt::{
     Coordinates, HyperProblem, LogBounds, Objective, ProgressSink, learn, maximize, starts,
 };
-use crate::scaling::{ScaledTraining, check_finite, scale_queries, unscale_predictions};
+use crate::scaling::{ScaledTraining, check_finite};
 use crate::sparse_gp::SparsePosterior;
 use crate::sparse_gp::inducing::place_inducing;
+use crate::stream_rows::{rows_dataset, running_moments};
 
 /// What one later batch cost (s): the hyperparameter step (L-BFGS on
 /// the bound) and the posterior update (placing its inducing inputs and
@@ -60,19 +60,6 @@ pub struct StreamingSparseGp {
     buffer: Vec<(Vec<f64>, Vec<f64>)>,
     progress: ProgressSink,
     timings: Vec<BatchTiming>,
-}
-
-/// `rows` as a dataset with placeholder column names.
-fn rows_dataset(rows: &[(Vec<f64>, Vec<f64>)]) -> Result<ResidualDataset, Error> {
-    let (d, p) = (rows[0].0.len(), rows[0].1.len());
-    let inputs: Vec<&[f64]> = rows.iter().map(|r| r.0.as_slice()).collect();
-    let targets: Vec<&[f64]> = rows.iter().map(|r| r.1.as_slice()).collect();
-    ResidualDataset::new(
-        SampleMatrix::from_rows(d, &inputs)?,
-        SampleMatrix::from_rows(p, &targets)?,
-        (0..d).map(|j| format!("x{j}")).collect(),
-        (0..p).map(|j| format!("y{j}")).collect(),
-    )
 }
 
 impl StreamingSparseGp {
@@ -434,30 +421,7 @@ impl StreamingSparseGp {
     /// Before the first batch: the kept rows' mean and variance per output
     /// (an error before any row).
     fn predict_before_first_batch(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
-        let Some((_, y0)) = self.buffer.first() else {
-            return Err(Error::NotFitted {
-                model: self.name().into(),
-            });
-        };
-        let (n, p) = (self.buffer.len() as f64, y0.len());
-        let mean: Vec<f64> = (0..p)
-            .map(|j| self.buffer.iter().map(|r| r.1[j]).sum::<f64>() / n)
-            .collect();
-        let variance: Vec<f64> = (0..p)
-            .map(|j| {
-                let spread: f64 = self.buffer.iter().map(|r| (r.1[j] - mean[j]).powi(2)).sum();
-                if n > 1.0 {
-                    spread / (n - 1.0)
-                } else {
-                    mean[j] * mean[j]
-                }
-            })
-            .collect();
-        let q = inputs.nrows();
-        Ok(Predictions {
-            mean: SampleMatrix::from_row_major(q, p, mean.repeat(q))?,
-            variance: SampleMatrix::from_row_major(q, p, variance.repeat(q))?,
-        })
+        running_moments(self.name(), &self.buffer, inputs)
     }
 }
 
@@ -474,22 +438,11 @@ impl ResidualRegressor for StreamingSparseGp {
         let Some((state, posterior)) = &self.learned else {
             return self.predict_before_first_batch(inputs);
         };
-        let xs = scale_queries(
+        let full = posterior.predict_scaled(
             self.name(),
             inputs,
             state.input_names.len(),
             state.input_scaler.as_ref(),
-        )?;
-        let moments = posterior.predict(xs.as_ref());
-        let (q, p) = (xs.nrows(), moments.mean.ncols());
-        let latent = Mat::from_fn(q, p, |i, _| moments.latent_variance[i]);
-        let noisy = Mat::from_fn(q, p, |i, _| {
-            moments.latent_variance[i] + moments.noise_variance
-        });
-        let full = unscale_predictions(
-            moments.mean.as_ref(),
-            latent.as_ref(),
-            noisy.as_ref(),
             state.output_scaler.as_ref(),
         )?;
         Ok(Predictions {
