@@ -38,6 +38,7 @@ pub(super) fn keep_and_add(
         .min(n);
     let kept = draw(rng, m_old, count.saturating_sub(fresh).min(m_old));
     let mut chosen = Mat::from_fn(kept.len(), d, |i, q| old[(kept[i], q)]);
+    let mut priors = kernel.diag(chosen.as_ref());
     let order = rand::seq::index::sample(rng, n, n).into_vec();
     let mut added = 0;
     for i in order {
@@ -47,20 +48,14 @@ pub(super) fn keep_and_add(
         let candidate = x.subrows(i, 1);
         let repeated = chosen.nrows() > 0 && {
             let prior = kernel.diag(candidate)[0];
-            let priors = kernel.diag(chosen.as_ref());
             let cross = kernel.cross(candidate, chosen.as_ref());
             (0..chosen.nrows())
                 .any(|j| cross[(0, j)] > SAME_POINT_CORRELATION * (prior * priors[j]).sqrt())
         };
         if !repeated {
+            priors.extend(kernel.diag(candidate));
             let m = chosen.nrows();
-            chosen = Mat::from_fn(m + 1, d, |r, q| {
-                if r < m {
-                    chosen[(r, q)]
-                } else {
-                    candidate[(0, q)]
-                }
-            });
+            chosen.resize_with(m + 1, d, |_, q| candidate[(0, q)]);
             added += 1;
         }
     }
