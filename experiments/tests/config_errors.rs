@@ -281,6 +281,42 @@ fn schemes_and_selectors_are_checked() {
     );
 }
 
+/// An online scheme learns one way: in batches of seconds, or refitted
+/// every so many targets, and a batch spans a positive time.
+#[test]
+fn an_online_schemes_batches_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let online = |fields: &str| {
+        format!(
+            "{GOOD}schemes:\n  - label: a\n    online: {{ regressor: {{ kind: streaming_sparse_gp }}, {fields} }}\n    selector: {{ kind: uncertainty_budget, count_mean: false }}\n"
+        )
+    };
+    let path = dir.path().join("ok.yaml");
+    std::fs::write(&path, online("batch_secs: 60.0")).unwrap();
+    load_plan(&path).unwrap();
+    for (file, fields, problem, expected) in [
+        (
+            "both.yaml",
+            "refit_every: 5, batch_secs: 60.0",
+            "both `refit_every` and `batch_secs`",
+            "either `refit_every` or `batch_secs`, not both",
+        ),
+        (
+            "zero.yaml",
+            "batch_secs: 0.0",
+            "a batch of 0 s",
+            "a positive, finite number of seconds",
+        ),
+    ] {
+        let text = online(fields);
+        let e = error_of(dir.path(), file, &text);
+        let line = text.lines().position(|l| l.contains("batch_secs")).unwrap();
+        let column =
+            text.lines().nth(line).unwrap().find("batch_secs").unwrap() + "batch_secs: ".len();
+        check(&e, problem, file, line + 1, column + 1, expected);
+    }
+}
+
 /// A scheme's `odometry`: the regressors it names exist in their lists, it
 /// does not come with `regressor` or `online`, and a drift budget's
 /// explicit `count_mean` agrees with it.

@@ -30,6 +30,18 @@ pub enum OnlineMode {
         #[serde(default = "default_min_targets")]
         min_targets: usize,
     },
+    /// Learn in batches of VO targets that span `secs` seconds (learners
+    /// that learn in batches, such as the streaming sparse GP, through
+    /// [`ResidualRegressor::update_batch`]): a batch ends at the first
+    /// target at least `secs` after the batch's first, and the first batch
+    /// also waits for `min_targets` targets.
+    Batch {
+        /// Seconds of VO targets a batch spans.
+        secs: f64,
+        /// Fewest targets in the first batch (default 20).
+        #[serde(default = "default_min_targets")]
+        min_targets: usize,
+    },
 }
 
 fn default_refit_every() -> usize {
@@ -55,6 +67,9 @@ pub struct OnlineLearner {
     history: Vec<(f64, usize)>,
     /// Whether the window inputs are z-scored already.
     inputs_standardized: bool,
+    /// In [`OnlineMode::Batch`], the time of the open batch's first target
+    /// and the index of its first row.
+    open_batch: Option<(f64, usize)>,
 }
 
 impl OnlineLearner {
@@ -72,7 +87,7 @@ impl OnlineLearner {
         prior_variance: f64,
     ) -> Result<Self, FrontendError> {
         match mode {
-            OnlineMode::Update if !model.supports_online_update() => {
+            OnlineMode::Update | OnlineMode::Batch { .. } if !model.supports_online_update() => {
                 return Err(FrontendError::InvalidConfig {
                     field: "online.mode".into(),
                     expected: format!(
@@ -85,6 +100,17 @@ impl OnlineLearner {
                 return Err(FrontendError::InvalidConfig {
                     field: "online.every".into(),
                     expected: "at least 1 target between refits and for the first fit".into(),
+                });
+            }
+            OnlineMode::Batch { secs, min_targets }
+                if !(secs.is_finite() && secs > 0.0) || min_targets == 0 =>
+            {
+                return Err(FrontendError::InvalidConfig {
+                    field: "online.batch_secs".into(),
+                    expected: format!(
+                        "a positive, finite number of seconds (found {secs}) and at least 1 \
+                         target for the first batch"
+                    ),
                 });
             }
             _ => {}
@@ -101,6 +127,7 @@ impl OnlineLearner {
             fitted: false,
             history: Vec::new(),
             inputs_standardized: false,
+            open_batch: None,
         })
     }
 
@@ -123,15 +150,20 @@ impl OnlineLearner {
         &self.history
     }
 
-    fn refit(&mut self) -> Result<(), FrontendError> {
-        let (n, d) = (self.targets.len() / 3, self.n_inputs.unwrap_or(0));
-        let data = ResidualDataset::new(
-            SampleMatrix::from_row_major(n, d, self.inputs.clone())?,
-            SampleMatrix::from_row_major(n, 3, self.targets.clone())?,
+    /// The targets from row `first` on, as a dataset.
+    fn rows_from(&self, first: usize) -> Result<ResidualDataset, FrontendError> {
+        let (n, d) = (self.targets_seen() - first, self.n_inputs.unwrap_or(0));
+        Ok(ResidualDataset::new(
+            SampleMatrix::from_row_major(n, d, self.inputs[first * d..].to_vec())?,
+            SampleMatrix::from_row_major(n, 3, self.targets[first * 3..].to_vec())?,
             (0..d).map(|i| format!("x{i}")).collect(),
             ["res_vx", "res_vy", "res_vz"].map(String::from).to_vec(),
         )?
-        .with_standardized_inputs(self.inputs_standardized);
+        .with_standardized_inputs(self.inputs_standardized))
+    }
+
+    fn refit(&mut self) -> Result<(), FrontendError> {
+        let data = self.rows_from(0)?;
         self.model.fit(&data)?;
         self.fitted = true;
         self.since_refit = 0;
@@ -197,8 +229,101 @@ impl ResidualSource for OnlineLearner {
                     self.refit()?;
                 }
             }
+            OnlineMode::Batch { secs, min_targets } => {
+                let row = self.targets_seen() - 1;
+                let (began, first) = *self.open_batch.get_or_insert((time_secs, row));
+                let enough = self.fitted || self.targets_seen() >= min_targets;
+                if time_secs - began >= secs && enough {
+                    let batch = self.rows_from(first)?;
+                    self.model.update_batch(&batch)?;
+                    self.fitted = true;
+                    self.open_batch = None;
+                }
+            }
         }
         self.history.push((time_secs, self.targets_seen()));
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use std::sync::{Arc, Mutex};
+
+    use gpodo_traits::{FitReport, Predictions};
+
+    use super::*;
+
+    /// Records the size of each batch it is given.
+    struct Batches(Arc<Mutex<Vec<usize>>>);
+
+    impl ResidualRegressor for Batches {
+        fn name(&self) -> &str {
+            "batches"
+        }
+        fn fit(&mut self, _: &ResidualDataset) -> Result<FitReport, Error> {
+            unreachable!("a batch learner is never refitted")
+        }
+        fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
+            let zeros =
+                SampleMatrix::from_row_major(inputs.nrows(), 3, vec![0.0; 3 * inputs.nrows()])?;
+            Ok(Predictions {
+                mean: zeros.clone(),
+                variance: zeros,
+            })
+        }
+        fn supports_online_update(&self) -> bool {
+            true
+        }
+        fn update_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
+            assert_eq!(
+                data.inputs.row(0)[0],
+                self.0.lock().unwrap().iter().sum::<usize>() as f64
+            );
+            self.0.lock().unwrap().push(data.len());
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_batch_spans_its_seconds_of_targets_and_the_first_waits_for_enough() {
+        let sizes = Arc::new(Mutex::new(Vec::new()));
+        let mode = OnlineMode::Batch {
+            secs: 30.0,
+            min_targets: 6,
+        };
+        let mut learner =
+            OnlineLearner::new("b", Box::new(Batches(sizes.clone())), mode, 1e-4).unwrap();
+        // A target every 8 s; row i has input i.
+        for i in 0..20 {
+            learner
+                .on_target(&[i as f64, 0.0], &Vector3::zeros(), 8.0 * i as f64)
+                .unwrap();
+        }
+        // The first batch: 0 s to 32 s is 5 targets, too few, so it runs
+        // to the 6th (40 s); then 48 s to 80 s and 88 s to 120 s (the first
+        // target 30 s after the batch's first ends it), and 128 s to 152 s
+        // stays open.
+        assert_eq!(*sizes.lock().unwrap(), vec![6, 5, 5]);
+        assert_eq!(learner.targets_seen(), 20);
+    }
+
+    #[test]
+    fn a_batch_of_no_seconds_is_refused() {
+        let sizes = Arc::new(Mutex::new(Vec::new()));
+        for secs in [0.0, -1.0, f64::NAN] {
+            let mode = OnlineMode::Batch {
+                secs,
+                min_targets: 6,
+            };
+            let Err(FrontendError::InvalidConfig { field, .. }) =
+                OnlineLearner::new("b", Box::new(Batches(sizes.clone())), mode, 1e-4)
+            else {
+                panic!("{secs} s accepted");
+            };
+            assert_eq!(field, "online.batch_secs");
+        }
     }
 }

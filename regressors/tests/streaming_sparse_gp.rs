@@ -442,6 +442,53 @@ fn streaming_row_by_row_is_fitting_the_same_rows_and_a_saved_model_goes_on_ident
     assert_eq!(loaded.state().unwrap().batches, 11);
 }
 
+/// Rows `from..to` as a dataset.
+fn batch(x: &Mat<f64>, y: &Mat<f64>, from: usize, to: usize) -> gpodo_traits::ResidualDataset {
+    dataset(&rows(x, from, to), &rows(y, from, to))
+}
+
+#[test]
+fn batches_the_caller_ends_are_learned_whatever_their_size() {
+    let mut rng = rng(73);
+    let x = inputs(&mut rng, 90, 3);
+    let y = targets(&mut rng, &x, 0.05);
+    let queries = sample_matrix(&inputs(&mut rng, 6, 3));
+    // Batches of 25 (first), 3, 13 and 9 rows, where the settings say 40
+    // and 8: the same as a stream whose settings are 25 and the sizes.
+    let mut ended = StreamingSparseGp::new(stream_params()).unwrap();
+    ended.update_batch(&batch(&x, &y, 0, 1)).unwrap();
+    assert!(ended.state().is_none(), "one row waits for a second");
+    ended.update_batch(&batch(&x, &y, 1, 25)).unwrap();
+    assert_eq!(ended.state().unwrap().batches, 1);
+    ended.update_batch(&batch(&x, &y, 25, 28)).unwrap();
+    // Two rows given by `update` wait, and join the next batch.
+    feed(&mut ended, &x, &y, 28..30);
+    assert_eq!(ended.state().unwrap().pending.len(), 2);
+    ended.update_batch(&batch(&x, &y, 30, 41)).unwrap();
+    ended.update_batch(&batch(&x, &y, 41, 50)).unwrap();
+    assert_eq!(ended.state().unwrap().batches, 4);
+    assert_eq!(ended.state().unwrap().rows_seen, 50);
+
+    let mut by_rows = StreamingSparseGp::new(StreamingSparseGpParams {
+        warmup_rows: 25,
+        batch_rows: 3,
+        ..stream_params()
+    })
+    .unwrap();
+    feed(&mut by_rows, &x, &y, 0..28);
+    for (from, to, size) in [(28, 41, 13), (41, 50, 9)] {
+        let mut state = by_rows.state().unwrap().clone();
+        state.params.batch_rows = size;
+        by_rows = StreamingSparseGp::from_state(state).unwrap();
+        feed(&mut by_rows, &x, &y, from..to);
+    }
+    assert_eq!(by_rows.state().unwrap().batches, 4);
+    assert_eq!(
+        ended.predict(&queries).unwrap(),
+        by_rows.predict(&queries).unwrap()
+    );
+}
+
 #[test]
 fn the_stream_gives_the_same_numbers_at_one_and_two_threads() {
     let mut rng = rng(72);

@@ -252,4 +252,21 @@ pub trait ResidualRegressor: Send + Sync {
             model: self.name().to_string(),
         })
     }
+
+    /// Learns from a batch of new samples as one batch, where the caller
+    /// decides where a batch ends (Table II's online schemes end one every
+    /// so many seconds of VO targets). Learners that learn in batches (the
+    /// streaming sparse GP) learn these rows, with any that `update` left
+    /// waiting, in one step, whatever their number; the others learn them
+    /// one [`ResidualRegressor::update`] at a time, which is the default.
+    ///
+    /// # Errors
+    /// As [`ResidualRegressor::update`]; rows learned before the failing
+    /// one stay learned.
+    fn update_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
+        for i in 0..data.len() {
+            self.update(data.inputs.row(i), data.targets.row(i))?;
+        }
+        Ok(())
+    }
 }

@@ -164,7 +164,14 @@ pub struct OnlineSpec {
     /// the sparse GP); omitted, one online `update` per target (ILGR).
     #[serde(default)]
     pub refit_every: Option<usize>,
-    /// Fewest targets before the first refit (default 20).
+    /// Learn in batches of VO targets spanning this many seconds (learners
+    /// that learn in batches: the streaming sparse GP); omitted, one online
+    /// `update` per target, batched by the regressor's own row count.
+    /// Exclusive with `refit_every`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub batch_secs: Option<f64>,
+    /// Fewest targets before the first refit or the first batch
+    /// (default 20).
     #[serde(default = "default_min_targets")]
     pub min_targets: usize,
 }
@@ -175,13 +182,25 @@ fn default_min_targets() -> usize {
 
 impl OnlineSpec {
     /// The learning mode.
-    pub fn mode(&self) -> OnlineMode {
-        match self.refit_every {
-            Some(every) => OnlineMode::Refit {
+    ///
+    /// # Errors
+    /// The field at fault and what was expected, when both `refit_every`
+    /// and `batch_secs` are given.
+    pub fn mode(&self) -> Result<OnlineMode, (String, String)> {
+        match (self.refit_every, self.batch_secs) {
+            (Some(_), Some(_)) => Err((
+                "online.batch_secs".into(),
+                "either `refit_every` or `batch_secs`, not both".into(),
+            )),
+            (Some(every), None) => Ok(OnlineMode::Refit {
                 every,
                 min_targets: self.min_targets,
-            },
-            None => OnlineMode::Update,
+            }),
+            (None, Some(secs)) => Ok(OnlineMode::Batch {
+                secs,
+                min_targets: self.min_targets,
+            }),
+            (None, None) => Ok(OnlineMode::Update),
         }
     }
 }

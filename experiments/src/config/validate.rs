@@ -295,6 +295,22 @@ impl ExperimentConfig {
                             "refit_every and min_targets of at least 1",
                         ));
                     }
+                    online.mode().map_err(|(field, expected)| {
+                        Issue::new(
+                            &at(&field),
+                            "both `refit_every` and `batch_secs`",
+                            &expected,
+                        )
+                    })?;
+                    if let Some(secs) = online.batch_secs
+                        && !(secs.is_finite() && secs > 0.0)
+                    {
+                        return Err(Issue::new(
+                            &at("online.batch_secs"),
+                            format!("a batch of {secs} s"),
+                            "a positive, finite number of seconds",
+                        ));
+                    }
                 }
                 (None, _, _) => {}
             }

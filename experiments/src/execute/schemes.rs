@@ -50,7 +50,9 @@ impl SchemeInputs<'_> {
             return Ok(SchemeResiduals::Online {
                 label: online.regressor.label(),
                 regressor: online.regressor.build()?,
-                mode: online.mode(),
+                mode: online.mode().map_err(|(field, expected)| {
+                    gpodo_frontends::FrontendError::InvalidConfig { field, expected }
+                })?,
             });
         }
         let resolved = self.odometry(scheme)?;

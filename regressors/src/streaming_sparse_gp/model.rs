@@ -381,6 +381,57 @@ impl StreamingSparseGp {
 
     /// A stream's row: kept until its batch is complete, then learned.
     fn learn_row(&mut self, x: &[f64], y: &[f64]) -> Result<(), Error> {
+        self.check_row(x, y)?;
+        match &mut self.learned {
+            None => {
+                self.buffer.push((x.to_vec(), y.to_vec()));
+                if self.buffer.len() >= self.params.warmup_rows {
+                    let rows = std::mem::take(&mut self.buffer);
+                    self.first_batch(&rows_dataset(&rows)?)?;
+                }
+            }
+            Some((state, _)) => {
+                state.pending.push((x.to_vec(), y.to_vec()));
+                if state.pending.len() >= self.params.batch_rows {
+                    let rows = std::mem::take(&mut state.pending);
+                    self.next_batch(&rows)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A batch the caller ended: learned now with the rows waiting, as the
+    /// first batch (from at least 2 rows; fewer wait) or as the next one,
+    /// whatever `warmup_rows` and `batch_rows` say.
+    fn learn_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
+        let mut rows = Vec::with_capacity(data.len());
+        for i in 0..data.len() {
+            let (x, y) = (data.inputs.row(i), data.targets.row(i));
+            self.check_row(x, y)?;
+            rows.push((x.to_vec(), y.to_vec()));
+        }
+        match &mut self.learned {
+            None => {
+                self.buffer.extend(rows);
+                if self.buffer.len() >= 2 {
+                    let rows = std::mem::take(&mut self.buffer);
+                    self.first_batch(&rows_dataset(&rows)?)?;
+                }
+            }
+            Some((state, _)) => {
+                let mut batch = std::mem::take(&mut state.pending);
+                batch.extend(rows);
+                if !batch.is_empty() {
+                    self.next_batch(&batch)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a stream's row against the widths seen so far.
+    fn check_row(&self, x: &[f64], y: &[f64]) -> Result<(), Error> {
         let width = match &self.learned {
             Some((s, _)) => Some((s.input_names.len(), s.target_names.len())),
             None => self.buffer.first().map(|(x0, y0)| (x0.len(), y0.len())),
@@ -398,22 +449,6 @@ impl StreamingSparseGp {
             return Err(Error::InvalidInput(
                 "streaming_sparse_gp: a non-finite input or target".into(),
             ));
-        }
-        match &mut self.learned {
-            None => {
-                self.buffer.push((x.to_vec(), y.to_vec()));
-                if self.buffer.len() >= self.params.warmup_rows {
-                    let rows = std::mem::take(&mut self.buffer);
-                    self.first_batch(&rows_dataset(&rows)?)?;
-                }
-            }
-            Some((state, _)) => {
-                state.pending.push((x.to_vec(), y.to_vec()));
-                if state.pending.len() >= self.params.batch_rows {
-                    let rows = std::mem::take(&mut state.pending);
-                    self.next_batch(&rows)?;
-                }
-            }
         }
         Ok(())
     }
@@ -461,5 +496,9 @@ impl ResidualRegressor for StreamingSparseGp {
 
     fn update(&mut self, inputs: &[f64], targets: &[f64]) -> Result<(), Error> {
         self.learn_row(inputs, targets)
+    }
+
+    fn update_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
+        self.learn_batch(data)
     }
 }
