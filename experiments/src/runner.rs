@@ -13,6 +13,7 @@ use crate::error::PipelineError;
 use crate::execute::records::{
     RecordError, RecordWriter, RunRecord, read_records, record_files, record_path,
 };
+use crate::execute::results::ExperimentResults;
 use crate::execute::shared::{SharedCounts, SharedWork};
 use crate::output::{slug, write_atomically};
 use crate::plan::{PlanFile, RunSpec, SweepPlan};
@@ -129,11 +130,65 @@ pub fn recorded_keys(dir: &Path) -> Result<BTreeSet<String>, RecordError> {
     Ok(keys)
 }
 
+/// Sees each run's results as the run finishes (from the worker thread
+/// that ran it, in any order).
+pub type RunObserver<'a> = dyn Fn(&RunSpec, &ExperimentResults) + Sync + 'a;
+
 /// Runs the plan (or this shard of it).
 ///
 /// # Errors
 /// [`RunnerError`]; runs finished before a failure stay recorded.
 pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome, RunnerError> {
+    run_sweep_observed(plan, options, &|_, _| {})
+}
+
+/// Runs every run of the plan and writes nothing: the shared work once,
+/// then the runs in parallel (rayon, on the pool the call is made from), as
+/// [`run_sweep`] does; `observer` sees each run as it finishes. Returns
+/// each run's results, or why it failed, in the plan's order.
+///
+/// # Errors
+/// [`RunnerError::Pipeline`] when the shared work fails,
+/// [`RunnerError::Stopped`] after [`crate::stop::request`].
+pub fn run_in_memory(
+    plan: &SweepPlan,
+    observer: &RunObserver<'_>,
+) -> Result<Vec<Result<ExperimentResults, String>>, RunnerError> {
+    let start = Instant::now();
+    let configs: Vec<&ExperimentConfig> = plan.runs.iter().map(|r| &r.config).collect();
+    let shared = SharedWork::build(&configs, None)?;
+    plan.runs
+        .par_iter()
+        .map(|run| {
+            if crate::stop::requested() {
+                return Err(RunnerError::Stopped);
+            }
+            let results = shared.results(&run.config);
+            if crate::stop::requested() {
+                return Err(RunnerError::Stopped);
+            }
+            Ok(results
+                .map(|mut results| {
+                    results.duration_secs = start.elapsed().as_secs_f64();
+                    results.cpu_secs = crate::cpu::process_cpu_secs();
+                    observer(run, &results);
+                    results
+                })
+                .map_err(|e| e.to_string()))
+        })
+        .collect()
+}
+
+/// [`run_sweep`], with `observer` seeing each run's results as it is
+/// recorded.
+///
+/// # Errors
+/// As [`run_sweep`].
+pub fn run_sweep_observed(
+    plan: &SweepPlan,
+    options: &RunOptions,
+    observer: &RunObserver<'_>,
+) -> Result<SweepOutcome, RunnerError> {
     let start = Instant::now();
     let dir = results_dir(plan, options);
     let output = |path: &Path, e: anyhow::Error| RunnerError::Output {
@@ -234,6 +289,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
             results.duration_secs = start.elapsed().as_secs_f64();
             results.cpu_secs = crate::cpu::process_cpu_secs();
             writer.append(&RunRecord::new(run, &results))?;
+            observer(run, &results);
             if details {
                 let run_dir = if single {
                     dir.clone()

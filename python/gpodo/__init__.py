@@ -11,6 +11,15 @@ models with the ``gpodo`` command line::
 
 See ``help(gpodo.ExactGP)``, ``help(gpodo.SparseGP)``, ``help(gpodo.ILGR)``,
 ``help(gpodo.StreamingSparseGP)``.
+
+Experiment files run as ``gpodo run`` runs them, with the tables as pandas
+DataFrames::
+
+    results = gpodo.run("experiments/paper.yaml")
+    results.table2()                        # one row per scheme and test run
+    results.trajectories("fixed 2.5 fps")   # time, estimate and truth
+
+See ``help(gpodo.run)`` and ``help(gpodo.Results)``.
 """
 
 import json
@@ -19,8 +28,18 @@ import numpy as np
 
 from . import _native
 from ._estimators import ILGR, ExactGP, SparseGP, StreamingSparseGP
+from ._experiments import Results, run
 
-__all__ = ["ExactGP", "SparseGP", "ILGR", "StreamingSparseGP", "load_model", "kernel_names"]
+__all__ = [
+    "ExactGP",
+    "SparseGP",
+    "ILGR",
+    "StreamingSparseGP",
+    "load_model",
+    "kernel_names",
+    "run",
+    "Results",
+]
 
 _KINDS = {
     "exact_gp": ExactGP,

@@ -203,8 +203,29 @@ impl Located<'_> {
 /// # Errors
 /// [`ConfigError`] naming the file, line and column of the first problem.
 pub fn load_plan(file: &Path) -> Result<SweepPlan, ConfigError> {
+    load_plan_with(file, None, None)
+}
+
+/// [`load_plan`] with what a caller of the library may change: `text` read
+/// as if it were `file` (an experiment given as a Python dict; `file` need
+/// not exist, and `base:` and relative paths are resolved from its
+/// folder), and `seeds` in place of the file's `seeds:` list.
+///
+/// # Errors
+/// As [`load_plan`]; an error in `text` names `file` and the key's path.
+pub fn load_plan_with(
+    file: &Path,
+    text: Option<&str>,
+    seeds: Option<&[u64]>,
+) -> Result<SweepPlan, ConfigError> {
     let mut provenance = Provenance::default();
-    let mut tree = read_tree(file, 0, &mut provenance)?;
+    let mut tree = match text {
+        Some(text) => tree::tree_of_text(file, text, 0, &mut provenance)?,
+        None => read_tree(file, 0, &mut provenance)?,
+    };
+    if let (Some(seeds), serde_json::Value::Object(map)) = (seeds, &mut tree) {
+        map.insert("seeds".into(), seeds.iter().copied().collect());
+    }
     let located = Located { file, provenance };
     let controls = expand::split_controls(&mut tree, &located)?;
     let (mut dimensions, mut value_sources) = expand::dimensions(&controls, &located)?;

@@ -83,11 +83,22 @@ pub(crate) fn read_tree(
         path: file.to_path_buf(),
         source,
     })?;
-    let mut value: Value = serde_saphyr::from_str(&text).map_err(|e| ConfigError::Parse {
+    tree_of_text(file, &text, depth, provenance)
+}
+
+/// [`read_tree`] of `text`, read as if it were `file` (which need not
+/// exist: its folder is where `base:` is looked for).
+pub(crate) fn tree_of_text(
+    file: &Path,
+    text: &str,
+    depth: usize,
+    provenance: &mut Provenance,
+) -> Result<Value, ConfigError> {
+    let mut value: Value = serde_saphyr::from_str(text).map_err(|e| ConfigError::Parse {
         path: file.to_path_buf(),
         detail: e.to_string(),
     })?;
-    let locator = Locator::new(&text);
+    let locator = Locator::new(text);
     let located = |path: &str, problem: String, expected: String| {
         let pos = locator.find(path).unwrap_or_default();
         ConfigError::Located {
