@@ -79,7 +79,7 @@ use crate::DatasetError;
 
 use columns::{LogLayout, check_joint_name};
 pub use read::read_log_csv;
-pub use write::write_log_csv;
+pub use write::{log_table, write_log_csv};
 
 /// Largest `|‖q‖ − 1|` accepted for a ground-truth quaternion.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;

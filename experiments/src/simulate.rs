@@ -11,7 +11,7 @@ use gpodo_datasets::bags::write_camera::{intrinsics, projection};
 use gpodo_datasets::camera::traverse::camera_stream;
 use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_datasets::log::{RoverLog, write_log_csv};
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_datasets::sim::preset::{Preset, SimulatedTestbed, SimulatorConfig};
 use gpodo_traits::CameraParams;
 use gpodo_vision::png_io::write_png_gray;
 
@@ -195,6 +195,24 @@ fn check_camera(options: &SimulateOptions) -> Result<(), PipelineError> {
 /// [`PipelineError::Io`] naming the file that could not be written.
 pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>, PipelineError> {
     check_camera(options)?;
+    let testbed = simulate_testbed(options)?;
+    write_testbed(options, &testbed, out)
+}
+
+/// The training and test runs of the testbed of `options`, in memory (the
+/// logs `gpodo simulate` writes; the camera and format are not used).
+///
+/// # Errors
+/// [`PipelineError::Dataset`] when the simulation fails.
+pub fn simulate_logs(
+    options: &SimulateOptions,
+) -> Result<(Vec<RoverLog>, Vec<RoverLog>), PipelineError> {
+    let testbed = simulate_testbed(options)?;
+    Ok((testbed.train, testbed.test))
+}
+
+/// The simulated testbed of `options`, without its IMU when asked.
+fn simulate_testbed(options: &SimulateOptions) -> Result<SimulatedTestbed, PipelineError> {
     let mut config = SimulatorConfig::preset(options.preset, options.seed);
     if let Some(n) = options.training_runs {
         config.training_runs = n;
@@ -213,6 +231,15 @@ pub fn simulate_to(options: &SimulateOptions, out: &Path) -> Result<Vec<Written>
             }
         }
     }
+    Ok(testbed)
+}
+
+/// Writes the simulated `testbed` as `options` ask.
+fn write_testbed(
+    options: &SimulateOptions,
+    testbed: &SimulatedTestbed,
+    out: &Path,
+) -> Result<Vec<Written>, PipelineError> {
     std::fs::create_dir_all(out).map_err(io(out))?;
     let ground = match options.camera {
         Some(_) => Some(GroundMaps::build(

@@ -19,7 +19,14 @@ DataFrames::
     results.table2()                        # one row per scheme and test run
     results.trajectories("fixed 2.5 fps")   # time, estimate and truth
 
-See ``help(gpodo.run)`` and ``help(gpodo.Results)``.
+Simulated testbeds, ROS bags and residual rows as DataFrames::
+
+    train, test = gpodo.simulate("exoter-prl", seed=7)
+    X, Y = gpodo.residuals(train)           # ready for ExactGP().fit(X, Y)
+    log = gpodo.read_bag("run.mcap", topics="topics.yaml")
+
+See ``help(gpodo.run)``, ``help(gpodo.Results)``, ``help(gpodo.simulate)``,
+``help(gpodo.read_bag)`` and ``help(gpodo.residuals)``.
 """
 
 import json
@@ -28,6 +35,7 @@ import numpy as np
 
 from . import _native
 from ._estimators import ILGR, ExactGP, SparseGP, StreamingSparseGP
+from ._data import read_bag, residuals, simulate
 from ._experiments import Results, run
 
 __all__ = [
@@ -39,6 +47,9 @@ __all__ = [
     "kernel_names",
     "run",
     "Results",
+    "simulate",
+    "read_bag",
+    "residuals",
 ]
 
 _KINDS = {

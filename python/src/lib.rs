@@ -23,6 +23,7 @@ use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
+mod data;
 mod experiments;
 
 /// A message for any error: a `ValueError`.
@@ -330,6 +331,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model_from_json, m)?)?;
     m.add_function(wrap_pyfunction!(kernel_names, m)?)?;
     m.add_function(wrap_pyfunction!(experiments::run_experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(data::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(data::read_bag, m)?)?;
+    m.add_function(wrap_pyfunction!(data::residuals, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
 }

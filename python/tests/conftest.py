@@ -34,3 +34,20 @@ def fit_csv():
         RELEASE / "examples" / "fit_csv",
         "cargo build --release -p gpodo-regressors --example fit_csv",
     )
+
+
+@pytest.fixture(scope="session")
+def paper_cli(tmp_path_factory):
+    """The folder `gpodo run experiments/paper.yaml --out …` wrote (its
+    `metrics.json` and `residuals_train.csv`), run once per session."""
+    import subprocess
+
+    cli = _binary(RELEASE / "gpodo", "cargo test --workspace --all-targets --release")
+    out = tmp_path_factory.mktemp("paper") / "cli"
+    subprocess.run(
+        [str(cli), "run", str(REPO / "experiments" / "paper.yaml"), "--out", str(out), "--quiet"],
+        check=True,
+        capture_output=True,
+        cwd=REPO,
+    )
+    return out

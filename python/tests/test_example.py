@@ -30,3 +30,25 @@ def test_the_exoter_example_fits_predicts_saves_and_loads(tmp_path):
     assert "log marginal likelihood -4493.24" in out, out
     assert "held-out RMSE 0.004404 m/s (predicting no error: 0.004736)" in out, out
     assert (tmp_path / "exoter.gpodo").exists()
+
+
+def test_the_table2_example_runs_the_paper_and_fits_on_simulated_residuals(tmp_path, paper_cli):
+    import json
+
+    out = subprocess.run(
+        [sys.executable, str(REPO / "python" / "examples" / "table2.py")],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    cli = json.loads((paper_cli / "metrics.json").read_text())
+    base = next(s for s in cli["schemes"] if s["label"] == "ORB-SLAM 2.5 fps")["run"]
+    assert f"2.5 fps: {base['frames']} frames, RMSE {base['metrics']['rmse_m']:.3f} m" in out, out
+    assert f"{cli['dataset']['n_train']} training rows" in out, out
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        assert "matplotlib is not installed" in out
+    else:
+        assert (tmp_path / "table2.png").exists()

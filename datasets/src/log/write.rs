@@ -58,6 +58,19 @@ fn check_file_stem(log: &RoverLog) -> Result<(), DatasetError> {
     Ok(())
 }
 
+/// The columns of the log's CSV and its rows, as `<name>.csv` holds them
+/// (for a table in memory, such as a pandas DataFrame).
+pub fn log_table(log: &RoverLog) -> (Vec<String>, Vec<Vec<f64>>) {
+    let layout = LogLayout::of_log(log);
+    let rows = log
+        .samples
+        .iter()
+        .zip(&log.ground_truth)
+        .map(|(sample, pose)| layout.encode(sample, pose))
+        .collect();
+    (layout.column_names(), rows)
+}
+
 /// The text of `<name>.csv`.
 fn log_text(log: &RoverLog) -> String {
     let layout = LogLayout::of_log(log);

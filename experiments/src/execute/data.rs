@@ -8,7 +8,9 @@ use std::path::PathBuf;
 use gpodo_frontends::tum::StampedPose;
 
 use gpodo_datasets::log::{RoverLog, read_log_csv};
-use gpodo_datasets::residuals::{LogStep, StepWindows, log_steps, residual_dataset_from_steps};
+use gpodo_datasets::residuals::{
+    LogStep, ResidualConfig, StepWindows, log_steps, residual_dataset_from_steps,
+};
 use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::speed_check::{median_speed_ratio, unit_warning};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
@@ -200,6 +202,78 @@ fn refs(logs: &[RoverLog]) -> Vec<&RoverLog> {
     logs.iter().collect()
 }
 
+/// The motion model of a spec and the logs as it reads them.
+struct LogsForModel {
+    model: Box<dyn MotionModel>,
+    /// The rover's wheel radius (0 without a rover).
+    radius: f64,
+    train: Vec<RoverLog>,
+    test: Vec<RoverLog>,
+    /// Where the roll and pitch come from.
+    attitude: Attitude,
+}
+
+/// Builds the motion model of `spec` and puts the logs in its rover's
+/// joint order, with the off-board roll and pitch it reads where there is
+/// no IMU.
+fn logs_for_model(
+    spec: &MotionModelSpec,
+    train: &[RoverLog],
+    test: &[RoverLog],
+) -> Result<LogsForModel, PipelineError> {
+    let (model, rover) = motion_model(spec)?;
+    let (mut train, mut test) = (
+        in_rover_order(train, rover.as_ref())?,
+        in_rover_order(test, rover.as_ref())?,
+    );
+    let mut attitude = attitude_source(spec, &train, &test)?;
+    if attitude == Attitude::GroundTruth && !ground_truth_has_attitude(&train, &test) {
+        tracing::warn!(
+            "`attitude_without_imu: ground_truth`, but the ground truth carries no roll or pitch (a GNSS fix has none): the ground is taken as level"
+        );
+        attitude = Attitude::Level;
+    }
+    if attitude == Attitude::GroundTruth {
+        for log in train.iter_mut().chain(test.iter_mut()) {
+            with_ground_truth_attitude(log);
+        }
+    }
+    Ok(LogsForModel {
+        model,
+        radius: rover.as_ref().map_or(0.0, |r| r.wheel_radius_m),
+        train,
+        test,
+        attitude,
+    })
+}
+
+/// The residual rows of `logs` (concatenated in order) as an experiment
+/// with this `motion_model:` and `residuals:` computes its training rows.
+///
+/// # Errors
+/// [`PipelineError`] when the model cannot be built, a log does not fit
+/// its rover, or the residuals cannot be computed.
+pub fn residual_rows(
+    spec: &MotionModelSpec,
+    residuals: &ResidualConfig,
+    logs: &[RoverLog],
+) -> Result<ResidualDataset, PipelineError> {
+    let prepared = logs_for_model(spec, logs, &[])?;
+    let steps = prepared
+        .train
+        .iter()
+        .map(|log| {
+            log.validate()?;
+            log_steps(log, prepared.model.as_ref(), prepared.radius)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(residual_dataset_from_steps(
+        &refs(&prepared.train),
+        &steps,
+        residuals,
+    )?)
+}
+
 fn from_logs(
     config: &ExperimentConfig,
     train_logs: &[RoverLog],
@@ -207,25 +281,14 @@ fn from_logs(
     source: String,
     terrain_max_slope_deg: Option<f64>,
 ) -> Result<PreparedData, PipelineError> {
-    let (model, rover) = motion_model(&config.motion_model)?;
-    let (mut train_logs, mut test_logs) = (
-        in_rover_order(train_logs, rover.as_ref())?,
-        in_rover_order(test_logs, rover.as_ref())?,
-    );
-    let mut attitude = attitude_source(&config.motion_model, &train_logs, &test_logs)?;
-    if attitude == Attitude::GroundTruth && !ground_truth_has_attitude(&train_logs, &test_logs) {
-        tracing::warn!(
-            "`attitude_without_imu: ground_truth`, but the ground truth carries no roll or pitch (a GNSS fix has none): the ground is taken as level"
-        );
-        attitude = Attitude::Level;
-    }
-    if attitude == Attitude::GroundTruth {
-        for log in train_logs.iter_mut().chain(test_logs.iter_mut()) {
-            with_ground_truth_attitude(log);
-        }
-    }
+    let LogsForModel {
+        model,
+        radius,
+        train: train_logs,
+        test: test_logs,
+        attitude,
+    } = logs_for_model(&config.motion_model, train_logs, test_logs)?;
     let (train_logs, test_logs) = (&train_logs, &test_logs);
-    let radius = rover.as_ref().map_or(0.0, |r| r.wheel_radius_m);
     let steps_of = |logs: &[RoverLog]| {
         logs.iter()
             .map(|log| {
