@@ -81,6 +81,19 @@ def test_a_dict_runs_and_its_tables_and_trajectories_are_dataframes():
         results.trajectories("nothing")
 
 
+def test_curves_are_the_points_of_the_schemes_with_a_curve():
+    experiment = small()
+    for scheme in experiment["schemes"]:
+        scheme["curve"] = "fixed rate"
+    experiment["schemes"].append(
+        {"label": "fixed 1.0 fps", "selector": {"kind": "fixed_rate", "fps": 1.0}}
+    )
+    curves = gpodo.run(experiment, progress=False).curves()
+    assert curves["scheme"].tolist() == ["fixed 2.5 fps", "fixed 0.5 fps"]
+    assert set(curves["curve"]) == {"fixed rate"}
+    assert curves["frames"].is_monotonic_decreasing
+
+
 def test_seeds_replace_the_files_and_threads_change_no_number():
     one = gpodo.run(small(), seeds=[3, 4], threads=1, progress=False)
     two = gpodo.run(small(), seeds=[3, 4], threads=2, progress=False)
