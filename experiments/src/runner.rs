@@ -144,8 +144,9 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
 
 /// Runs every run of the plan and writes nothing: the shared work once,
 /// then the runs in parallel (rayon, on the pool the call is made from), as
-/// [`run_sweep`] does; `observer` sees each run as it finishes. Returns
-/// each run's results, or why it failed, in the plan's order.
+/// [`run_sweep`] does; `observer` sees each run's results as it finishes
+/// (they are not kept). Returns the runs that failed: their indices in the
+/// plan and why.
 ///
 /// # Errors
 /// [`RunnerError::Pipeline`] when the shared work fails,
@@ -153,7 +154,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
 pub fn run_in_memory(
     plan: &SweepPlan,
     observer: &RunObserver<'_>,
-) -> Result<Vec<Result<ExperimentResults, String>>, RunnerError> {
+) -> Result<Vec<(usize, String)>, RunnerError> {
     let start = Instant::now();
     let configs: Vec<&ExperimentConfig> = plan.runs.iter().map(|r| &r.config).collect();
     let shared = SharedWork::build(&configs, None)?;
@@ -167,16 +168,18 @@ pub fn run_in_memory(
             if crate::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
-            Ok(results
-                .map(|mut results| {
+            match results {
+                Ok(mut results) => {
                     results.duration_secs = start.elapsed().as_secs_f64();
                     results.cpu_secs = crate::cpu::process_cpu_secs();
                     observer(run, &results);
-                    results
-                })
-                .map_err(|e| e.to_string()))
+                    Ok(None)
+                }
+                Err(e) => Ok(Some((run.index, e.to_string()))),
+            }
         })
-        .collect()
+        .collect::<Result<Vec<_>, _>>()
+        .map(|failed| failed.into_iter().flatten().collect())
 }
 
 /// [`run_sweep`], with `observer` seeing each run's results as it is

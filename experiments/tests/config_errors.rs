@@ -315,6 +315,19 @@ fn an_online_schemes_batches_are_checked() {
             text.lines().nth(line).unwrap().find("batch_secs").unwrap() + "batch_secs: ".len();
         check(&e, problem, file, line + 1, column + 1, expected);
     }
+    // A regressor that is only refitted cannot learn online.
+    let text = online("batch_secs: 60.0").replace("streaming_sparse_gp", "sparse_gp");
+    let e = error_of(dir.path(), "batch.yaml", &text);
+    let line = text.lines().position(|l| l.contains("sparse_gp")).unwrap();
+    let column = text.lines().nth(line).unwrap().find("sparse_gp").unwrap();
+    check(
+        &e,
+        "`sparse_gp`, which cannot learn online",
+        "batch.yaml",
+        line + 1,
+        column + 1,
+        "or `refit_every`",
+    );
 }
 
 /// A scheme's `odometry`: the regressors it names exist in their lists, it

@@ -70,6 +70,8 @@ pub struct OnlineLearner {
     /// In [`OnlineMode::Batch`], the time of the open batch's first target
     /// and the index of its first row.
     open_batch: Option<(f64, usize)>,
+    /// Whether the predicted mean is handed on (to correct the odometry).
+    correct_mean: bool,
 }
 
 impl OnlineLearner {
@@ -128,6 +130,7 @@ impl OnlineLearner {
             history: Vec::new(),
             inputs_standardized: false,
             open_batch: None,
+            correct_mean: true,
         })
     }
 
@@ -137,6 +140,15 @@ impl OnlineLearner {
     #[must_use]
     pub fn with_standardized_inputs(mut self, standardized: bool) -> Self {
         self.inputs_standardized = standardized;
+        self
+    }
+
+    /// Whether the model's predicted mean is handed on, to correct the
+    /// odometry (the default); `false` hands on a zero mean with the
+    /// model's variance, a control in which the learner only gates frames.
+    #[must_use]
+    pub fn with_mean_correction(mut self, correct_mean: bool) -> Self {
+        self.correct_mean = correct_mean;
         self
     }
 
@@ -187,6 +199,11 @@ impl ResidualSource for OnlineLearner {
         }
         let x = SampleMatrix::from_row_major(1, window.inputs.len(), window.inputs.clone())?;
         match self.model.predict(&x) {
+            Ok(p) if !self.correct_mean => Ok(ResidualPrediction {
+                mean: Vector3::zeros(),
+                variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
+                absolute: None,
+            }),
             Ok(p) => Ok(ResidualPrediction {
                 mean: Vector3::from_iterator(p.mean.row(0).iter().copied()),
                 variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
@@ -266,16 +283,19 @@ mod tests {
         fn fit(&mut self, _: &ResidualDataset) -> Result<FitReport, Error> {
             unreachable!("a batch learner is never refitted")
         }
+        /// A mean of 1 and a variance of 2 for every output.
         fn predict(&self, inputs: &SampleMatrix) -> Result<Predictions, Error> {
-            let zeros =
-                SampleMatrix::from_row_major(inputs.nrows(), 3, vec![0.0; 3 * inputs.nrows()])?;
+            let n = inputs.nrows();
             Ok(Predictions {
-                mean: zeros.clone(),
-                variance: zeros,
+                mean: SampleMatrix::from_row_major(n, 3, vec![1.0; 3 * n])?,
+                variance: SampleMatrix::from_row_major(n, 3, vec![2.0; 3 * n])?,
             })
         }
         fn supports_online_update(&self) -> bool {
             true
+        }
+        fn update(&mut self, _: &[f64], _: &[f64]) -> Result<(), Error> {
+            Ok(())
         }
         fn update_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
             assert_eq!(
@@ -308,6 +328,31 @@ mod tests {
         // stays open.
         assert_eq!(*sizes.lock().unwrap(), vec![6, 5, 5]);
         assert_eq!(learner.targets_seen(), 20);
+    }
+
+    #[test]
+    fn without_mean_correction_only_the_variance_is_handed_on() {
+        let window = TraverseWindow {
+            start_secs: 0.0,
+            end_secs: 1.0,
+            steps: 0..10,
+            inputs: vec![0.5, 0.5],
+            true_residual: Vector3::zeros(),
+        };
+        for (correct, mean) in [(true, 1.0), (false, 0.0)] {
+            let model = Box::new(Batches(Arc::default()));
+            let mut learner = OnlineLearner::new("b", model, OnlineMode::Update, 1e-4)
+                .unwrap()
+                .with_mean_correction(correct);
+            let before = learner.on_window(0, &window).unwrap();
+            assert_eq!(before.variance, Vector3::repeat(1e-4), "uninformed");
+            learner
+                .on_target(&[0.0, 0.0], &Vector3::zeros(), 1.0)
+                .unwrap();
+            let after = learner.on_window(1, &window).unwrap();
+            assert_eq!(after.mean, Vector3::repeat(mean));
+            assert_eq!(after.variance, Vector3::repeat(2.0));
+        }
     }
 
     #[test]

@@ -81,8 +81,11 @@ pub enum SchemeResiduals {
         label: String,
         /// The regressor, untrained.
         regressor: Box<dyn ResidualRegressor>,
-        /// One update per target, or periodic refits.
+        /// One update per target, periodic refits, or batches of seconds.
         mode: OnlineMode,
+        /// Whether the learned mean corrects the odometry (`false`: only
+        /// its variance is used, a control).
+        correct_mean: bool,
     },
 }
 
@@ -224,6 +227,7 @@ impl SchemeResiduals {
                 label,
                 regressor,
                 mode,
+                correct_mean,
             } => {
                 let label = format!("online: {label}");
                 let learner = OnlineLearner::new(
@@ -232,7 +236,8 @@ impl SchemeResiduals {
                     mode,
                     params.initial_residual_variance,
                 )?
-                .with_standardized_inputs(traverse.inputs_standardized());
+                .with_standardized_inputs(traverse.inputs_standardized())
+                .with_mean_correction(correct_mean);
                 (Box::new(learner), label)
             }
         })

@@ -93,8 +93,10 @@ def residuals(log, motion_model=None, window_secs=1.0):
     with tempfile.TemporaryDirectory(prefix="gpodo-") as folder:
         paths = []
         for i, frame in enumerate(logs):
+            # A folder per log: two logs of the same name stay apart.
             name = frame.attrs.get("name") or f"run{i}"
-            path = pathlib.Path(folder) / f"{name}.csv"
+            path = pathlib.Path(folder) / str(i) / f"{name}.csv"
+            path.parent.mkdir()
             frame.to_csv(path, index=False, float_format="%.17g")
             paths.append(str(path))
         inputs, targets, input_names, target_names = _native.residuals(

@@ -4,6 +4,7 @@ Table I, Table II, the frames-versus-error curves and the trajectories as
 pandas DataFrames."""
 
 import json
+import os
 import pathlib
 import sys
 
@@ -32,7 +33,17 @@ def _print_progress(done, total, key):
     sys.stderr.flush()
 
 
-def run(path_or_dict, out=None, seeds=None, threads=None, progress=True):
+def _plain(value):
+    """A dict's value JSON cannot hold as it is: a path as its text, a NumPy
+    number as a Python one."""
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{value!r} ({type(value).__name__}) has no place in an experiment")
+
+
+def run(path_or_dict, out=None, seeds=None, threads=None, progress=True, force=False):
     """Runs an experiment file, or a dict with the same schema, through the
     same runner as ``gpodo run``, and returns its :class:`Results`.
 
@@ -54,6 +65,9 @@ def run(path_or_dict, out=None, seeds=None, threads=None, progress=True):
         True prints ``done/total runs`` to ``sys.stderr`` after each run;
         a callable is called as ``progress(done, total, run_key)`` on the
         calling thread; False shows nothing.
+    force : bool, default False
+        With ``out``, start over a sweep whose folder holds runs already
+        (``gpodo run --force``); a single run is always run again.
 
     The GIL is released while the runner works. Ctrl-C stops it as the
     command line's first Ctrl-C does and raises ``KeyboardInterrupt``.
@@ -66,7 +80,10 @@ def run(path_or_dict, out=None, seeds=None, threads=None, progress=True):
         table) names the file.
     """
     if isinstance(path_or_dict, dict):
-        text = json.dumps(path_or_dict)
+        try:
+            text = json.dumps(path_or_dict, default=_plain, allow_nan=False)
+        except ValueError as e:
+            raise ValueError(f"the experiment dict holds a NaN or an infinity: {e}") from None
         file = pathlib.Path.cwd() / "<experiment dict>"
     else:
         text = None
@@ -86,6 +103,7 @@ def run(path_or_dict, out=None, seeds=None, threads=None, progress=True):
         None if seeds is None else [int(s) for s in seeds],
         None if threads is None else int(threads),
         callback,
+        bool(force),
     )
     return Results(name, report, runs)
 

@@ -90,17 +90,19 @@ fn trajectories(results: &ExperimentResults) -> Vec<Trajectory> {
         .collect()
 }
 
-/// A plan's error as Python sees it: for a dict, the key's path first
-/// (`schemes[3].selector.fps: …`), for a file the command line's message
-/// (file, line and column).
-fn config_error(e: &ConfigError, from_dict: bool) -> PyErr {
+/// A plan's error as Python sees it: in a dict (whose pseudo-file is
+/// `dict`), the key's path first (`schemes[3].selector.fps: …`); in a file
+/// (a dict's `base:` included), the command line's message (file, line and
+/// column).
+fn config_error(e: &ConfigError, dict: Option<&Path>) -> PyErr {
     match e {
         ConfigError::Located {
+            file,
             path,
             problem,
             expected,
             ..
-        } if from_dict => PyValueError::new_err(format!(
+        } if Some(file.as_path()) == dict => PyValueError::new_err(format!(
             "{}: {problem}; expected {expected}",
             if path.is_empty() {
                 "the experiment"
@@ -120,6 +122,7 @@ type RunnerOutput = Result<(Vec<RunData>, Option<PathBuf>), RunnerError>;
 fn run_plan(
     plan: &SweepPlan,
     out: Option<PathBuf>,
+    force: bool,
     threads: Option<usize>,
     events: &mpsc::Sender<(usize, usize, String)>,
 ) -> Result<RunnerOutput, rayon::ThreadPoolBuildError> {
@@ -129,30 +132,26 @@ fn run_plan(
     let total = plan.runs.len();
     let collected = Mutex::new(Vec::<(usize, RunData)>::new());
     let events = Mutex::new(events.clone());
+    // Sent under the lock, so that the counts arrive in order.
     let observer = |run: &RunSpec, results: &ExperimentResults| {
         let data = RunData::new(run, Ok(results));
-        let done = {
-            let mut c = collected
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            c.push((run.index, data));
-            c.len()
-        };
+        let mut c = collected
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        c.push((run.index, data));
         if let Ok(tx) = events.lock() {
-            let _ = tx.send((done, total, run.key.clone()));
+            let _ = tx.send((c.len(), total, run.key.clone()));
         }
     };
     Ok(pool.install(|| -> RunnerOutput {
         let report = match out {
             None => {
-                let all = run_in_memory(plan, &observer)?;
+                let failed = run_in_memory(plan, &observer)?;
                 let mut c = collected
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
-                for (run, results) in plan.runs.iter().zip(all) {
-                    if let Err(reason) = results {
-                        c.push((run.index, RunData::new(run, Err(reason))));
-                    }
+                for (index, reason) in failed {
+                    c.push((index, RunData::new(&plan.runs[index], Err(reason))));
                 }
                 None
             }
@@ -160,7 +159,7 @@ fn run_plan(
                 let single = plan.runs.len() == 1;
                 let options = RunOptions {
                     out: Some(dir),
-                    force: single,
+                    force: force || single,
                     quiet: true,
                     ..RunOptions::default()
                 };
@@ -173,12 +172,18 @@ fn run_plan(
                         c.push((run.index, RunData::new(run, Err(reason))));
                     }
                 }
-                let name = if single { "summary.md" } else { "report.md" };
-                if outcome.complete || single {
-                    write_sweep_report(&outcome.dir, name)
+                // What `gpodo run` writes after the runs: a single run's
+                // summary beside its report, a sweep's report.
+                let written = if single {
+                    write_sweep_report(&outcome.dir, "summary.md")
                         .map_err(|e| RunnerError::Report(e.into()))?;
-                }
-                Some(outcome.dir.join("report.md"))
+                    Some(outcome.dir.join("report.md"))
+                } else {
+                    let report = write_sweep_report(&outcome.dir, "report.md")
+                        .map_err(|e| RunnerError::Report(e.into()))?;
+                    Some(report.markdown)
+                };
+                written.filter(|path| path.exists())
             }
         };
         let mut runs = std::mem::take(
@@ -226,11 +231,14 @@ fn rows_array<'py, const N: usize>(
 /// Runs the experiment file `file` (or `text`, a YAML or JSON experiment
 /// read as if it were `file`) through `gpodo run`'s runner. Returns the
 /// experiment's name, the report's path (None when `out` is None: nothing
-/// is written) and its runs in plan order. `progress(done, total, key)` is
-/// called on this thread after each run.
+/// is written) and its runs in plan order. `force` starts a sweep's folder
+/// over. `progress(done, total, key)` is called on this thread after each
+/// run.
 #[pyfunction]
-#[pyo3(signature = (file, text=None, out=None, seeds=None, threads=None, progress=None))]
+#[pyo3(signature = (file, text=None, out=None, seeds=None, threads=None, progress=None, force=false))]
 #[allow(clippy::type_complexity)]
+// Python's keyword arguments, one parameter each.
+#[allow(clippy::too_many_arguments)]
 pub fn run_experiment<'py>(
     py: Python<'py>,
     file: PathBuf,
@@ -239,11 +247,12 @@ pub fn run_experiment<'py>(
     seeds: Option<Vec<u64>>,
     threads: Option<usize>,
     progress: Option<Bound<'py, PyAny>>,
+    force: bool,
 ) -> PyResult<(String, Option<String>, Vec<PyRun<'py>>)> {
     let from_dict = text.is_some();
     let plan = py
         .detach(|| load_plan_with(Path::new(&file), text.as_deref(), seeds.as_deref()))
-        .map_err(|e| config_error(&e, from_dict))?;
+        .map_err(|e| config_error(&e, from_dict.then_some(file.as_path())))?;
     let name = plan.name.clone();
     gpodo_experiments::stop::clear();
     let (tx, rx) = mpsc::channel();
@@ -252,7 +261,7 @@ pub fn run_experiment<'py>(
         Ok(rx) => rx.recv_timeout(Duration::from_millis(100)),
         Err(_) => Err(mpsc::RecvTimeoutError::Disconnected),
     };
-    let worker = std::thread::spawn(move || run_plan(&plan, out, threads, &tx));
+    let worker = std::thread::spawn(move || run_plan(&plan, out, force, threads, &tx));
     let mut interrupted = None;
     loop {
         match py.detach(next) {
@@ -275,17 +284,29 @@ pub fn run_experiment<'py>(
             interrupted = Some(e);
         }
     }
-    let outcome = py.detach(|| worker.join()).map_err(|_| {
-        PyRuntimeError::new_err("gpodo failed inside Rust (a bug; please report it)")
-    })?;
+    let outcome = py.detach(|| worker.join());
     gpodo_experiments::stop::clear();
     if let Some(e) = interrupted {
         return Err(e);
     }
+    let outcome = outcome.map_err(|panic| {
+        let what = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "unknown".into());
+        PyRuntimeError::new_err(format!(
+            "gpodo failed inside Rust (a bug; please report it): {what}"
+        ))
+    })?;
     let (runs, report) = outcome
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
         .map_err(|e| match e {
             RunnerError::Pipeline(e) => PyValueError::new_err(e.to_string()),
+            RunnerError::ResultsExist { path } => PyValueError::new_err(format!(
+                "{} already holds the sweep's runs; pass force=True to start it over, or another `out`",
+                path.display()
+            )),
             e => PyRuntimeError::new_err(e.to_string()),
         })?;
     let runs = runs

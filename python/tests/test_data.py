@@ -48,6 +48,11 @@ def test_residuals_of_the_simulated_runs_are_the_experiments_rows(paper_cli):
     # A rover description's path is the weighted Jacobian model of it.
     X2, Y2 = gpodo.residuals(train[0], motion_model=REPO / "kinematics" / "rovers" / "exoter.yaml")
     assert X2.shape[1] == X.shape[1] and len(X2) < len(X)
+    # Two logs of the same name are two logs.
+    X1, _ = gpodo.residuals(train[0], motion_model=motion_model)
+    X3, _ = gpodo.residuals([train[0], train[0]], motion_model=motion_model)
+    assert len(X3) == 2 * len(X1)
+    np.testing.assert_array_equal(X3.values[len(X1):], X1.values)
     fitted = gpodo.ExactGP(kernel="rbf").fit(X.iloc[:200], Y.iloc[:200])
     assert fitted.predict(X.iloc[200:210]).shape == (10, 3)
 

@@ -122,15 +122,30 @@ def test_a_bad_dict_names_the_key_path_and_a_bad_file_its_line(tmp_path):
         gpodo.run(path, progress=False)
     with pytest.raises(FileNotFoundError):
         gpodo.run(tmp_path / "missing.yaml")
+    # An error in the dict's base file names that file's line.
+    base = tmp_path / "base.yaml"
+    base.write_text(path.read_text())
+    with pytest.raises(ValueError, match=r"base\.yaml:4:11; expected"):
+        gpodo.run({"base": str(base), "name": "derived"}, progress=False)
+    with pytest.raises(ValueError, match="NaN"):
+        gpodo.run(small(dataset={"training_run_secs": float("nan")}), progress=False)
+    with pytest.raises(TypeError, match="no place"):
+        gpodo.run(small(name=object()), progress=False)
 
 
-def test_an_exception_in_the_progress_callback_stops_the_run_and_the_next_run_goes():
+def test_an_exception_in_the_progress_callback_stops_the_run_and_the_next_run_goes(tmp_path):
     def stop(done, total, key):
         raise KeyboardInterrupt
 
+    out = tmp_path / "stopped"
     with pytest.raises(KeyboardInterrupt):
-        gpodo.run(small(), seeds=[1, 2, 3], threads=1, progress=stop)
-    assert len(gpodo.run(small(), progress=False).runs) == 1
+        gpodo.run(small(), seeds=[1, 2, 3], threads=1, progress=stop, out=out)
+    # The first run is recorded; the stop kept the others from running.
+    assert len((out / "runs.jsonl").read_text().splitlines()) == 1
+    with pytest.raises(ValueError, match="force=True"):
+        gpodo.run(small(), seeds=[1, 2, 3], out=out, progress=False)
+    again = gpodo.run(small(), seeds=[1, 2, 3], out=out, force=True, progress=False)
+    assert len(again.runs) == 3 and again.report_path == out / "report.md"
 
 
 def test_ctrl_c_stops_a_run_promptly(tmp_path):
@@ -140,6 +155,7 @@ def test_ctrl_c_stops_a_run_promptly(tmp_path):
     script.write_text(
         "import signal, gpodo\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "print('running', flush=True)\n"
         f"gpodo.run({str(PAPER)!r}, progress=False)\n"
         "print('finished')\n"
     )
@@ -150,7 +166,9 @@ def test_ctrl_c_stops_a_run_promptly(tmp_path):
         text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
-    time.sleep(3.0)
+    # Ctrl-C two seconds into the run, not during the imports.
+    assert process.stdout.readline().strip() == "running"
+    time.sleep(2.0)
     sent = time.monotonic()
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=60)

@@ -261,8 +261,9 @@ pub trait ResidualRegressor: Send + Sync {
     /// one [`ResidualRegressor::update`] at a time, which is the default.
     ///
     /// # Errors
-    /// As [`ResidualRegressor::update`]; rows learned before the failing
-    /// one stay learned.
+    /// As [`ResidualRegressor::update`]. The default learns the rows before
+    /// the failing one; a batch learner may check every row first and
+    /// learn none of the batch when one is bad.
     fn update_batch(&mut self, data: &ResidualDataset) -> Result<(), Error> {
         for i in 0..data.len() {
             self.update(data.inputs.row(i), data.targets.row(i))?;

@@ -174,6 +174,19 @@ pub struct OnlineSpec {
     /// (default 20).
     #[serde(default = "default_min_targets")]
     pub min_targets: usize,
+    /// Whether the learned mean corrects the odometry (default true);
+    /// false keeps the odometry uncorrected and gates frames by the
+    /// learned variance alone (a control that separates the two).
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub correct_mean: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn is_true(value: &bool) -> bool {
+    *value
 }
 
 fn default_min_targets() -> usize {

@@ -289,8 +289,13 @@ impl ExperimentConfig {
                         .validate()
                         .map_err(|e| Issue::from_regressor(&at("online.regressor"), e))?;
                     if online.refit_every == Some(0) || online.min_targets == 0 {
+                        let field = if online.refit_every == Some(0) {
+                            "online.refit_every"
+                        } else {
+                            "online.min_targets"
+                        };
                         return Err(Issue::new(
-                            &at("online.refit_every"),
+                            &at(field),
                             "zero targets",
                             "refit_every and min_targets of at least 1",
                         ));
@@ -309,6 +314,18 @@ impl ExperimentConfig {
                             &at("online.batch_secs"),
                             format!("a batch of {secs} s"),
                             "a positive, finite number of seconds",
+                        ));
+                    }
+                    // Without refits, the learner learns row by row or in
+                    // batches, which a batch-only regressor cannot.
+                    if online.refit_every.is_none()
+                        && let Ok(model) = online.regressor.build()
+                        && !model.supports_online_update()
+                    {
+                        return Err(Issue::new(
+                            &at("online.regressor.kind"),
+                            format!("`{}`, which cannot learn online", model.name()),
+                            "a regressor that learns online (ilgr, sparse_spectrum, streaming_sparse_gp), or `refit_every` for one that is refitted",
                         ));
                     }
                 }

@@ -53,6 +53,7 @@ impl SchemeInputs<'_> {
                 mode: online.mode().map_err(|(field, expected)| {
                     gpodo_frontends::FrontendError::InvalidConfig { field, expected }
                 })?,
+                correct_mean: online.correct_mean,
             });
         }
         let resolved = self.odometry(scheme)?;
