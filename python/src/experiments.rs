@@ -289,16 +289,7 @@ pub fn run_experiment<'py>(
     if let Some(e) = interrupted {
         return Err(e);
     }
-    let outcome = outcome.map_err(|panic| {
-        let what = panic
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "unknown".into());
-        PyRuntimeError::new_err(format!(
-            "gpodo failed inside Rust (a bug; please report it): {what}"
-        ))
-    })?;
+    let outcome = outcome.map_err(|panic| crate::panic_error(panic.as_ref()))?;
     let (runs, report) = outcome
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
         .map_err(|e| match e {

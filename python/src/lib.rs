@@ -31,19 +31,22 @@ fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// A Rust panic as Python sees it: a `RuntimeError` with its message.
+fn panic_error(panic: &(dyn std::any::Any + Send)) -> PyErr {
+    let what = panic
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "unknown".into());
+    PyRuntimeError::new_err(format!(
+        "gpodo failed inside Rust (a bug; please report it): {what}"
+    ))
+}
+
 /// Runs `f` with the GIL released; a panic becomes a `RuntimeError`.
 fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
     py.detach(|| catch_unwind(AssertUnwindSafe(f)))
-        .map_err(|panic| {
-            let what = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "unknown".into());
-            PyRuntimeError::new_err(format!(
-                "gpodo failed inside Rust (a bug; please report it): {what}"
-            ))
-        })
+        .map_err(|panic| panic_error(panic.as_ref()))
 }
 
 /// A NumPy array as a row-major matrix (it may be a strided view).
