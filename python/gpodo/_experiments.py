@@ -7,6 +7,7 @@ import json
 import os
 import pathlib
 import sys
+import warnings
 
 import numpy as np
 
@@ -77,7 +78,9 @@ def run(path_or_dict, out=None, seeds=None, threads=None, progress=True, force=F
     ValueError
         A bad file names its file, line and field; a bad dict names the
         key's path (``schemes[3].selector.fps``). Bad data (a missing
-        table) names the file.
+        table) names the file. A single run that fails raises its reason;
+        the failed runs of a sweep are named in a ``UserWarning``, and the
+        others are returned.
     """
     if isinstance(path_or_dict, dict):
         try:
@@ -105,7 +108,14 @@ def run(path_or_dict, out=None, seeds=None, threads=None, progress=True, force=F
         callback,
         bool(force),
     )
-    return Results(name, report, runs)
+    results = Results(name, report, runs)
+    failed = [r for r in results.runs if r.failure is not None]
+    if failed and len(results.runs) == 1:
+        raise ValueError(failed[0].failure)
+    if failed:
+        reasons = "; ".join(f"`{r.key}`: {r.failure}" for r in failed)
+        warnings.warn(f"{len(failed)} of {len(results.runs)} runs failed: {reasons}", stacklevel=2)
+    return results
 
 
 class Run:
