@@ -130,10 +130,7 @@ pub struct KeyPoint {
 /// A 256-bit binary descriptor.
 pub type Descriptor = [u8; 32];
 
-/// The number of bits in which two descriptors differ.
-pub fn hamming(a: &Descriptor, b: &Descriptor) -> u32 {
-    a.iter().zip(b).map(|(x, y)| (x ^ y).count_ones()).sum()
-}
+pub use crate::hamming::hamming;
 
 /// An image's features: keypoints and their descriptors, in step.
 #[derive(Debug, Clone, Default, PartialEq)]

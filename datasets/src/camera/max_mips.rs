@@ -12,6 +12,12 @@ use rayon::prelude::*;
 
 use super::tiled::TiledGrid;
 
+/// The level a ray starts at (blocks of 64 cells, 16 cm on the testbed's
+/// 2.5 mm map): the hit is the same from any level; from this one the
+/// rendered testbed's rays take the fewest instructions (4 % fewer than
+/// from level 4, 8 % fewer than from level 2).
+const START_LEVEL: usize = 6;
+
 /// The maximum mipmap of a square height map of `n × n` samples.
 pub(super) struct MaxMips {
     /// Level `k`: the highest height of each block of `2^k × 2^k` cells,
@@ -40,15 +46,27 @@ impl MapRay {
         self.z0 + self.dz * t
     }
 
+    /// The ray's lowest height over `[t, exit]` (`t ≤ exit`): at the end
+    /// it descends towards, the other's rounding never being lower (both
+    /// roundings are monotone), so this is `z(t).min(z(exit))`.
+    #[inline(always)]
+    fn lowest(&self, t: f64, exit: f64) -> f64 {
+        if self.dz < 0.0 {
+            self.z(exit)
+        } else {
+            self.z(t)
+        }
+    }
+
     /// Where the ray leaves the block `(i, j)` of side `size` cells, and
     /// which of its two axes it leaves by (`(true, false)` across u, both
     /// at a corner).
     fn exit(&self, i: usize, j: usize, size: f64) -> (f64, bool, bool) {
         let across = |o: f64, d: f64, inv: f64, k: usize| {
             if d > 0.0 {
-                ((k + 1) as f64 * size - o) * inv
+                (as_f64(k + 1) * size - o) * inv
             } else if d < 0.0 {
-                (k as f64 * size - o) * inv
+                (as_f64(k) * size - o) * inv
             } else {
                 f64::INFINITY
             }
@@ -61,6 +79,20 @@ impl MapRay {
     }
 }
 
+/// A block or cell index as a float. (Through `i64`: x86-64 converts
+/// signed integers in one instruction, unsigned ones in several; an index
+/// is far below 2⁶³, so the value is the same.)
+#[inline(always)]
+fn as_f64(k: usize) -> f64 {
+    k as i64 as f64
+}
+
+/// The side of a block of `level` in cells, `2^level`, exactly.
+#[inline(always)]
+fn block_size(level: usize) -> f64 {
+    f64::from(1u32 << level)
+}
+
 /// The block along one axis that holds the coordinate `c ≥ 0` (cells) for
 /// a ray moving by `d` per metre: a coordinate on a boundary belongs to the
 /// block the ray is entering. (Truncation is the floor of a non-negative
@@ -69,8 +101,10 @@ impl MapRay {
 fn block(c: f64, d: f64, size: f64, side: usize) -> usize {
     // `size` is a power of two: its reciprocal is exact.
     let q = (c * size.recip()).max(0.0);
-    let k = q as usize;
-    let k = if d < 0.0 && k as f64 == q {
+    // Saturating, as `q as usize` is, and clamped below: the same index,
+    // by the one-instruction conversion (see `as_f64`).
+    let k = q as i64 as usize;
+    let k = if d < 0.0 && as_f64(k) == q {
         k.saturating_sub(1)
     } else {
         k
@@ -145,6 +179,20 @@ impl MaxMips {
         t_start: f64,
         t_end: f64,
     ) -> Option<f64> {
+        self.first_hit_from(START_LEVEL, height, cell_m, origin, dir, [t_start, t_end])
+    }
+
+    /// [`Self::first_hit`] starting at level `start` (or the top, if
+    /// lower).
+    fn first_hit_from(
+        &self,
+        start: usize,
+        height: &TiledGrid,
+        cell_m: f64,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        [t_start, t_end]: [f64; 2],
+    ) -> Option<f64> {
         let ray = MapRay {
             u0: origin[0] / cell_m,
             v0: origin[1] / cell_m,
@@ -173,8 +221,8 @@ impl MaxMips {
             return None;
         }
         let top = self.levels.len() - 1;
-        let mut level = top.min(4);
-        let size = |level: usize| (1u64 << level) as f64;
+        let mut level = top.min(start);
+        let size = block_size;
         let side = self.sides[level];
         let (mut i, mut j) = (
             block(ray.u0 + ray.du * t, ray.du, size(level), side),
@@ -185,7 +233,8 @@ impl MaxMips {
             let (exit, across_u, across_v) = ray.exit(i, j, size(level));
             let exit = exit.clamp(t, t_end);
             let highest = f64::from(self.levels[level].at(i, j));
-            if level > 0 && ray.z(t).min(ray.z(exit)) <= highest {
+            let below = ray.lowest(t, exit) <= highest;
+            if level > 0 && below {
                 // The ray may meet the ground in this block: look closer.
                 level -= 1;
                 let half = size(level);
@@ -198,7 +247,7 @@ impl MaxMips {
                 continue;
             }
             if level == 0
-                && ray.z(t).min(ray.z(exit)) <= highest
+                && below
                 && let Some(hit) = cell_hit(height, &ray, i, j, t, exit)
             {
                 return Some(hit);
@@ -241,8 +290,8 @@ fn cell_hit(
     let h00 = at(i, j);
     let (a, b) = (at(i + 1, j) - h00, at(i, j + 1) - h00);
     let c = at(i + 1, j + 1) - at(i + 1, j) - at(i, j + 1) + h00;
-    let s0 = ray.u0 + ray.du * t_in - i as f64;
-    let r0 = ray.v0 + ray.dv * t_in - j as f64;
+    let s0 = ray.u0 + ray.du * t_in - as_f64(i);
+    let r0 = ray.v0 + ray.dv * t_in - as_f64(j);
     // gap(τ) = g0 + g1 τ + g2 τ², τ = t − t_in.
     let g0 = ray.z(t_in) - (h00 + a * s0 + b * r0 + c * s0 * r0);
     let g1 = ray.dz - a * ray.du - b * ray.dv - c * (s0 * ray.dv + r0 * ray.du);
@@ -289,6 +338,94 @@ mod tests {
         // Opening downward: 1 + τ − τ² crosses at (1 + √5) / 2.
         let r = smallest_root(1.0, 1.0, -1.0).unwrap();
         assert!((r - 0.5 * (1.0 + 5f64.sqrt())).abs() < 1e-12);
+    }
+
+    /// The first hit by brute force: every cell's span along the ray
+    /// (slabs), its patch met by the same quadratic, the earliest kept.
+    fn brute_force_hit(
+        height: &TiledGrid,
+        cell_m: f64,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        span: [f64; 2],
+    ) -> Option<f64> {
+        let cells = height.side() - 1;
+        let ray = MapRay {
+            u0: origin[0] / cell_m,
+            v0: origin[1] / cell_m,
+            z0: origin[2],
+            du: dir[0] / cell_m,
+            dv: dir[1] / cell_m,
+            dz: dir[2],
+            inv_du: cell_m / dir[0],
+            inv_dv: cell_m / dir[1],
+        };
+        let slab = |o: f64, d: f64, k: usize| -> (f64, f64) {
+            let (a, b) = ((k as f64 - o) / d, ((k + 1) as f64 - o) / d);
+            (a.min(b), a.max(b))
+        };
+        let mut best: Option<f64> = None;
+        for j in 0..cells {
+            for i in 0..cells {
+                let ((a0, a1), (b0, b1)) = (slab(ray.u0, ray.du, i), slab(ray.v0, ray.dv, j));
+                let (t_in, t_out) = (a0.max(b0).max(span[0]), a1.min(b1).min(span[1]));
+                if t_in > t_out {
+                    continue;
+                }
+                if let Some(t) = cell_hit(height, &ray, i, j, t_in, t_out) {
+                    best = Some(best.map_or(t, |b: f64| b.min(t)));
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn the_first_hit_is_the_brute_force_one_from_every_start_level() {
+        // A rough 33 × 33 map (32 cells a side, 6 levels) of 1 cm cells.
+        let n = 33;
+        let mut state = 7u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let values: Vec<f32> = (0..n * n)
+            .map(|k| {
+                let (x, y) = ((k % n) as f64, (k / n) as f64);
+                (0.03 * (0.3 * x).sin() * (0.2 * y).cos() + 0.01 * uniform()) as f32
+            })
+            .collect();
+        let height = TiledGrid::from_row_major(n, &values);
+        let mips = MaxMips::build(&height);
+        let cell_m = 0.01;
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..400 {
+            let origin = [0.32 * uniform(), 0.32 * uniform(), 0.02 + 0.1 * uniform()];
+            let (azimuth, down) = (std::f64::consts::TAU * uniform(), 0.02 + 0.6 * uniform());
+            let dir = [
+                down.cos() * azimuth.cos(),
+                down.cos() * azimuth.sin(),
+                -down.sin(),
+            ];
+            let span = [0.0, 1.0];
+            let expected = brute_force_hit(&height, cell_m, origin, dir, span);
+            let from = |start| mips.first_hit_from(start, &height, cell_m, origin, dir, span);
+            let found = from(START_LEVEL);
+            match (found, expected) {
+                (Some(a), Some(b)) => {
+                    assert!((a - b).abs() <= 1e-9, "{a} against {b}");
+                    hits += 1;
+                }
+                (None, None) => misses += 1,
+                other => panic!("{other:?} for the ray from {origin:?} along {dir:?}"),
+            }
+            for start in 0..8 {
+                assert_eq!(from(start), found, "from level {start}");
+            }
+        }
+        assert!(hits > 100 && misses > 20, "{hits} hits, {misses} misses");
     }
 
     #[test]

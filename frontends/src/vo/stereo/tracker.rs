@@ -34,7 +34,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use gpodo_vision::orb::{Descriptor, OrbParams, hamming};
+use gpodo_vision::hamming::{hamming, two_nearest_each};
+use gpodo_vision::orb::{Descriptor, OrbParams};
 use gpodo_vision::stereo::StereoFeatures;
 use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
@@ -404,23 +405,11 @@ impl StereoVo {
     /// How many of the current frame's descriptors find their match
     /// among `other`'s by the ratio test (brute force).
     fn appearance_matches(&self, current: &StereoFeatures, other: &StereoFeatures) -> usize {
-        current
-            .left
-            .descriptors
+        two_nearest_each(&current.left.descriptors, &other.left.descriptors)
             .iter()
-            .filter(|d| {
-                let (mut best, mut second) = (u32::MAX, u32::MAX);
-                for e in &other.left.descriptors {
-                    let h = hamming(d, e);
-                    if h < best {
-                        second = best;
-                        best = h;
-                    } else {
-                        second = second.min(h);
-                    }
-                }
-                best <= self.params.max_hamming / 2
-                    && f64::from(best) < self.params.ratio * f64::from(second)
+            .filter(|n| {
+                n.best <= self.params.max_hamming / 2
+                    && f64::from(n.best) < self.params.ratio * f64::from(n.second)
             })
             .count()
     }
