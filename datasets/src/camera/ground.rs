@@ -10,6 +10,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use super::convert::{as_f64, truncate};
 use super::look::{SceneSpec, SoilLook};
 use super::max_mips::MaxMips;
 use super::noise::{mix, octaves};
@@ -301,8 +302,8 @@ impl GroundMaps {
         }
         let (u, v) = (x / self.cell_m, y / self.cell_m);
         let last = self.n - 2;
-        let (i, j) = ((u as usize).min(last), (v as usize).min(last));
-        let (tx, ty) = (u - i as f64, v - j as f64);
+        let (i, j) = (truncate(u).min(last), truncate(v).min(last));
+        let (tx, ty) = (u - as_f64(i), v - as_f64(j));
         let at = |i: usize, j: usize| f64::from(data.at(i, j));
         let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
         let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;

@@ -10,6 +10,7 @@
 
 use rayon::prelude::*;
 
+use super::convert::{as_f64, truncate};
 use super::tiled::TiledGrid;
 
 /// The level a ray starts at (blocks of 64 cells, 16 cm on the testbed's
@@ -79,14 +80,6 @@ impl MapRay {
     }
 }
 
-/// A block or cell index as a float. (Through `i64`: x86-64 converts
-/// signed integers in one instruction, unsigned ones in several; an index
-/// is far below 2⁶³, so the value is the same.)
-#[inline(always)]
-fn as_f64(k: usize) -> f64 {
-    k as i64 as f64
-}
-
 /// The side of a block of `level` in cells, `2^level`, exactly.
 #[inline(always)]
 fn block_size(level: usize) -> f64 {
@@ -101,9 +94,7 @@ fn block_size(level: usize) -> f64 {
 fn block(c: f64, d: f64, size: f64, side: usize) -> usize {
     // `size` is a power of two: its reciprocal is exact.
     let q = (c * size.recip()).max(0.0);
-    // Saturating, as `q as usize` is, and clamped below: the same index,
-    // by the one-instruction conversion (see `as_f64`).
-    let k = q as i64 as usize;
+    let k = truncate(q);
     let k = if d < 0.0 && as_f64(k) == q {
         k.saturating_sub(1)
     } else {

@@ -19,6 +19,7 @@
 //! alone (the stones are seen, not felt).
 
 pub mod calibration;
+mod convert;
 pub mod ground;
 pub mod look;
 mod max_mips;

@@ -13,6 +13,7 @@ use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::convert::{as_f64, truncate};
 use super::ground::GroundMaps;
 use super::noise::mix;
 use crate::DatasetError;
@@ -171,7 +172,7 @@ impl<'a> StereoRenderer<'a> {
                 let mut radiance = Vec::with_capacity(w);
                 let mut depth = Vec::with_capacity(w);
                 for u in 0..w {
-                    let ray = self.camera.pixel_ray(u as f64, v as f64);
+                    let ray = self.camera.pixel_ray(as_f64(u), as_f64(v));
                     let dir = world_from_camera.rotation * ray.normalize();
                     match self.trace(&origin, &dir) {
                         Some((t, p)) => {
@@ -223,39 +224,40 @@ impl<'a> StereoRenderer<'a> {
         let sample = |x: f64, y: f64| -> f64 {
             let x = x.clamp(0.0, (w - 1) as f64);
             let y = y.clamp(0.0, (h - 1) as f64);
-            let (i, j) = ((x as usize).min(w - 2), (y as usize).min(h - 2));
-            let (tx, ty) = (x - i as f64, y - j as f64);
+            let (i, j) = (truncate(x).min(w - 2), truncate(y).min(h - 2));
+            let (tx, ty) = (x - as_f64(i), y - as_f64(j));
             let at = |i: usize, j: usize| f64::from(view.radiance[j * w + i]);
             let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
             let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
             top + (bottom - top) * ty
         };
-        (0..h)
-            .into_par_iter()
-            .flat_map_iter(|v| {
-                let sample = &sample;
-                let (start_inv, end_inv) = (&start_inv, &end_inv);
-                (0..w).map(move |u| {
+        let mut blurred = vec![0f32; w * h];
+        blurred
+            .par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(v, row)| {
+                for (u, out) in row.iter_mut().enumerate() {
                     let depth = f64::from(view.depth_m[v * w + u]).min(1e3);
-                    let p_cam = Point3::from(self.camera.pixel_ray(u as f64, v as f64) * depth);
+                    let p_cam = Point3::from(self.camera.pixel_ray(as_f64(u), as_f64(v)) * depth);
                     let p_world = world_from_camera * p_cam;
                     let from = self.camera.project(&(start_inv * p_world));
                     let to = self.camera.project(&(end_inv * p_world));
                     let (Some([u0, v0]), Some([u1, v1])) = (from, to) else {
-                        return view.radiance[v * w + u];
+                        *out = view.radiance[v * w + u];
+                        continue;
                     };
                     let length = ((u1 - u0).powi(2) + (v1 - v0).powi(2)).sqrt();
-                    let n = (length.ceil() as usize).clamp(1, 64) + 1;
+                    let n = truncate(length.ceil()).clamp(1, 64) + 1;
                     let sum: f64 = (0..n)
                         .map(|k| {
-                            let s = k as f64 / (n - 1) as f64;
+                            let s = as_f64(k) / as_f64(n - 1);
                             sample(u0 + (u1 - u0) * s, v0 + (v1 - v0) * s)
                         })
                         .sum();
-                    (sum / n as f64) as f32
-                })
-            })
-            .collect()
+                    *out = (sum / as_f64(n)) as f32;
+                }
+            });
+        blurred
     }
 
     /// Grey levels with shot and read noise, quantised to 8 bits; the
