@@ -43,6 +43,21 @@ struct MapRay {
 }
 
 impl MapRay {
+    /// The ray from `origin` along `dir` (metres, the map's origin at
+    /// `(0, 0)`) over a map of `cell_m` per cell.
+    fn new(origin: [f64; 3], dir: [f64; 3], cell_m: f64) -> Self {
+        Self {
+            u0: origin[0] / cell_m,
+            v0: origin[1] / cell_m,
+            z0: origin[2],
+            du: dir[0] / cell_m,
+            dv: dir[1] / cell_m,
+            dz: dir[2],
+            inv_du: cell_m / dir[0],
+            inv_dv: cell_m / dir[1],
+        }
+    }
+
     fn z(&self, t: f64) -> f64 {
         self.z0 + self.dz * t
     }
@@ -184,16 +199,7 @@ impl MaxMips {
         dir: [f64; 3],
         [t_start, t_end]: [f64; 2],
     ) -> Option<f64> {
-        let ray = MapRay {
-            u0: origin[0] / cell_m,
-            v0: origin[1] / cell_m,
-            z0: origin[2],
-            du: dir[0] / cell_m,
-            dv: dir[1] / cell_m,
-            dz: dir[2],
-            inv_du: cell_m / dir[0],
-            inv_dv: cell_m / dir[1],
-        };
+        let ray = MapRay::new(origin, dir, cell_m);
         let cells = self.sides[0];
         // The span of the ray over the map.
         let (mut t, mut t_end) = (t_start, t_end);
@@ -341,16 +347,7 @@ mod tests {
         span: [f64; 2],
     ) -> Option<f64> {
         let cells = height.side() - 1;
-        let ray = MapRay {
-            u0: origin[0] / cell_m,
-            v0: origin[1] / cell_m,
-            z0: origin[2],
-            du: dir[0] / cell_m,
-            dv: dir[1] / cell_m,
-            dz: dir[2],
-            inv_du: cell_m / dir[0],
-            inv_dv: cell_m / dir[1],
-        };
+        let ray = MapRay::new(origin, dir, cell_m);
         let slab = |o: f64, d: f64, k: usize| -> (f64, f64) {
             let (a, b) = ((k as f64 - o) / d, ((k + 1) as f64 - o) / d);
             (a.min(b), a.max(b))
