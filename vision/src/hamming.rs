@@ -1,6 +1,6 @@
 //! Hamming distances between 256-bit binary descriptors: one pair
-//! ([`hamming`]), and a query's two nearest neighbours among many
-//! ([`two_nearest`], [`two_nearest_each`]), the brute-force loop compiled
+//! ([`hamming`]), and each query's two nearest neighbours among many
+//! ([`two_nearest_each`]), the brute-force loop compiled
 //! for the processor's instruction set at run time (`pulp`'s dispatch:
 //! the population count is one instruction with x86-64-v3, a bit-twiddling
 //! sequence without). Distances are integers, so every path gives the same
@@ -64,11 +64,6 @@ impl TwoNearest {
             self.second = d;
         }
     }
-}
-
-/// The two nearest of `train` to `query`.
-pub fn two_nearest(query: &Descriptor, train: &[Descriptor]) -> TwoNearest {
-    two_nearest_each(std::slice::from_ref(query), train)[0]
 }
 
 /// The two nearest of `train` to each of `queries`, in order.
@@ -151,12 +146,11 @@ mod tests {
             all.sort_unstable();
             assert_eq!((found.best, found.index), all[0]);
             assert_eq!(found.second, all[1].0);
-            assert_eq!(two_nearest(q, &train), found);
         }
         // A tie: the second equals the best; the first index is kept.
         let twice = [train[5], train[5]];
-        let found = two_nearest(&train[5], &twice);
+        let found = two_nearest_each(&[train[5]], &twice)[0];
         assert_eq!((found.best, found.index, found.second), (0, 0, 0));
-        assert_eq!(two_nearest(&train[0], &[]), TwoNearest::NONE);
+        assert_eq!(two_nearest_each(&[train[0]], &[]), [TwoNearest::NONE]);
     }
 }
