@@ -18,6 +18,11 @@
 //!   two frames' indices, then the robust motion-only refinement
 //!   ([`super::pose`]); lost below `min_tracked_features` inliers
 //!   (ORB-SLAM2's 30).
+//! * **Local map** (off unless `local_map_keyframes` is set): once the
+//!   reference's points have placed the frame, the points of the
+//!   keyframes behind the reference are matched too and the pose refined
+//!   on all, as ORB-SLAM2's `TrackLocalMap` does with the covisible
+//!   keyframes'.
 //! * **Overlap**, what the keyframe rule reads: ORB-SLAM2's ratio of the
 //!   tracked inliers to the reference keyframe's points that are seen
 //!   again (`mnMatchesInliers` against `TrackedMapPoints(nMinObs)` in
@@ -44,8 +49,8 @@ use super::frames::{Cached, StereoFrames};
 use super::grid::KeypointGrid;
 use super::pose::{Correspondence, StereoIntrinsics, ransac_pnp, refine_pose};
 use crate::vo::{
-    CameraParams, ErrorStructure, FrameRef, TrackOutcome, TrackRequest, VisualOdometry,
-    VoMeasurement,
+    CameraParams, ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest,
+    VisualOdometry, VoMeasurement,
 };
 
 /// Settings of the stereo VO.
@@ -79,6 +84,15 @@ pub struct StereoVoParams {
     /// FAST's threshold in a cell without a corner at 20 (default 7,
     /// ExoTeR's `minThFAST`; 20 keeps only the strong corners).
     pub fast_min_threshold: u8,
+    /// Keyframes before the reference (its parent, the parent's parent,
+    /// …) whose map points are tracked too once the reference's have
+    /// placed the frame, as ORB-SLAM2's `TrackLocalMap` tracks the points
+    /// of the covisible keyframes (default 0: the reference's only).
+    pub local_map_keyframes: usize,
+    /// Search radius of such a point around its predicted pixel, per unit
+    /// of its level's scale (px; default 4, ORB-SLAM2's
+    /// `RadiusByViewingCos` for a nearly parallel view, `th = 1`).
+    pub local_map_radius_px: f64,
     /// The camera (default ExoTeR's Bumblebee2 at half resolution,
     /// 512 × 384, as rendered); a recording's camera infos, when its topic
     /// map names both, replace its intrinsics, size and baseline.
@@ -98,6 +112,8 @@ impl Default for StereoVoParams {
             seed: 0,
             features: None,
             fast_min_threshold: 7,
+            local_map_keyframes: 0,
+            local_map_radius_px: 4.0,
             camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
@@ -119,6 +135,7 @@ impl StereoVoParams {
             ("search_radius_px", self.search_radius_px),
             ("wide_search_px", self.wide_search_px),
             ("max_depth_baselines", self.max_depth_baselines),
+            ("local_map_radius_px", self.local_map_radius_px),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(field, "a positive number");
@@ -173,6 +190,9 @@ pub struct StereoVo {
     seen_again: HashMap<usize, usize>,
     /// Per tracked frame: its inliers when it was last tracked.
     inliers: HashMap<usize, usize>,
+    /// Per frame tracked or relocalised: its reference and
+    /// `camera_from_reference`, the links the local map follows back.
+    parents: HashMap<usize, (FrameRef, Isometry3<f64>)>,
 }
 
 /// What tracking one request found, before it is a measurement.
@@ -181,6 +201,10 @@ struct Tracked {
     pose: Isometry3<f64>,
     covariance: Matrix6<f64>,
     inliers: usize,
+    /// The correspondences the pose came from, and each one's current
+    /// keypoint.
+    correspondences: Vec<Correspondence>,
+    keypoints: Vec<usize>,
 }
 
 impl StereoVo {
@@ -211,6 +235,7 @@ impl StereoVo {
             frames,
             seen_again: HashMap::new(),
             inliers: HashMap::new(),
+            parents: HashMap::new(),
         })
     }
 
@@ -266,8 +291,103 @@ impl StereoVo {
 
     /// Tracks `request` (see the module); `None` when lost.
     fn track_request(&self, request: &TrackRequest) -> Option<Tracked> {
-        self.track_within(request, 1.0)
-            .or_else(|| request.prior.and_then(|_| self.track_within(request, 2.0)))
+        let tracked = self
+            .track_within(request, 1.0)
+            .or_else(|| request.prior.and_then(|_| self.track_within(request, 2.0)))?;
+        if self.params.local_map_keyframes == 0 || request.purpose == TrackPurpose::LoopClosure {
+            return Some(tracked);
+        }
+        self.track_local_map(request, tracked)
+    }
+
+    /// Up to `local_map_keyframes` keyframes behind `reference` along the
+    /// links it was tracked by, nearest first, each with
+    /// `reference_from_keyframe` (left cameras).
+    fn local_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
+        let mut keyframes: Vec<(FrameRef, Isometry3<f64>)> = Vec::new();
+        let (mut at, mut reference_from_at) = (reference, Isometry3::identity());
+        while keyframes.len() < self.params.local_map_keyframes {
+            let Some(&(parent, at_from_parent)) = self.parents.get(&at) else {
+                break;
+            };
+            if parent.index == reference || keyframes.iter().any(|(k, _)| k.index == parent.index) {
+                break;
+            }
+            reference_from_at *= at_from_parent;
+            keyframes.push((parent, reference_from_at));
+            at = parent.index;
+        }
+        keyframes
+    }
+
+    /// ORB-SLAM2's `TrackLocalMap` after `tracked` has placed the frame:
+    /// the map points of the keyframes behind the reference, carried into
+    /// its camera, projected by `tracked`'s pose and matched within
+    /// `local_map_radius_px` to current keypoints no other point has
+    /// taken (a point seen by several keyframes is matched once), then the
+    /// pose refined on all; `None` below `min_tracked_features` inliers.
+    fn track_local_map(&self, request: &TrackRequest, tracked: Tracked) -> Option<Tracked> {
+        let current = self.features(request.current);
+        let current = &current.as_ref().as_ref().ok()?.stereo;
+        let grid = KeypointGrid::new(current);
+        let mut taken = vec![false; current.left.keypoints.len()];
+        for &k in &tracked.keypoints {
+            taken[k] = true;
+        }
+        let [width, height] = self.camera.image_size_px.map(f64::from);
+        let mut correspondences = tracked.correspondences;
+        let mut keypoints = tracked.keypoints;
+        for (keyframe, reference_from_keyframe) in self.local_keyframes(request.reference.index) {
+            let features = self.features(keyframe);
+            let Ok(features) = features.as_ref() else {
+                continue;
+            };
+            let features = &features.stereo;
+            let rotation = reference_from_keyframe.rotation.to_rotation_matrix();
+            for (k, point, point_covariance) in self.map_points(features) {
+                let point = reference_from_keyframe * point;
+                let x = tracked.pose * point;
+                if x.z <= 0.0 {
+                    continue;
+                }
+                let centre = self.intrinsics.project_left(&x);
+                if !((0.0..width).contains(&centre[0]) && (0.0..height).contains(&centre[1])) {
+                    continue;
+                }
+                let kp = &features.left.keypoints[k];
+                let radius =
+                    self.params.local_map_radius_px * features.left.scales[usize::from(kp.level)];
+                let Some(found) = self.best_match(
+                    &features.left.descriptors[k],
+                    kp.level,
+                    centre,
+                    radius,
+                    current,
+                    &grid,
+                ) else {
+                    continue;
+                };
+                if std::mem::replace(&mut taken[found], true) {
+                    continue;
+                }
+                let r = rotation.matrix();
+                correspondences.push(correspondence(
+                    current,
+                    found,
+                    point,
+                    r * point_covariance * r.transpose(),
+                ));
+                keypoints.push(found);
+            }
+        }
+        let refined = refine_pose(&correspondences, &self.intrinsics, &tracked.pose)?;
+        (refined.inlier_count >= self.params.min_tracked_features).then_some(Tracked {
+            pose: refined.pose,
+            covariance: refined.covariance,
+            inliers: refined.inlier_count,
+            correspondences,
+            keypoints,
+        })
     }
 
     /// Tracks `request` with the prior's search window times `widen`.
@@ -284,6 +404,7 @@ impl StereoVo {
         let wide = self.params.wide_search_px * width / 1024.0;
         let grid = KeypointGrid::new(current);
         let mut correspondences = Vec::new();
+        let mut keypoints = Vec::new();
         for (k, point, point_covariance) in &points {
             let kp = &reference.left.keypoints[*k];
             let scale = reference.left.scales[usize::from(kp.level)];
@@ -310,14 +431,8 @@ impl StereoVo {
             ) else {
                 continue;
             };
-            let c = &current.left.keypoints[found];
-            correspondences.push(Correspondence {
-                point: *point,
-                left_px: [f64::from(c.x), f64::from(c.y)],
-                right_x: current.right_x[found].map(f64::from),
-                sigma_px: current.left.scales[usize::from(c.level)],
-                point_covariance: *point_covariance,
-            });
+            correspondences.push(correspondence(current, found, *point, *point_covariance));
+            keypoints.push(found);
         }
         if correspondences.len() < self.params.min_tracked_features {
             return None;
@@ -342,6 +457,8 @@ impl StereoVo {
             pose: refined.pose,
             covariance: refined.covariance,
             inliers: refined.inlier_count,
+            correspondences,
+            keypoints,
         })
     }
 
@@ -415,6 +532,24 @@ impl StereoVo {
     }
 }
 
+/// The map point `point` (with its covariance) seen at the current
+/// keypoint `found`.
+fn correspondence(
+    current: &StereoFeatures,
+    found: usize,
+    point: Point3<f64>,
+    point_covariance: Matrix3<f64>,
+) -> Correspondence {
+    let c = &current.left.keypoints[found];
+    Correspondence {
+        point,
+        left_px: [f64::from(c.x), f64::from(c.y)],
+        right_x: current.right_x[found].map(f64::from),
+        sigma_px: current.left.scales[usize::from(c.level)],
+        point_covariance,
+    }
+}
+
 impl VisualOdometry for StereoVo {
     fn name(&self) -> &str {
         "stereo"
@@ -439,6 +574,10 @@ impl VisualOdometry for StereoVo {
                     "stereo VO tracked"
                 );
                 self.inliers.insert(request.current.index, tracked.inliers);
+                if request.purpose != TrackPurpose::LoopClosure {
+                    self.parents
+                        .insert(request.current.index, (request.reference, tracked.pose));
+                }
                 TrackOutcome::Tracked(measurement)
             }
             None => {
