@@ -21,9 +21,13 @@ const START_LEVEL: usize = 6;
 
 /// The maximum mipmap of a square height map of `n × n` samples.
 pub(super) struct MaxMips {
-    /// Level `k`: the highest height of each block of `2^k × 2^k` cells,
-    /// `sides[k]` blocks per side.
+    /// Level `k ≥ 1` at index `k − 1`: the highest height of each block of
+    /// `2^k × 2^k` cells. Level 0, the highest corner of each cell, is not
+    /// stored: a ray reads it from the cell's four corners, which it needs
+    /// anyway to meet the cell's surface, so the largest level costs no
+    /// memory and no cache misses of its own.
     levels: Vec<TiledGrid>,
+    /// Blocks per side of each level, from level 0.
     sides: Vec<usize>,
 }
 
@@ -74,15 +78,17 @@ impl MapRay {
         }
     }
 
-    /// Where the ray leaves the block `(i, j)` of side `size` cells, and
-    /// which of its two axes it leaves by (`(true, false)` across u, both
-    /// at a corner).
-    fn exit(&self, i: usize, j: usize, size: f64) -> (f64, bool, bool) {
+    /// Where the ray leaves the block `(i, j)` of `level`, and which of
+    /// its two axes it leaves by (`(true, false)` across u, both at a
+    /// corner). The boundary `k · 2^level` is the integer `k << level`
+    /// converted, the same float as `k` times the block's size.
+    #[inline(always)]
+    fn exit(&self, i: usize, j: usize, level: usize) -> (f64, bool, bool) {
         let across = |o: f64, d: f64, inv: f64, k: usize| {
             if d > 0.0 {
-                (as_f64(k + 1) * size - o) * inv
+                (as_f64((k + 1) << level) - o) * inv
             } else if d < 0.0 {
-                (as_f64(k) * size - o) * inv
+                (as_f64(k << level) - o) * inv
             } else {
                 f64::INFINITY
             }
@@ -118,7 +124,21 @@ fn block(c: f64, d: f64, size: f64, side: usize) -> usize {
     k.min(side - 1)
 }
 
+/// Of the two children `2k` and `2k + 1` (at `level`, the last being
+/// `last`) of the block `k` along one axis, the one that holds the
+/// coordinate `c`: the upper past their common boundary, or on it when the
+/// ray does not move down the axis. This is [`block`] at `level` clamped
+/// to the two children (the boundary `(2k + 1) · 2^level` is exact, so
+/// comparing `c` with it is comparing `c / 2^level` with `2k + 1`).
+#[inline(always)]
+fn child(c: f64, d: f64, k: usize, level: usize, last: usize) -> usize {
+    let boundary = as_f64((2 * k + 1) << level);
+    let upper = c > boundary || (c == boundary && d >= 0.0);
+    (2 * k + usize::from(upper)).min(last)
+}
+
 /// One step to the next block along an axis; `None` past the map's edge.
+#[inline(always)]
 fn step(k: usize, d: f64, side: usize) -> Option<usize> {
     if d > 0.0 {
         (k + 1 < side).then_some(k + 1)
@@ -142,7 +162,7 @@ impl MaxMips {
                 })
             })
             .collect();
-        let mut levels = vec![TiledGrid::from_row_major(cells, &base)];
+        let mut levels = Vec::new();
         let mut sides = vec![cells];
         let mut below = base;
         while let Some(&side) = sides.last() {
@@ -217,7 +237,7 @@ impl MaxMips {
         if t > t_end {
             return None;
         }
-        let top = self.levels.len() - 1;
+        let top = self.sides.len() - 1;
         let mut level = top.min(start);
         let side = self.sides[level];
         let (mut i, mut j) = (
@@ -226,25 +246,32 @@ impl MaxMips {
         );
         loop {
             let side = self.sides[level];
-            let (exit, across_u, across_v) = ray.exit(i, j, block_size(level));
-            let exit = exit.clamp(t, t_end);
-            let highest = f64::from(self.levels[level].at(i, j));
+            let (exit, across_u, across_v) = ray.exit(i, j, level);
+            // `exit.clamp(t, t_end)`, `t ≤ t_end` holding throughout.
+            let exit = if exit < t {
+                t
+            } else if exit > t_end {
+                t_end
+            } else {
+                exit
+            };
+            let corners = (level == 0).then(|| Corners::of(height, i, j));
+            let highest = f64::from(match &corners {
+                Some(c) => c.highest(),
+                None => self.levels[level - 1].at(i, j),
+            });
             let below = ray.lowest(t, exit) <= highest;
             if level > 0 && below {
                 // The ray may meet the ground in this block: look closer.
                 level -= 1;
-                let half = block_size(level);
-                let pick = |c: f64, d: f64, k: usize| {
-                    block(c, d, half, self.sides[level])
-                        .clamp(2 * k, (2 * k + 1).min(self.sides[level] - 1))
-                };
-                i = pick(ray.u0 + ray.du * t, ray.du, i);
-                j = pick(ray.v0 + ray.dv * t, ray.dv, j);
+                let last = self.sides[level] - 1;
+                i = child(ray.u0 + ray.du * t, ray.du, i, level, last);
+                j = child(ray.v0 + ray.dv * t, ray.dv, j, level, last);
                 continue;
             }
-            if level == 0
+            if let Some(c) = &corners
                 && below
-                && let Some(hit) = cell_hit(height, &ray, i, j, t, exit)
+                && let Some(hit) = cell_hit(c, &ray, i, j, t, exit)
             {
                 return Some(hit);
             }
@@ -254,13 +281,16 @@ impl MaxMips {
             }
             t = exit;
             let mut parent_crossed = false;
-            for (across, k, d) in [(across_u, &mut i, ray.du), (across_v, &mut j, ray.dv)] {
-                if across {
-                    // Past the map's edge: nothing more to meet.
-                    let next = step(*k, d, side)?;
-                    parent_crossed |= next / 2 != *k / 2;
-                    *k = next;
-                }
+            // Past the map's edge: nothing more to meet.
+            if across_u {
+                let next = step(i, ray.du, side)?;
+                parent_crossed |= next >> 1 != i >> 1;
+                i = next;
+            }
+            if across_v {
+                let next = step(j, ray.dv, side)?;
+                parent_crossed |= next >> 1 != j >> 1;
+                j = next;
             }
             if parent_crossed && level < top {
                 level += 1;
@@ -271,21 +301,47 @@ impl MaxMips {
     }
 }
 
+/// The heights at the four corners of a map cell.
+struct Corners {
+    h00: f32,
+    h10: f32,
+    h01: f32,
+    h11: f32,
+}
+
+impl Corners {
+    /// The corners of the cell `(i, j)` of `height`.
+    #[inline(always)]
+    fn of(height: &TiledGrid, i: usize, j: usize) -> Self {
+        Self {
+            h00: height.at(i, j),
+            h10: height.at(i + 1, j),
+            h01: height.at(i, j + 1),
+            h11: height.at(i + 1, j + 1),
+        }
+    }
+
+    /// The highest corner: level 0 of the mipmap, the same value (a
+    /// maximum of floats is exact in any order).
+    fn highest(&self) -> f32 {
+        self.h00.max(self.h10).max(self.h01.max(self.h11))
+    }
+}
+
 /// The first `t` in `[t_in, t_out]` at which the ray meets the bilinear
-/// patch of the map cell `(i, j)`: along the ray the patch's height is a
-/// quadratic in `t`, so the gap `z − h` is one too.
+/// patch of the map cell `(i, j)` with `corners`: along the ray the
+/// patch's height is a quadratic in `t`, so the gap `z − h` is one too.
 fn cell_hit(
-    height: &TiledGrid,
+    corners: &Corners,
     ray: &MapRay,
     i: usize,
     j: usize,
     t_in: f64,
     t_out: f64,
 ) -> Option<f64> {
-    let at = |i: usize, j: usize| f64::from(height.at(i, j));
-    let h00 = at(i, j);
-    let (a, b) = (at(i + 1, j) - h00, at(i, j + 1) - h00);
-    let c = at(i + 1, j + 1) - at(i + 1, j) - at(i, j + 1) + h00;
+    let [h00, h10, h01, h11] = [corners.h00, corners.h10, corners.h01, corners.h11].map(f64::from);
+    let (a, b) = (h10 - h00, h01 - h00);
+    let c = h11 - h10 - h01 + h00;
     let s0 = ray.u0 + ray.du * t_in - as_f64(i);
     let r0 = ray.v0 + ray.dv * t_in - as_f64(j);
     // gap(τ) = g0 + g1 τ + g2 τ², τ = t − t_in.
@@ -359,7 +415,7 @@ mod tests {
                 if t_in > t_out {
                     continue;
                 }
-                if let Some(t) = cell_hit(height, &ray, i, j, t_in, t_out) {
+                if let Some(t) = cell_hit(&Corners::of(height, i, j), &ray, i, j, t_in, t_out) {
                     best = Some(best.map_or(t, |b: f64| b.min(t)));
                 }
             }
@@ -413,6 +469,29 @@ mod tests {
             }
         }
         assert!(hits > 100 && misses > 20, "{hits} hits, {misses} misses");
+    }
+
+    #[test]
+    fn a_child_is_the_block_clamped_to_the_two_children() {
+        // On and around every boundary, for both directions and none, at
+        // levels 0 to 3, odd sides (a last block with one child) included.
+        for level in 0..4 {
+            let half = block_size(level);
+            for side in [5usize, 6, 9] {
+                for k in 0..side.div_ceil(2) {
+                    let last = side - 1;
+                    for offset in [-1.5, -1e-9, 0.0, 1e-9, 0.5, 1.0, 2.0, 2.5] {
+                        let c = (as_f64(2 * k + 1) + offset) * half;
+                        for d in [-1.0, 0.0, 1.0] {
+                            let expected =
+                                block(c, d, half, side).clamp(2 * k, (2 * k + 1).min(last));
+                            assert_eq!(child(c, d, k, level, last), expected, "{c} {d} {k}");
+                        }
+                    }
+                    assert_eq!(child(f64::NAN, 1.0, k, level, last), 2 * k);
+                }
+            }
+        }
     }
 
     #[test]
