@@ -476,3 +476,49 @@ fn tracking_the_local_map_finds_the_older_keyframes_points_again() {
         "{alone:?} {local:?}"
     );
 }
+
+#[test]
+fn the_local_maps_older_keyframes_are_placed_by_a_chain_that_drifts() {
+    // Keyframes every 12 frames (4.8 s) along the drive, each tracked
+    // against the one before; the local map of the last places the ten
+    // before it by chaining those relative poses. Each link's error adds
+    // to the chain's, so the older keyframes' points are placed worse, and
+    // their error enters the pose refined on them.
+    let poses = drive(121, 0.03, 0.01);
+    let params = StereoVoParams {
+        local_map_keyframes: 10,
+        ..StereoVoParams::default()
+    };
+    let mut vo = vo_with(Soil::compact(), &poses, params);
+    for k in (0..120).step_by(12) {
+        assert!(matches!(
+            track(&mut vo, &poses, k, 12),
+            TrackOutcome::Tracked(_)
+        ));
+    }
+    let camera = CameraParams::exoter_bumblebee2().scaled(0.5);
+    let body_from_camera = camera.body_from_camera();
+    let keyframes = vo.local_keyframes(120);
+    assert_eq!(keyframes.len(), 10);
+    // Where the chain puts each keyframe's camera against where it was:
+    // its error, and a point 2 m ahead of it seen from the reference.
+    let errors: Vec<(f64, f64)> = keyframes
+        .iter()
+        .map(|(keyframe, reference_from_keyframe)| {
+            let truth = (poses[120].world_from_body * body_from_camera).inverse()
+                * poses[keyframe.index].world_from_body
+                * body_from_camera;
+            let d = reference_from_keyframe.inverse() * truth;
+            let ahead = nalgebra::Point3::new(0.0, 0.0, 2.0);
+            let shift = (reference_from_keyframe * ahead - truth * ahead).norm();
+            (d.rotation.angle().to_degrees(), shift)
+        })
+        .collect();
+    eprintln!(
+        "chained keyframes, nearest first (rotation error °, a point 2 m ahead off by m): {errors:.4?}"
+    );
+    // The chain's error grows with its length: the five oldest keyframes
+    // are placed worse than the five nearest.
+    let mean = |e: &[(f64, f64)]| e.iter().map(|e| e.1).sum::<f64>() / e.len() as f64;
+    assert!(mean(&errors[5..]) > mean(&errors[..5]), "{errors:?}");
+}

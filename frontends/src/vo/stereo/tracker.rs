@@ -300,10 +300,11 @@ impl StereoVo {
         self.track_local_map(request, tracked)
     }
 
-    /// Up to `local_map_keyframes` keyframes behind `reference` along the
-    /// links it was tracked by, nearest first, each with
-    /// `reference_from_keyframe` (left cameras).
-    fn local_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
+    /// The local map of `reference`: up to `local_map_keyframes`
+    /// keyframes behind it along the links it was tracked by, nearest
+    /// first, each with `reference_from_keyframe` (left cameras) as this
+    /// VO chains it from its own relative poses.
+    pub fn local_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
         let mut keyframes: Vec<(FrameRef, Isometry3<f64>)> = Vec::new();
         let (mut at, mut reference_from_at) = (reference, Isometry3::identity());
         while keyframes.len() < self.params.local_map_keyframes {
