@@ -325,8 +325,9 @@ impl StereoVo {
     /// the map points of the keyframes behind the reference, carried into
     /// its camera, projected by `tracked`'s pose and matched within
     /// `local_map_radius_px` to current keypoints no other point has
-    /// taken (a point seen by several keyframes is matched once), then the
-    /// pose refined on all; `None` below `min_tracked_features` inliers.
+    /// taken (so a point that several keyframes saw, whose copies all
+    /// match the same keypoint, counts once), then the pose refined on
+    /// all; `None` below `min_tracked_features` inliers.
     fn track_local_map(&self, request: &TrackRequest, tracked: Tracked) -> Option<Tracked> {
         let current = self.features(request.current);
         let current = &current.as_ref().as_ref().ok()?.stereo;
