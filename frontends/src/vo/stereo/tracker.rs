@@ -40,7 +40,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use gpodo_vision::hamming::{hamming, two_nearest_each};
-use gpodo_vision::orb::{Descriptor, OrbParams};
+use gpodo_vision::orb::OrbParams;
 use gpodo_vision::stereo::StereoFeatures;
 use nalgebra::{Isometry3, Matrix3, Matrix6, Point3};
 use serde::{Deserialize, Serialize};
@@ -359,14 +359,8 @@ impl StereoVo {
                 let kp = &features.left.keypoints[k];
                 let radius =
                     self.params.local_map_radius_px * features.left.scales[usize::from(kp.level)];
-                let Some(found) = self.best_match(
-                    &features.left.descriptors[k],
-                    kp.level,
-                    centre,
-                    radius,
-                    current,
-                    &grid,
-                ) else {
+                let Some(found) = self.best_match((features, k), (centre, radius), current, &grid)
+                else {
                     continue;
                 };
                 if std::mem::replace(&mut taken[found], true) {
@@ -423,14 +417,8 @@ impl StereoVo {
                 }
                 None => ([f64::from(kp.x), f64::from(kp.y)], wide),
             };
-            let Some(found) = self.best_match(
-                &reference.left.descriptors[*k],
-                kp.level,
-                centre,
-                radius,
-                current,
-                &grid,
-            ) else {
+            let Some(found) = self.best_match((reference, *k), (centre, radius), current, &grid)
+            else {
                 continue;
             };
             correspondences.push(correspondence(current, found, *point, *point_covariance));
@@ -465,17 +453,17 @@ impl StereoVo {
     }
 
     /// The current keypoint within `radius` of `centre`, at a level next to
-    /// `level`, nearest to `descriptor` in Hamming distance, if below the
-    /// limit and the ratio test.
+    /// that of `reference`'s keypoint `keypoint`, nearest to its descriptor
+    /// in Hamming distance, if below the limit and the ratio test.
     fn best_match(
         &self,
-        descriptor: &Descriptor,
-        level: u8,
-        centre: [f64; 2],
-        radius: f64,
+        (reference, keypoint): (&StereoFeatures, usize),
+        (centre, radius): ([f64; 2], f64),
         current: &StereoFeatures,
         grid: &KeypointGrid,
     ) -> Option<usize> {
+        let descriptor = &reference.left.descriptors[keypoint];
+        let level = reference.left.keypoints[keypoint].level;
         let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
         for k in grid.within(centre, radius) {
             let kp = &current.left.keypoints[k];
