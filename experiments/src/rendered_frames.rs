@@ -93,4 +93,9 @@ impl StereoFrameSource for RenderedFrames {
         );
         Ok((pair.left, pair.right))
     }
+
+    fn true_camera_pose(&self, frame: FrameRef) -> Option<Isometry3<f64>> {
+        let pose = self.poses.get(frame.index)?;
+        Some(pose.world_from_body * self.camera.body_from_camera())
+    }
 }

@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use gpodo_vision::GrayImage;
 use gpodo_vision::orb::OrbParams;
 use gpodo_vision::stereo::{StereoFeatures, stereo_features};
+use nalgebra::Isometry3;
 
 use crate::vo::{CameraParams, FrameRef};
 
@@ -19,6 +20,13 @@ pub trait StereoFrameSource: Send + Sync {
     /// # Errors
     /// A message naming the frame and what could not be had.
     fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String>;
+
+    /// The true `world_from_camera` of `frame`'s left camera, where the
+    /// source knows it (a rendered camera does, a recording does not):
+    /// for controls that see ground truth, never for tracking.
+    fn true_camera_pose(&self, _frame: FrameRef) -> Option<Isometry3<f64>> {
+        None
+    }
 }
 
 /// What a frame gives the VO, computed once: its stereo features and a
@@ -105,6 +113,12 @@ impl StereoFrames {
     /// The camera.
     pub fn camera(&self) -> &CameraParams {
         &self.camera
+    }
+
+    /// The source's true `world_from_camera` of `frame`'s left camera, if
+    /// it knows it ([`StereoFrameSource::true_camera_pose`]).
+    pub fn true_camera_pose(&self, frame: FrameRef) -> Option<Isometry3<f64>> {
+        self.source.true_camera_pose(frame)
     }
 
     /// The features of `frame`, from the cache or computed (and cached):

@@ -93,6 +93,11 @@ pub struct StereoVoParams {
     /// of its level's scale (px; default 4, ORB-SLAM2's
     /// `RadiusByViewingCos` for a nearly parallel view, `th = 1`).
     pub local_map_radius_px: f64,
+    /// Where the local map's keyframes are placed: `chained` (default) by
+    /// this VO's relative poses, as it must; `ground_truth`, by the frame
+    /// source's ground truth, a control that sees it (for the rendered
+    /// camera only).
+    pub local_map_placement: LocalMapPlacement,
     /// The camera (default ExoTeR's Bumblebee2 at half resolution,
     /// 512 × 384, as rendered); a recording's camera infos, when its topic
     /// map names both, replace its intrinsics, size and baseline.
@@ -114,6 +119,7 @@ impl Default for StereoVoParams {
             fast_min_threshold: 7,
             local_map_keyframes: 0,
             local_map_radius_px: 4.0,
+            local_map_placement: LocalMapPlacement::Chained,
             camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
@@ -177,6 +183,17 @@ impl StereoVoParams {
             ..exoter
         }
     }
+}
+
+/// Where the local map's keyframes are placed against the reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LocalMapPlacement {
+    /// By chaining the VO's own relative poses back from the reference.
+    Chained,
+    /// By the frame source's true camera poses (a control; the chained
+    /// pose where the source has none).
+    GroundTruth,
 }
 
 /// The stereo visual odometry (see the module).
@@ -303,8 +320,29 @@ impl StereoVo {
     /// The local map of `reference`: up to `local_map_keyframes`
     /// keyframes behind it along the links it was tracked by, nearest
     /// first, each with `reference_from_keyframe` (left cameras) as this
-    /// VO chains it from its own relative poses.
-    pub fn local_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
+    /// VO chains it from its own relative poses (or as the ground truth
+    /// places it, under [`LocalMapPlacement::GroundTruth`]).
+    pub fn local_keyframes(&self, reference: FrameRef) -> Vec<(FrameRef, Isometry3<f64>)> {
+        let chained = self.chained_keyframes(reference.index);
+        if self.params.local_map_placement == LocalMapPlacement::Chained {
+            return chained;
+        }
+        let truth = |frame| self.frames.true_camera_pose(frame);
+        chained
+            .into_iter()
+            .map(|(keyframe, pose)| {
+                let true_pose = truth(reference).zip(truth(keyframe)).map(
+                    |(world_from_reference, world_from_keyframe)| {
+                        world_from_reference.inverse() * world_from_keyframe
+                    },
+                );
+                (keyframe, true_pose.unwrap_or(pose))
+            })
+            .collect()
+    }
+
+    /// [`Self::local_keyframes`] as the VO chains them.
+    fn chained_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
         let mut keyframes: Vec<(FrameRef, Isometry3<f64>)> = Vec::new();
         let (mut at, mut reference_from_at) = (reference, Isometry3::identity());
         while keyframes.len() < self.params.local_map_keyframes {
@@ -339,7 +377,7 @@ impl StereoVo {
         let [width, height] = self.camera.image_size_px.map(f64::from);
         let mut correspondences = tracked.correspondences;
         let mut keypoints = tracked.keypoints;
-        for (keyframe, reference_from_keyframe) in self.local_keyframes(request.reference.index) {
+        for (keyframe, reference_from_keyframe) in self.local_keyframes(request.reference) {
             let features = self.features(keyframe);
             let Ok(features) = features.as_ref() else {
                 continue;
