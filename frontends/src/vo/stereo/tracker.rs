@@ -327,15 +327,18 @@ impl StereoVo {
         if self.params.local_map_placement == LocalMapPlacement::Chained {
             return chained;
         }
-        let truth = |frame| self.frames.true_camera_pose(frame);
+        let Some(reference_from_world) =
+            self.frames.true_camera_pose(reference).map(|p| p.inverse())
+        else {
+            return chained;
+        };
         chained
             .into_iter()
             .map(|(keyframe, pose)| {
-                let true_pose = truth(reference).zip(truth(keyframe)).map(
-                    |(world_from_reference, world_from_keyframe)| {
-                        world_from_reference.inverse() * world_from_keyframe
-                    },
-                );
+                let true_pose = self
+                    .frames
+                    .true_camera_pose(keyframe)
+                    .map(|world_from_keyframe| reference_from_world * world_from_keyframe);
                 (keyframe, true_pose.unwrap_or(pose))
             })
             .collect()
@@ -383,7 +386,10 @@ impl StereoVo {
                 continue;
             };
             let features = &features.stereo;
-            let rotation = reference_from_keyframe.rotation.to_rotation_matrix();
+            let r = reference_from_keyframe
+                .rotation
+                .to_rotation_matrix()
+                .into_inner();
             for (k, point, point_covariance) in self.map_points(features) {
                 let point = reference_from_keyframe * point;
                 let x = tracked.pose * point;
@@ -404,7 +410,6 @@ impl StereoVo {
                 if std::mem::replace(&mut taken[found], true) {
                     continue;
                 }
-                let r = rotation.matrix();
                 correspondences.push(correspondence(
                     current,
                     found,
