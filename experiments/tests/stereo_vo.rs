@@ -13,7 +13,9 @@ use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
 use gpodo_datasets::sim::soil::{Soil, SoilMap};
 use gpodo_datasets::sim::terrain::Terrain;
 use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
-use gpodo_frontends::vo::stereo::{LocalMapPlacement, StereoFrames, StereoVo, StereoVoParams};
+use gpodo_frontends::vo::stereo::{
+    LocalMapPlacement, OverlapDenominator, StereoFrames, StereoVo, StereoVoParams,
+};
 use gpodo_frontends::vo::{
     FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry, VoMeasurement,
 };
@@ -532,4 +534,118 @@ fn the_local_maps_older_keyframes_are_placed_by_a_chain_that_drifts() {
     for (_, shift) in errors(&local_map(LocalMapPlacement::GroundTruth)) {
         assert!(shift < 1e-9, "{shift}");
     }
+}
+
+#[test]
+fn the_shared_points_are_the_references_points_the_keyframe_behind_it_sees() {
+    // ORB-SLAM2's keyframe rule divides a frame's inliers by the reference
+    // keyframe's points that a second keyframe sees too. Frame `gap`,
+    // tracked against keyframe 0, counts those keyframe 0 sees: fewer the
+    // farther it has driven, about as many as keyframe 0's points it
+    // tracked. Keyframe 0, with none behind it, counts all its points.
+    let poses = drive(51, 0.03, 0.01);
+    let shared = frames(Soil::compact(), &poses, &StereoVoParams::default());
+    let vo_of = |overlap_denominator| {
+        let params = StereoVoParams {
+            overlap_denominator,
+            ..StereoVoParams::default()
+        };
+        StereoVo::new(params, Arc::clone(&shared)).unwrap()
+    };
+    let mut vo = vo_of(OverlapDenominator::SharedPoints);
+    assert_eq!(
+        vo.shared_point_count(frame(0)),
+        vo.map_point_count(frame(0))
+    );
+    let counts: Vec<(usize, usize, usize)> = [1usize, 5, 12, 25, 38]
+        .iter()
+        .map(|&gap| {
+            assert!(matches!(
+                track(&mut vo, &poses, 0, gap),
+                TrackOutcome::Tracked(_)
+            ));
+            let current = frame(gap);
+            (
+                vo.shared_point_count(current),
+                vo.tracked_inliers(current).unwrap(),
+                vo.map_point_count(current),
+            )
+        })
+        .collect();
+    eprintln!("(shared points, inliers against keyframe 0, map points): {counts:?}");
+    for &(shared, inliers, points) in &counts {
+        assert!(shared <= points, "{counts:?}");
+        assert!(
+            (shared as f64) > 0.7 * inliers as f64 && (shared as f64) < 1.5 * inliers as f64,
+            "{counts:?}"
+        );
+    }
+    assert!(counts[4].0 < counts[0].0, "{counts:?}");
+    // Frames tracked against frame 12 as the reference: the same inliers
+    // over the shared points, a ratio at least the most-inliers one.
+    let ratios = |vo: &mut StereoVo| -> Vec<f64> {
+        assert!(matches!(track(vo, &poses, 0, 12), TrackOutcome::Tracked(_)));
+        [1usize, 5, 12, 25, 38]
+            .iter()
+            .map(|&gap| match track(vo, &poses, 12, gap) {
+                TrackOutcome::Tracked(m) => m.overlap,
+                TrackOutcome::Lost => panic!("lost at gap {gap}"),
+            })
+            .collect()
+    };
+    let most = ratios(&mut vo_of(OverlapDenominator::MostInliers));
+    let orb_slam = ratios(&mut vo_of(OverlapDenominator::SharedPoints));
+    eprintln!("keyframe ratios, most inliers: {most:.3?}; shared points: {orb_slam:.3?}");
+    for (m, o) in most.iter().zip(&orb_slam) {
+        assert!(o >= m, "{most:?} {orb_slam:?}");
+    }
+}
+
+#[test]
+fn too_few_close_points_tracked_call_for_a_keyframe() {
+    // ORB-SLAM2's stereo trigger: fewer than 100 close points tracked
+    // while more than 70 go untracked. A frame's close points are its map
+    // points, and its close inliers at most its inliers, so fewer than 100
+    // inliers with more than 70 other close points must call; the call
+    // never comes with 70 or fewer close points in all. Off, it never
+    // calls.
+    let poses = drive(51, 0.03, 0.01);
+    let shared = frames(Soil::compact(), &poses, &StereoVoParams::default());
+    let calls = |close_points_keyframe| {
+        let params = StereoVoParams {
+            close_points_keyframe,
+            ..StereoVoParams::default()
+        };
+        let mut vo = StereoVo::new(params, Arc::clone(&shared)).unwrap();
+        [1usize, 5, 12, 25, 38]
+            .iter()
+            .map(|&gap| match track(&mut vo, &poses, 0, gap) {
+                TrackOutcome::Tracked(m) => (
+                    m.needs_keyframe,
+                    vo.tracked_inliers(frame(gap)).unwrap(),
+                    vo.map_point_count(frame(gap)),
+                ),
+                TrackOutcome::Lost => panic!("lost at gap {gap}"),
+            })
+            .collect::<Vec<(bool, usize, usize)>>()
+    };
+    let orb_slam = calls(Some([100, 70]));
+    eprintln!("(calls, inliers, close points): {orb_slam:?}");
+    for &(call, inliers, close) in &orb_slam {
+        if inliers < 100 && close - inliers.min(close) > 70 {
+            assert!(call, "{orb_slam:?}");
+        }
+        if call {
+            assert!(close > 70, "{orb_slam:?}");
+        }
+    }
+    // At 512 × 384 a third of a frame's inliers have no stereo match of
+    // their own: ORB-SLAM2's counts, set for ExoTeR's 1024 × 768, call at
+    // every gap (130 inliers at 0.4 s). Halved, they call only once the
+    // view has moved on.
+    assert!(orb_slam.iter().all(|c| c.0), "{orb_slam:?}");
+    let halved = calls(Some([50, 35]));
+    eprintln!("at [50, 35]: {halved:?}");
+    assert!(!halved[0].0 && halved[4].0, "{halved:?}");
+    assert!(calls(None).iter().all(|c| !c.0));
 }

@@ -654,6 +654,7 @@ impl<'a> Session<'a> {
         let k = &self.params.keyframes;
         let threshold = 1.0 - (1.0 - k.min_overlap) * scale.max(0.0);
         m.overlap < threshold
+            || m.needs_keyframe
             || k.max_interval_secs
                 .is_some_and(|max| current.time_secs - reference.time_secs >= max)
     }

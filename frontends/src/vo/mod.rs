@@ -68,6 +68,10 @@ pub struct VoMeasurement {
     /// current frame, in `[0, 1]` (what keyframe decisions read): the view
     /// overlap, times `min(1, s_cur / s_ref)` when features are counted.
     pub overlap: f64,
+    /// The tracker's own call for a keyframe, whatever the overlap (the
+    /// stereo VO's ORB-SLAM2 close-point trigger, when it is on; false
+    /// otherwise).
+    pub needs_keyframe: bool,
 }
 
 /// What tracking gave.

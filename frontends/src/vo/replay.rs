@@ -196,6 +196,7 @@ impl VisualOdometry for ReplayVo {
             relative,
             covariance: isotropic_covariance(sigma_r, sigma_t),
             overlap,
+            needs_keyframe: false,
         })
     }
 

@@ -469,6 +469,7 @@ impl VisualOdometry for SimulatedVo {
             relative: truth * noise,
             covariance: isotropic_covariance(sigma_r, sigma_t),
             overlap: self.refound_share(request, overlap),
+            needs_keyframe: false,
         })
     }
 

@@ -10,4 +10,4 @@ pub mod pose;
 pub mod tracker;
 
 pub use frames::{FrameFeatures, StereoFrameSource, StereoFrames};
-pub use tracker::{LocalMapPlacement, StereoVo, StereoVoParams};
+pub use tracker::{LocalMapPlacement, OverlapDenominator, StereoVo, StereoVoParams};

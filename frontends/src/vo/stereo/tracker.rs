@@ -30,7 +30,9 @@
 //!   points seen again are the most inliers any frame tracked against the
 //!   reference has had, so the ratio measures what tracking has lost since
 //!   then, whatever share of its corners a frame finds again at best (a
-//!   fresh keyframe's first tracked frame scores 1).
+//!   fresh keyframe's first tracked frame scores 1). A control,
+//!   `overlap_denominator: shared_points`, counts ORB-SLAM2's points
+//!   instead: the reference's that a keyframe behind it sees too.
 //! * **Recognition**: by appearance only: the keyframes whose whole-image
 //!   signatures correlate best with the current frame's, kept when their
 //!   descriptors match the current frame's (ratio test) at least
@@ -98,6 +100,17 @@ pub struct StereoVoParams {
     /// source's ground truth, a control that sees it (for the rendered
     /// camera only).
     pub local_map_placement: LocalMapPlacement,
+    /// What the overlap divides the tracked inliers by: `most_inliers`
+    /// (default) or `shared_points`, ORB-SLAM2's (see
+    /// [`OverlapDenominator`]).
+    pub overlap_denominator: OverlapDenominator,
+    /// ORB-SLAM2's stereo keyframe trigger, whatever the overlap
+    /// (`bNeedToInsertClose` in `Tracking::NeedNewKeyFrame`): `[tracked,
+    /// untracked]` calls for a keyframe when fewer than `tracked` close
+    /// points (stereo keypoints within `max_depth_baselines`) are inliers
+    /// while more than `untracked` are not (ORB-SLAM2's `[100, 70]`; the
+    /// default, none, is off).
+    pub close_points_keyframe: Option<[usize; 2]>,
     /// The camera (default ExoTeR's Bumblebee2 at half resolution,
     /// 512 × 384, as rendered); a recording's camera infos, when its topic
     /// map names both, replace its intrinsics, size and baseline.
@@ -120,6 +133,8 @@ impl Default for StereoVoParams {
             local_map_keyframes: 0,
             local_map_radius_px: 4.0,
             local_map_placement: LocalMapPlacement::Chained,
+            overlap_denominator: OverlapDenominator::MostInliers,
+            close_points_keyframe: None,
             camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
@@ -196,6 +211,29 @@ pub enum LocalMapPlacement {
     GroundTruth,
 }
 
+/// What the overlap, the ratio the keyframe rule reads, divides a
+/// frame's inliers by: how many of the reference keyframe's points a frame
+/// could find again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OverlapDenominator {
+    /// The most inliers any frame tracked against the reference has had.
+    MostInliers,
+    /// ORB-SLAM2's `TrackedMapPoints(nMinObs)` in `NeedNewKeyFrame`: the
+    /// reference's map points with at least three observations, a stereo
+    /// observation counting two (`MapPoint::AddObservation`), so the
+    /// points a second keyframe sees too. Here: the reference's map points
+    /// found in the keyframes behind it (its parent, or the local map's
+    /// `local_map_keyframes`), projected there by the VO's own poses and
+    /// matched within `local_map_radius_px` times their level's scale. A
+    /// reference with no keyframe behind it counts all its points
+    /// (ORB-SLAM2's `nMinObs = 2` while the map has two keyframes); one
+    /// with fewer shared points than `min_tracked_features` falls back to
+    /// the most inliers. The ratio can pass 1 (a frame matching points
+    /// the reference made alone): it is capped there.
+    SharedPoints,
+}
+
 /// The stereo visual odometry (see the module).
 pub struct StereoVo {
     params: StereoVoParams,
@@ -205,6 +243,9 @@ pub struct StereoVo {
     /// Per reference frame: the most inliers a frame tracked against it
     /// has had.
     seen_again: HashMap<usize, usize>,
+    /// Per reference frame under [`OverlapDenominator::SharedPoints`]: its
+    /// map points that a keyframe behind it sees too.
+    shared_points: HashMap<usize, usize>,
     /// Per tracked frame: its inliers when it was last tracked.
     inliers: HashMap<usize, usize>,
     /// Per frame tracked or relocalised: its reference and
@@ -222,6 +263,8 @@ struct Tracked {
     /// keypoint.
     correspondences: Vec<Correspondence>,
     keypoints: Vec<usize>,
+    /// Per correspondence: an inlier of the pose.
+    kept: Vec<bool>,
 }
 
 impl StereoVo {
@@ -251,6 +294,7 @@ impl StereoVo {
             camera,
             frames,
             seen_again: HashMap::new(),
+            shared_points: HashMap::new(),
             inliers: HashMap::new(),
             parents: HashMap::new(),
         })
@@ -323,7 +367,17 @@ impl StereoVo {
     /// VO chains it from its own relative poses (or as the ground truth
     /// places it, under [`LocalMapPlacement::GroundTruth`]).
     pub fn local_keyframes(&self, reference: FrameRef) -> Vec<(FrameRef, Isometry3<f64>)> {
-        let chained = self.chained_keyframes(reference.index);
+        self.keyframes_behind(reference, self.params.local_map_keyframes)
+    }
+
+    /// Up to `count` keyframes behind `reference`, placed as
+    /// [`Self::local_keyframes`] places them.
+    fn keyframes_behind(
+        &self,
+        reference: FrameRef,
+        count: usize,
+    ) -> Vec<(FrameRef, Isometry3<f64>)> {
+        let chained = self.chained_keyframes(reference.index, count);
         if self.params.local_map_placement == LocalMapPlacement::Chained {
             return chained;
         }
@@ -345,10 +399,10 @@ impl StereoVo {
     }
 
     /// [`Self::local_keyframes`] as the VO chains them.
-    fn chained_keyframes(&self, reference: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
+    fn chained_keyframes(&self, reference: usize, count: usize) -> Vec<(FrameRef, Isometry3<f64>)> {
         let mut keyframes: Vec<(FrameRef, Isometry3<f64>)> = Vec::new();
         let (mut at, mut reference_from_at) = (reference, Isometry3::identity());
-        while keyframes.len() < self.params.local_map_keyframes {
+        while keyframes.len() < count {
             let Some(&(parent, at_from_parent)) = self.parents.get(&at) else {
                 break;
             };
@@ -360,6 +414,83 @@ impl StereoVo {
             at = parent.index;
         }
         keyframes
+    }
+
+    /// [`OverlapDenominator::SharedPoints`] of `reference`: how many of
+    /// its map points a keyframe behind it sees too (all of them when no
+    /// keyframe is behind it).
+    pub fn shared_point_count(&self, reference: FrameRef) -> usize {
+        let features = self.features(reference);
+        let Ok(features) = features.as_ref() else {
+            return 0;
+        };
+        let features = &features.stereo;
+        let points = self.map_points(features);
+        let behind = self.keyframes_behind(reference, self.params.local_map_keyframes.max(1));
+        if behind.is_empty() {
+            return points.len();
+        }
+        let [width, height] = self.camera.image_size_px.map(f64::from);
+        let mut shared = vec![false; points.len()];
+        for (keyframe, reference_from_keyframe) in behind {
+            let other = self.features(keyframe);
+            let Ok(other) = other.as_ref() else {
+                continue;
+            };
+            let other = &other.stereo;
+            let grid = KeypointGrid::new(other);
+            let keyframe_from_reference = reference_from_keyframe.inverse();
+            let mut taken = vec![false; other.left.keypoints.len()];
+            for ((k, point, _), shared) in points.iter().zip(shared.iter_mut()) {
+                let x = keyframe_from_reference * point;
+                if *shared || x.z <= 0.0 {
+                    continue;
+                }
+                let centre = self.intrinsics.project_left(&x);
+                if !((0.0..width).contains(&centre[0]) && (0.0..height).contains(&centre[1])) {
+                    continue;
+                }
+                let level = usize::from(features.left.keypoints[*k].level);
+                let radius = self.params.local_map_radius_px * features.left.scales[level];
+                if let Some(found) = self.best_match((features, *k), (centre, radius), other, &grid)
+                    && !std::mem::replace(&mut taken[found], true)
+                {
+                    *shared = true;
+                }
+            }
+        }
+        shared.into_iter().filter(|s| *s).count()
+    }
+
+    /// The overlap's denominator for a frame tracked against `reference`
+    /// with `inliers` (see [`OverlapDenominator`]), its bookkeeping
+    /// updated.
+    fn seen_again(&mut self, reference: FrameRef, inliers: usize) -> usize {
+        let most = self.seen_again.entry(reference.index).or_default();
+        *most = (*most).max(inliers);
+        let most = *most;
+        if self.params.overlap_denominator == OverlapDenominator::MostInliers {
+            return most;
+        }
+        let shared = match self.shared_points.get(&reference.index) {
+            Some(&n) => n,
+            None => {
+                let n = self.shared_point_count(reference);
+                tracing::debug!(
+                    reference = reference.index,
+                    shared_points = n,
+                    first_inliers = inliers,
+                    "stereo VO: the reference's points a keyframe behind it sees"
+                );
+                self.shared_points.insert(reference.index, n);
+                n
+            }
+        };
+        if shared < self.params.min_tracked_features {
+            most
+        } else {
+            shared
+        }
     }
 
     /// ORB-SLAM2's `TrackLocalMap` after `tracked` has placed the frame:
@@ -426,6 +557,7 @@ impl StereoVo {
             inliers: refined.inlier_count,
             correspondences,
             keypoints,
+            kept: refined.inliers,
         })
     }
 
@@ -492,6 +624,7 @@ impl StereoVo {
             inliers: refined.inlier_count,
             correspondences,
             keypoints,
+            kept: refined.inliers,
         })
     }
 
@@ -535,7 +668,12 @@ impl StereoVo {
     /// perturbation (the camera's left perturbation carried through the
     /// mounting's adjoint), with the overlap against `seen_again` of the
     /// reference's points.
-    fn measurement(&self, tracked: &Tracked, seen_again: usize) -> VoMeasurement {
+    fn measurement(
+        &self,
+        tracked: &Tracked,
+        seen_again: usize,
+        current: FrameRef,
+    ) -> VoMeasurement {
         let b = self.camera.body_from_camera();
         let relative = b * tracked.pose.inverse() * b.inverse();
         let r = b.rotation.to_rotation_matrix().into_inner();
@@ -548,8 +686,35 @@ impl StereoVo {
         VoMeasurement {
             relative,
             covariance: adjoint * tracked.covariance * adjoint.transpose(),
-            overlap: tracked.inliers as f64 / seen_again.max(1) as f64,
+            overlap: (tracked.inliers as f64 / seen_again.max(1) as f64).min(1.0),
+            needs_keyframe: self.params.close_points_keyframe.is_some_and(
+                |[tracked_below, untracked_above]| {
+                    let [inliers, others] = self.close_points(tracked, current);
+                    inliers < tracked_below && others > untracked_above
+                },
+            ),
         }
+    }
+
+    /// The current frame's close points (stereo keypoints within
+    /// `max_depth_baselines`) that are inliers of `tracked`, and those
+    /// that are not.
+    fn close_points(&self, tracked: &Tracked, current: FrameRef) -> [usize; 2] {
+        let features = self.features(current);
+        let Ok(features) = features.as_ref() else {
+            return [0, 0];
+        };
+        let close: Vec<usize> = self
+            .map_points(&features.stereo)
+            .into_iter()
+            .map(|(k, _, _)| k)
+            .collect();
+        let mut inlier = vec![false; features.stereo.left.keypoints.len()];
+        for (&k, &kept) in tracked.keypoints.iter().zip(&tracked.kept) {
+            inlier[k] |= kept;
+        }
+        let inliers = close.iter().filter(|&&k| inlier[k]).count();
+        [inliers, close.len() - inliers]
     }
 
     /// How many of the current frame's descriptors find their match
@@ -595,10 +760,8 @@ impl VisualOdometry for StereoVo {
     fn track(&mut self, request: &TrackRequest) -> TrackOutcome {
         match self.track_request(request) {
             Some(tracked) => {
-                let seen_again = self.seen_again.entry(request.reference.index).or_default();
-                *seen_again = (*seen_again).max(tracked.inliers);
-                let seen_again = *seen_again;
-                let measurement = self.measurement(&tracked, seen_again);
+                let seen_again = self.seen_again(request.reference, tracked.inliers);
+                let measurement = self.measurement(&tracked, seen_again, request.current);
                 tracing::trace!(
                     reference = request.reference.index,
                     current = request.current.index,
