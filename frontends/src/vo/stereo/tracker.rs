@@ -667,7 +667,8 @@ impl StereoVo {
     /// `reference_from_current` and its covariance as a right
     /// perturbation (the camera's left perturbation carried through the
     /// mounting's adjoint), with the overlap against `seen_again` of the
-    /// reference's points.
+    /// reference's points and, when `close_points_keyframe` is on, its
+    /// call for a keyframe on `current`'s close points.
     fn measurement(
         &self,
         tracked: &Tracked,
