@@ -641,8 +641,8 @@ fn too_few_close_points_tracked_call_for_a_keyframe() {
     }
     // At 512 × 384 a quarter or more of a frame's inliers have no stereo
     // match of their own: ORB-SLAM2's counts, set for ExoTeR's
-    // 1024 × 768, call at every gap (130 inliers at 0.4 s). Halved, they call only once the
-    // view has moved on.
+    // 1024 × 768, call at every gap (130 inliers at 0.4 s). Halved, they
+    // call only once the view has moved on.
     assert!(orb_slam.iter().all(|c| c.0), "{orb_slam:?}");
     let halved = calls(Some([50, 35]));
     eprintln!("at [50, 35]: {halved:?}");
