@@ -325,23 +325,38 @@ impl StereoVo {
     /// by its disparity with its level's scale as each coordinate's
     /// standard deviation.
     fn map_points(&self, features: &StereoFeatures) -> Vec<(usize, Point3<f64>, Matrix3<f64>)> {
-        let max_depth = self.params.max_depth_baselines * self.intrinsics.baseline_m;
-        (0..features.left.keypoints.len())
-            .filter_map(|k| {
-                let d = f64::from(features.disparity(k)?);
-                if !(d > 0.0
-                    && self.intrinsics.focal_px * self.intrinsics.baseline_m / d <= max_depth)
-                {
-                    return None;
-                }
+        self.close_keypoints(features)
+            .map(|(k, d)| {
                 let kp = &features.left.keypoints[k];
                 let sigma = features.left.scales[usize::from(kp.level)];
                 let (point, covariance) =
                     self.intrinsics
                         .triangulate([f64::from(kp.x), f64::from(kp.y)], d, sigma);
-                Some((k, point, covariance))
+                (k, point, covariance)
             })
             .collect()
+    }
+
+    /// The close keypoints (ORB-SLAM2's): stereo matches nearer than
+    /// `max_depth_baselines` baselines, each with its disparity.
+    fn close_keypoints<'f>(
+        &self,
+        features: &'f StereoFeatures,
+    ) -> impl Iterator<Item = (usize, f64)> + use<'f> {
+        let max_depth = self.params.max_depth_baselines * self.intrinsics.baseline_m;
+        let focal_baseline = self.intrinsics.focal_px * self.intrinsics.baseline_m;
+        (0..features.left.keypoints.len()).filter_map(move |k| {
+            let d = f64::from(features.disparity(k)?);
+            (d > 0.0 && focal_baseline / d <= max_depth).then_some((k, d))
+        })
+    }
+
+    /// Where the point `x` (current camera) falls in the image, if in
+    /// front of the camera and inside the image.
+    fn in_image(&self, x: &Point3<f64>) -> Option<[f64; 2]> {
+        let [width, height] = self.camera.image_size_px.map(f64::from);
+        let centre = (x.z > 0.0).then(|| self.intrinsics.project_left(x))?;
+        ((0.0..width).contains(&centre[0]) && (0.0..height).contains(&centre[1])).then_some(centre)
     }
 
     /// `camera_from_reference` of the body motion `reference_from_current`.
@@ -430,7 +445,6 @@ impl StereoVo {
         if behind.is_empty() {
             return points.len();
         }
-        let [width, height] = self.camera.image_size_px.map(f64::from);
         let mut shared = vec![false; points.len()];
         for (keyframe, reference_from_keyframe) in behind {
             let other = self.features(keyframe);
@@ -442,14 +456,12 @@ impl StereoVo {
             let keyframe_from_reference = reference_from_keyframe.inverse();
             let mut taken = vec![false; other.left.keypoints.len()];
             for ((k, point, _), shared) in points.iter().zip(shared.iter_mut()) {
-                let x = keyframe_from_reference * point;
-                if *shared || x.z <= 0.0 {
+                if *shared {
                     continue;
                 }
-                let centre = self.intrinsics.project_left(&x);
-                if !((0.0..width).contains(&centre[0]) && (0.0..height).contains(&centre[1])) {
+                let Some(centre) = self.in_image(&(keyframe_from_reference * point)) else {
                     continue;
-                }
+                };
                 let level = usize::from(features.left.keypoints[*k].level);
                 let radius = self.params.local_map_radius_px * features.left.scales[level];
                 if let Some(found) = self.best_match((features, *k), (centre, radius), other, &grid)
@@ -508,7 +520,6 @@ impl StereoVo {
         for &k in &tracked.keypoints {
             taken[k] = true;
         }
-        let [width, height] = self.camera.image_size_px.map(f64::from);
         let mut correspondences = tracked.correspondences;
         let mut keypoints = tracked.keypoints;
         for (keyframe, reference_from_keyframe) in self.local_keyframes(request.reference) {
@@ -523,14 +534,9 @@ impl StereoVo {
                 .into_inner();
             for (k, point, point_covariance) in self.map_points(features) {
                 let point = reference_from_keyframe * point;
-                let x = tracked.pose * point;
-                if x.z <= 0.0 {
+                let Some(centre) = self.in_image(&(tracked.pose * point)) else {
                     continue;
-                }
-                let centre = self.intrinsics.project_left(&x);
-                if !((0.0..width).contains(&centre[0]) && (0.0..height).contains(&centre[1])) {
-                    continue;
-                }
+                };
                 let kp = &features.left.keypoints[k];
                 let radius =
                     self.params.local_map_radius_px * features.left.scales[usize::from(kp.level)];
@@ -706,9 +712,8 @@ impl StereoVo {
             return [0, 0];
         };
         let close: Vec<usize> = self
-            .map_points(&features.stereo)
-            .into_iter()
-            .map(|(k, _, _)| k)
+            .close_keypoints(&features.stereo)
+            .map(|(k, _)| k)
             .collect();
         let mut inlier = vec![false; features.stereo.left.keypoints.len()];
         for (&k, &kept) in tracked.keypoints.iter().zip(&tracked.kept) {
