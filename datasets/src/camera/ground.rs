@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::convert::{as_f64, truncate};
 use super::look::{SceneSpec, SoilLook};
-use super::max_mips::MaxMips;
+use super::max_mips::{MaxMips, RayQuery};
 use super::noise::{mix, octaves};
 use super::tiled::TiledGrid;
 use crate::DatasetError;
@@ -126,6 +126,17 @@ fn scatter_stones(spec: &SceneSpec, soils: &SoilMap, size_m: f64, seed: u64) -> 
         }
     }
     stones
+}
+
+/// How a ray's first hit is found (see [`GroundMaps::first_hit`]).
+enum RayPlan {
+    /// Without the map: the floor's hit, or none.
+    Known(Option<f64>),
+    /// By a walk over the map's mipmap, else the floor beyond the area.
+    Walk {
+        query: RayQuery,
+        floor_after: Option<f64>,
+    },
 }
 
 /// The precomputed height and radiance of the test area.
@@ -337,6 +348,66 @@ impl GroundMaps {
         t_start: f64,
         t_end: f64,
     ) -> Option<f64> {
+        match self.plan(origin, dir, t_start, t_end) {
+            RayPlan::Known(hit) => hit,
+            RayPlan::Walk { query, floor_after } => self
+                .mips
+                .first_hit(
+                    &self.height,
+                    self.cell_m,
+                    query.origin,
+                    query.dir,
+                    query.span[0],
+                    query.span[1],
+                )
+                .or(floor_after),
+        }
+    }
+
+    /// [`Self::first_hit`] of the rays from `origin` along each of the
+    /// unit `dirs`, into `hits` (cleared first): the same numbers, the
+    /// rays over the area walked several at a time.
+    pub fn first_hits(
+        &self,
+        origin: &nalgebra::Point3<f64>,
+        dirs: &[nalgebra::Vector3<f64>],
+        t_start: f64,
+        t_end: f64,
+        hits: &mut Vec<Option<f64>>,
+    ) {
+        let plans: Vec<RayPlan> = dirs
+            .iter()
+            .map(|dir| self.plan(origin, dir, t_start, t_end))
+            .collect();
+        let queries: Vec<RayQuery> = plans
+            .iter()
+            .filter_map(|p| match p {
+                RayPlan::Walk { query, .. } => Some(*query),
+                RayPlan::Known(_) => None,
+            })
+            .collect();
+        let mut walked = vec![None; queries.len()];
+        self.mips
+            .first_hits(&self.height, self.cell_m, &queries, &mut walked);
+        let mut walked = walked.into_iter();
+        hits.clear();
+        hits.extend(plans.into_iter().map(|p| match p {
+            RayPlan::Known(hit) => hit,
+            RayPlan::Walk { floor_after, .. } => walked.next().flatten().or(floor_after),
+        }));
+    }
+
+    /// What [`Self::first_hit`] needs of the map for one ray: nothing (the
+    /// ray misses the area, or meets the floor before it), or a walk over
+    /// the mipmap, the floor beyond the area answering if the walk meets
+    /// nothing.
+    fn plan(
+        &self,
+        origin: &nalgebra::Point3<f64>,
+        dir: &nalgebra::Vector3<f64>,
+        t_start: f64,
+        t_end: f64,
+    ) -> RayPlan {
         // The span of the ray over the area, if any.
         let mut span = (t_start, t_end);
         for (o, d) in [(origin.x, dir.x), (origin.y, dir.y)] {
@@ -353,11 +424,11 @@ impl GroundMaps {
             .then(|| -origin.z / dir.z)
             .filter(|t| (t_start..=t_end).contains(t));
         if span.0 > span.1 {
-            return floor;
+            return RayPlan::Known(floor);
         }
         // The floor before the ray enters the area.
         if let Some(t) = floor.filter(|&t| t < span.0) {
-            return Some(t);
+            return RayPlan::Known(Some(t));
         }
         // Nothing in the area is met above its highest point.
         let below_top = if dir.z < 0.0 {
@@ -367,19 +438,19 @@ impl GroundMaps {
         } else {
             span.0
         };
-        let inside = (below_top.max(span.0) <= span.1)
-            .then(|| {
-                self.mips.first_hit(
-                    &self.height,
-                    self.cell_m,
-                    [origin.x, origin.y, origin.z],
-                    [dir.x, dir.y, dir.z],
-                    below_top.max(span.0),
-                    span.1,
-                )
-            })
-            .flatten();
-        inside.or(floor.filter(|&t| t > span.1))
+        let floor_after = floor.filter(|&t| t > span.1);
+        if below_top.max(span.0) <= span.1 {
+            RayPlan::Walk {
+                query: RayQuery {
+                    origin: [origin.x, origin.y, origin.z],
+                    dir: [dir.x, dir.y, dir.z],
+                    span: [below_top.max(span.0), span.1],
+                },
+                floor_after,
+            }
+        } else {
+            RayPlan::Known(floor_after)
+        }
     }
 
     /// The side of the test area (m).

@@ -21,6 +21,9 @@ use crate::DatasetError;
 /// Rays longer than this meet nothing (m).
 const MAX_RANGE_M: f64 = 30.0;
 
+/// Rays start this far from the camera (m).
+const MIN_RANGE_M: f64 = 0.01;
+
 /// The image sensor: radiance to grey levels with shot and read noise.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -169,13 +172,22 @@ impl<'a> StereoRenderer<'a> {
         let rows: Vec<(Vec<f32>, Vec<f32>)> = (0..h)
             .into_par_iter()
             .map(|v| {
+                let rays: Vec<Vector3<f64>> = (0..w)
+                    .map(|u| self.camera.pixel_ray(as_f64(u), as_f64(v)))
+                    .collect();
+                let dirs: Vec<Vector3<f64>> = rays
+                    .iter()
+                    .map(|ray| world_from_camera.rotation * ray.normalize())
+                    .collect();
+                let mut hits = Vec::with_capacity(w);
+                self.ground
+                    .first_hits(&origin, &dirs, MIN_RANGE_M, MAX_RANGE_M, &mut hits);
                 let mut radiance = Vec::with_capacity(w);
                 let mut depth = Vec::with_capacity(w);
-                for u in 0..w {
-                    let ray = self.camera.pixel_ray(as_f64(u), as_f64(v));
-                    let dir = world_from_camera.rotation * ray.normalize();
-                    match self.trace(&origin, &dir) {
-                        Some((t, p)) => {
+                for ((ray, dir), hit) in rays.iter().zip(&dirs).zip(hits) {
+                    match hit {
+                        Some(t) => {
+                            let p = origin + dir * t;
                             radiance.push(self.ground.radiance(p.x, p.y) as f32);
                             depth.push((t / ray.norm()) as f32);
                         }
@@ -199,13 +211,6 @@ impl<'a> StereoRenderer<'a> {
             view.depth_m.extend(d);
         }
         view
-    }
-
-    /// Where the ray from `origin` along the unit `dir` first meets the
-    /// ground within [`MAX_RANGE_M`]: its length and the point.
-    fn trace(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<(f64, Point3<f64>)> {
-        let t = self.ground.first_hit(origin, dir, 0.01, MAX_RANGE_M)?;
-        Some((t, origin + dir * t))
     }
 
     /// The radiance integrated over the exposure: each pixel's ground

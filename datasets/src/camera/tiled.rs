@@ -32,14 +32,26 @@ impl TiledGrid {
     }
 
     fn index(&self, i: usize, j: usize) -> usize {
-        let tile = (j / TILE) * self.tiles_per_side + i / TILE;
-        tile * TILE * TILE + (j % TILE) * TILE + i % TILE
+        Self::index_of(self.tiles_per_side, i, j)
     }
 
     /// The sample at column `i`, row `j`.
     #[inline]
     pub(super) fn at(&self, i: usize, j: usize) -> f32 {
         self.data[self.index(i, j)]
+    }
+
+    /// The sample at `index` of the tiled order ([`Self::index_of`]).
+    #[inline]
+    pub(super) fn at_index(&self, index: usize) -> f32 {
+        self.data[index]
+    }
+
+    /// Where the sample at column `i`, row `j` lies in the tiled order of
+    /// a grid of `tiles_per_side` tiles a side: `((j / 8) · tiles_per_side
+    /// + i / 8) · 64 + (j % 8) · 8 + i % 8`.
+    pub(super) fn index_of(tiles_per_side: usize, i: usize, j: usize) -> usize {
+        ((j / TILE) * tiles_per_side + i / TILE) * TILE * TILE + (j % TILE) * TILE + i % TILE
     }
 
     /// Samples per side.
