@@ -101,12 +101,14 @@ mod tests {
                 down.cos() * azimuth.sin(),
                 -down.sin(),
             ];
-            // Rays along an axis, straight down, and from cell corners.
+            // Rays along an axis, straight down, from cell corners, and
+            // nearly along an axis (a reciprocal that overflows).
             match k % 7 {
                 0 => dir[0] = 0.0,
                 1 => dir[1] = -0.0,
                 2 => dir = [0.0, 0.0, -1.0],
                 3 => origin = [0.37, 1.21, origin[2]],
+                4 => dir[1] = 1e-320,
                 _ => {}
             }
             queries.push(RayQuery {

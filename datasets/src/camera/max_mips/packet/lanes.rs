@@ -209,42 +209,23 @@ impl pulp::NullaryFnOnce for PacketWalk<'_> {
         let top = signed(mips.sides.len() - 1);
         let mut next = 0;
         let mut packets = [(); PACKETS].map(|()| {
-            let mut rays = Rays::default();
-            let mut walks = Walks::default();
+            let mut packet = Packet::default();
             for l in 0..LANES {
-                refill(
-                    mips, &mut rays, &mut walks, l, cell_m, queries, hits, &mut next,
-                );
+                refill(mips, &mut packet, l, cell_m, queries, hits, &mut next);
             }
-            Packet {
-                ray_v: rays.vectors(),
-                walk_v: walks.vectors(),
-                rays,
-                walks,
-            }
+            packet
         });
-        while packets.iter().any(|p| walks_busy(simd, &p.walk_v)) {
+        while packets.iter().any(|p| p.walks.busy.iter().any(|&b| b != 0)) {
             for p in &mut packets {
-                let (ended, met) = step(simd, mips, height, top, &p.rays, &p.ray_v, &mut p.walk_v);
-                if ended != 0 {
-                    p.walks.store(&p.walk_v);
-                    for (l, hit) in met.into_iter().enumerate() {
-                        if ended & (1 << l) != 0 {
-                            hits[p.walks.query[l]] = hit;
-                            refill(
-                                mips,
-                                &mut p.rays,
-                                &mut p.walks,
-                                l,
-                                cell_m,
-                                queries,
-                                hits,
-                                &mut next,
-                            );
-                        }
+                let (ended, met) = step(simd, mips, height, top, &p.rays, &mut p.walks);
+                if ended == 0 {
+                    continue;
+                }
+                for (l, hit) in met.into_iter().enumerate() {
+                    if ended & (1 << l) != 0 {
+                        hits[p.walks.query[l]] = hit;
+                        refill(mips, p, l, cell_m, queries, hits, &mut next);
                     }
-                    p.ray_v = p.rays.vectors();
-                    p.walk_v = p.walks.vectors();
                 }
             }
         }
@@ -255,38 +236,31 @@ impl pulp::NullaryFnOnce for PacketWalk<'_> {
 /// the other's (each step waits on its own lookups).
 const PACKETS: usize = 3;
 
-/// A packet of lanes: its rays and walks, in arrays and on vectors.
+/// A packet of lanes: its rays and walks, one array element per lane (a
+/// step loads them onto vectors and stores the walks back).
+#[derive(Default)]
 struct Packet {
     rays: Rays,
     walks: Walks,
-    ray_v: RayVectors,
-    walk_v: WalkVectors,
-}
-
-/// Whether any lane is busy.
-#[inline(always)]
-fn walks_busy(simd: V3, w: &WalkVectors) -> bool {
-    simd.avx._mm256_movemask_pd(cast(w.busy)) != 0
 }
 
 /// Gives lane `l` the next query whose ray meets the map (answering
 /// those that miss it on the way), or leaves it idle at the end.
-#[allow(clippy::too_many_arguments)]
 fn refill(
     mips: &MaxMips,
-    rays: &mut Rays,
-    walks: &mut Walks,
+    packet: &mut Packet,
     l: usize,
     cell_m: f64,
     queries: &[RayQuery],
     hits: &mut [Option<f64>],
     next: &mut usize,
 ) {
+    let walks = &mut packet.walks;
     while let Some(q) = queries.get(*next) {
         let k = *next;
         *next += 1;
         if let Some(walk) = mips.walk(START_LEVEL, cell_m, q.origin, q.dir, q.span) {
-            rays.set(l, &walk.ray);
+            packet.rays.set(l, &walk.ray);
             walks.t[l] = walk.t;
             walks.t_end[l] = walk.t_end;
             walks.level[l] = signed(walk.level);

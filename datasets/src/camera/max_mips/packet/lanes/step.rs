@@ -6,7 +6,7 @@
 use pulp::x86::V3;
 use pulp::{cast, f64x4, i64x4, m64x4, u64x4};
 
-use super::{LANES, RayVectors, Rays, WalkVectors, signed};
+use super::{LANES, Rays, Walks, signed};
 use crate::camera::max_mips::{Corners, MaxMips, cell_hit};
 use crate::camera::tiled::TiledGrid;
 
@@ -113,10 +113,11 @@ pub(super) fn step(
     height: &TiledGrid,
     top: i64,
     rays: &Rays,
-    r: &RayVectors,
-    w: &mut WalkVectors,
+    walks: &mut Walks,
 ) -> (i32, [Option<f64>; LANES]) {
     let s = simd;
+    let r = &rays.vectors();
+    let w = &mut walks.vectors();
     // The level's blocks per side, `⌈n / 2^level⌉` for the map's `n`
     // cells (each level halves the one below, rounding up), the level
     // below's, and the block's place in its level's tiles.
@@ -150,7 +151,10 @@ pub(super) fn step(
     let tv = across(s, w.j, w.level, r.upper_v, r.v0, r.inv_dv, r.fixed_v);
     let across_u = s.cmp_le_f64x4(tu, tv);
     let across_v = s.cmp_le_f64x4(tv, tu);
-    let exit = s.min_f64x4(tu, tv);
+    // `tu.min(tv)` as Rust has it: `tu` where `tv` is NaN (an infinite
+    // reciprocal times a zero distance), which the processor's `min` would
+    // not give.
+    let exit = s.select_f64x4(s.cmp_eq_f64x4(tv, tv), s.min_f64x4(tu, tv), tu);
     let exit = s.select_f64x4(
         s.cmp_lt_f64x4(exit, w.t),
         w.t,
@@ -223,5 +227,6 @@ pub(super) fn step(
         .iter()
         .enumerate()
         .fold(0, |m, (l, hit)| m | (i32::from(hit.is_some()) << l));
+    walks.store(w);
     (gone | met_lanes, met)
 }
