@@ -226,3 +226,45 @@ fn the_bytes_do_not_depend_on_the_thread_count_and_the_noise_on_the_frame() {
     assert_eq!(one.depth_m, other.depth_m);
     assert_ne!(one.left, other.left, "another frame draws other noise");
 }
+
+#[test]
+fn the_rays_cast_together_meet_the_ground_where_each_cast_alone_does() {
+    // A 3 × 3 m patch of gravel (its stones the most work for a ray), seen
+    // from inside near an edge and from outside: rays meet the patch, the
+    // lab's floor beyond it, or nothing.
+    let terrain = Terrain::flat(3.0).unwrap();
+    let soils = SoilMap::uniform(Soil::gravel(), 3.0).unwrap();
+    let ground = GroundMaps::build(&terrain, &soils, &SceneSpec::default(), 5).unwrap();
+    let dirs: Vec<Vector3<f64>> = (0..120)
+        .flat_map(|a| (0..40).map(move |e| (f64::from(a) * 3.0, f64::from(e) * 2.7 - 88.0)))
+        .map(|(azimuth_deg, elevation_deg): (f64, f64)| {
+            let (a, e) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+            Vector3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin())
+        })
+        .collect();
+    let (mut on_patch, mut on_floor, mut none) = (0, 0, 0);
+    for origin in [Point3::new(2.9, 1.5, 0.8), Point3::new(-0.5, 1.2, 0.6)] {
+        let mut hits = Vec::new();
+        ground.first_hits(&origin, &dirs, 0.01, 30.0, &mut hits);
+        assert_eq!(hits.len(), dirs.len());
+        for (dir, hit) in dirs.iter().zip(&hits) {
+            let alone = ground.first_hit(&origin, dir, 0.01, 30.0);
+            assert_eq!(hit.map(f64::to_bits), alone.map(f64::to_bits), "{dir:?}");
+            match hit {
+                Some(t) => {
+                    let p = origin + dir * *t;
+                    if (0.0..=3.0).contains(&p.x) && (0.0..=3.0).contains(&p.y) {
+                        on_patch += 1;
+                    } else {
+                        on_floor += 1;
+                    }
+                }
+                None => none += 1,
+            }
+        }
+    }
+    assert!(
+        on_patch > 1000 && on_floor > 1000 && none > 1000,
+        "{on_patch} on the patch, {on_floor} on the floor, {none} none"
+    );
+}
