@@ -168,12 +168,11 @@ impl Walks {
 
     #[inline(always)]
     fn store(&mut self, v: &WalkVectors) {
+        // What a step moves: the span's start and the block.
         self.t = cast(v.t);
-        self.t_end = cast(v.t_end);
         self.level = cast(v.level);
         self.i = cast(v.i);
         self.j = cast(v.j);
-        self.busy = cast(v.busy);
     }
 }
 

@@ -122,14 +122,14 @@ pub(super) fn step(
     // cells (each level halves the one below, rounding up), the level
     // below's, and the block's place in its level's tiles.
     let one = s.splat_i64x4(1);
-    let zero_i = s.splat_i64x4(0);
+    let zero = s.splat_i64x4(0);
     let down = s.wrapping_sub_i64x4(w.level, one);
     let cells = s.splat_i64x4(signed(mips.sides[0]));
     let side = blocks(s, cells, w.level);
     let side_below = blocks(
         s,
         cells,
-        s.select_i64x4(s.cmp_lt_i64x4(down, zero_i), zero_i, down),
+        s.select_i64x4(s.cmp_lt_i64x4(down, zero), zero, down),
     );
     let index = tiled_index(s, side, w.i, w.j);
     // The block's highest point: the stored level's, or at level 0
@@ -165,7 +165,6 @@ pub(super) fn step(
         s.mul_f64x4(r.dz, s.select_f64x4(r.descending, exit, w.t)),
     );
     let below = s.cmp_le_f64x4(lowest, highest);
-    let zero = s.splat_i64x4(0);
     let at_cell = s.cmp_eq_i64x4(w.level, zero);
     // The cells met: a ray below its cell's highest corner at level 0.
     let meeting = s.and_m64x4(w.busy, s.and_m64x4(below, at_cell));
