@@ -18,6 +18,7 @@
 //! simulator's streams, and the wheels roll on the simulator's terrain
 //! alone (the stones are seen, not felt).
 
+mod blur;
 pub mod calibration;
 mod convert;
 pub mod ground;

@@ -13,7 +13,8 @@ use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::convert::{as_f64, truncate};
+use super::blur::blur;
+use super::convert::as_f64;
 use super::ground::GroundMaps;
 use super::noise::mix;
 use crate::DatasetError;
@@ -147,7 +148,14 @@ impl<'a> StereoRenderer<'a> {
             if exposure_motion.translation.vector.norm() > 0.0
                 || exposure_motion.rotation.angle() > 0.0
             {
-                view.radiance = self.blur(&view, &world_from_camera, &start, &end);
+                view.radiance = blur(
+                    &self.camera,
+                    view.width,
+                    &view.radiance,
+                    &view.depth_m,
+                    &world_from_camera,
+                    [&start, &end],
+                );
             }
             view
         });
@@ -211,58 +219,6 @@ impl<'a> StereoRenderer<'a> {
             view.depth_m.extend(d);
         }
         view
-    }
-
-    /// The radiance integrated over the exposure: each pixel's ground
-    /// point (from its depth; far away for the background) seen from the
-    /// start to the end pose, sampled along that image segment (a static
-    /// scene's blur; occlusions during the exposure are ignored).
-    fn blur(
-        &self,
-        view: &View,
-        world_from_camera: &Isometry3<f64>,
-        start: &Isometry3<f64>,
-        end: &Isometry3<f64>,
-    ) -> Vec<f32> {
-        let (w, h) = (view.width, view.height);
-        let (start_inv, end_inv) = (start.inverse(), end.inverse());
-        let sample = |x: f64, y: f64| -> f64 {
-            let x = x.clamp(0.0, (w - 1) as f64);
-            let y = y.clamp(0.0, (h - 1) as f64);
-            let (i, j) = (truncate(x).min(w - 2), truncate(y).min(h - 2));
-            let (tx, ty) = (x - as_f64(i), y - as_f64(j));
-            let at = |i: usize, j: usize| f64::from(view.radiance[j * w + i]);
-            let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
-            let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
-            top + (bottom - top) * ty
-        };
-        let mut blurred = vec![0f32; w * h];
-        blurred
-            .par_chunks_mut(w.max(1))
-            .enumerate()
-            .for_each(|(v, row)| {
-                for (u, out) in row.iter_mut().enumerate() {
-                    let depth = f64::from(view.depth_m[v * w + u]).min(1e3);
-                    let p_cam = Point3::from(self.camera.pixel_ray(as_f64(u), as_f64(v)) * depth);
-                    let p_world = world_from_camera * p_cam;
-                    let from = self.camera.project(&(start_inv * p_world));
-                    let to = self.camera.project(&(end_inv * p_world));
-                    let (Some([u0, v0]), Some([u1, v1])) = (from, to) else {
-                        *out = view.radiance[v * w + u];
-                        continue;
-                    };
-                    let length = ((u1 - u0).powi(2) + (v1 - v0).powi(2)).sqrt();
-                    let n = truncate(length.ceil()).clamp(1, 64) + 1;
-                    let sum: f64 = (0..n)
-                        .map(|k| {
-                            let s = as_f64(k) / as_f64(n - 1);
-                            sample(u0 + (u1 - u0) * s, v0 + (v1 - v0) * s)
-                        })
-                        .sum();
-                    *out = (sum / as_f64(n)) as f32;
-                }
-            });
-        blurred
     }
 
     /// Grey levels with shot and read noise, quantised to 8 bits; the
