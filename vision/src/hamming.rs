@@ -83,18 +83,24 @@ impl WithSimd for BruteForce<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, _simd: S) -> Self::Output {
-        let train: Vec<[u64; 4]> = self.train.iter().map(words).collect();
-        self.queries
-            .iter()
-            .map(|q| {
-                let q = words(q);
-                let mut found = TwoNearest::NONE;
-                for (k, t) in train.iter().enumerate() {
-                    found.offer(distance(&q, t), k);
-                }
-                found
-            })
-            .collect()
+        // Plain loops, not closures: a closure handed to an iterator
+        // adapter is compiled on its own, without the target's features
+        // (here the population count), and the distances then take
+        // several times as many instructions.
+        let mut train = Vec::with_capacity(self.train.len());
+        for t in self.train {
+            train.push(words(t));
+        }
+        let mut nearest = Vec::with_capacity(self.queries.len());
+        for q in self.queries {
+            let q = words(q);
+            let mut found = TwoNearest::NONE;
+            for (k, t) in train.iter().enumerate() {
+                found.offer(distance(&q, t), k);
+            }
+            nearest.push(found);
+        }
+        nearest
     }
 }
 
