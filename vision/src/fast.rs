@@ -15,6 +15,8 @@
 //! OpenCV's rules to the pixel, so that counts compare with the vision
 //! yardstick's one for one (the tests check this on real images).
 
+use pulp::{Arch, Simd, WithSimd};
+
 use crate::{GrayImage, PixelBox};
 
 /// The circle's 16 pixels as `(dx, dy)`, in order around it.
@@ -56,6 +58,7 @@ pub struct Corner {
 /// (brighter side). Each arc's minimum is built from minima of 2, 4 and 8
 /// (64 comparisons a side instead of 144). A pixel is a corner at `t`
 /// exactly when `max(A, B) > t`, and its score is `max(A, B) − 1`.
+#[inline(always)]
 fn arc_extremes(d: &[i16; 16]) -> (i16, i16) {
     let side = |sign: i16| {
         let v: [i16; 16] = std::array::from_fn(|k| sign * d[k]);
@@ -74,6 +77,7 @@ fn arc_extremes(d: &[i16; 16]) -> (i16, i16) {
 /// `threshold` (0 for no corner), its circle at `offsets` from it. Any 9
 /// contiguous circle pixels hold 2 of the 4 compass pixels and 4 of the 8
 /// even ones: without those on one side there is no corner.
+#[inline(always)]
 fn pixel_score(pixels: &[u8], idx: usize, offsets: &[isize; 16], threshold: u8) -> u8 {
     let t = i16::from(threshold);
     let centre = i16::from(pixels[idx]);
@@ -152,6 +156,27 @@ pub fn detect(image: &GrayImage, threshold: u8, nonmax: bool) -> Vec<Corner> {
 /// the lower of two thresholds answers both: a pixel is a corner at
 /// `t ≥ threshold` exactly when its score is at least `t`.
 pub fn score_map(image: &GrayImage, threshold: u8) -> Vec<u8> {
+    Arch::new().dispatch(ScoreMap { image, threshold })
+}
+
+/// [`score_map`] on the processor's widest vectors.
+struct ScoreMap<'a> {
+    image: &'a GrayImage,
+    threshold: u8,
+}
+
+impl WithSimd for ScoreMap<'_> {
+    type Output = Vec<u8>;
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _: S) -> Vec<u8> {
+        score_map_here(self.image, self.threshold)
+    }
+}
+
+/// [`score_map`], inlined into its caller's target features.
+#[inline(always)]
+fn score_map_here(image: &GrayImage, threshold: u8) -> Vec<u8> {
     let (width, height) = (image.width(), image.height());
     let mut scores = vec![0u8; width * height];
     if width < 7 || height < 7 {

@@ -2,6 +2,8 @@
 //! pixel-centre convention of OpenCV's `INTER_LINEAR`) and a separable
 //! Gaussian blur with mirrored borders (`BORDER_REFLECT_101`).
 
+use pulp::{Arch, Simd, WithSimd};
+
 use crate::GrayImage;
 
 /// An image at several scales: level `l` is the original shrunk by
@@ -38,6 +40,32 @@ impl Pyramid {
 /// destination pixel `(x, y)` taken at `((x + ½) s_x − ½, (y + ½) s_y − ½)`
 /// of the source, clamped to its edge, rounded to the nearest grey level.
 pub fn resize_bilinear(image: &GrayImage, width: usize, height: usize) -> GrayImage {
+    Arch::new().dispatch(Resize {
+        image,
+        width,
+        height,
+    })
+}
+
+/// [`resize_bilinear`] on the processor's widest vectors.
+struct Resize<'a> {
+    image: &'a GrayImage,
+    width: usize,
+    height: usize,
+}
+
+impl WithSimd for Resize<'_> {
+    type Output = GrayImage;
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _: S) -> GrayImage {
+        resize_bilinear_here(self.image, self.width, self.height)
+    }
+}
+
+/// [`resize_bilinear`], inlined into its caller's target features.
+#[inline(always)]
+fn resize_bilinear_here(image: &GrayImage, width: usize, height: usize) -> GrayImage {
     let (sw, sh) = (image.width(), image.height());
     let (sx, sy) = (sw as f64 / width as f64, sh as f64 / height as f64);
     // Source index and weight of the right/lower neighbour, per column/row.
@@ -83,6 +111,33 @@ fn reflect_101(k: isize, n: usize) -> usize {
 /// `(2 radius + 1)²` window (normalised weights; rows, then columns),
 /// mirrored at the borders, rounded to the nearest grey level.
 pub fn gaussian_blur(image: &GrayImage, radius: usize, sigma: f64) -> GrayImage {
+    Arch::new().dispatch(Blur {
+        image,
+        radius,
+        sigma,
+    })
+}
+
+/// [`gaussian_blur`] on the processor's widest vectors.
+struct Blur<'a> {
+    image: &'a GrayImage,
+    radius: usize,
+    sigma: f64,
+}
+
+impl WithSimd for Blur<'_> {
+    type Output = GrayImage;
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _: S) -> GrayImage {
+        gaussian_blur_here(self.image, self.radius, self.sigma)
+    }
+}
+
+/// [`gaussian_blur`], inlined into its caller's target features (the
+/// sums' operations and their order do not depend on them).
+#[inline(always)]
+fn gaussian_blur_here(image: &GrayImage, radius: usize, sigma: f64) -> GrayImage {
     let (w, h) = (image.width(), image.height());
     let r = radius as isize;
     let mut weights: Vec<f32> = (-r..=r)
