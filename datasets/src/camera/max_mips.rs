@@ -122,14 +122,20 @@ fn block_size(level: usize) -> f64 {
     f64::from(1u32 << level)
 }
 
+/// `1 / size` for a power of two `size ≥ 1`: the power of two with the
+/// opposite exponent, made from its bits (exact, and no division).
+#[inline(always)]
+fn power_of_two_recip(size: f64) -> f64 {
+    f64::from_bits(((2 * 1023u64) << 52).wrapping_sub(size.to_bits()))
+}
+
 /// The block along one axis that holds the coordinate `c ≥ 0` (cells) for
 /// a ray moving by `d` per metre: a coordinate on a boundary belongs to the
 /// block the ray is entering. (Truncation is the floor of a non-negative
 /// number, and cheaper than `floor` where the CPU has no rounding
 /// instruction.)
 fn block(c: f64, d: f64, size: f64, side: usize) -> usize {
-    // `size` is a power of two: its reciprocal is exact.
-    let q = (c * size.recip()).max(0.0);
+    let q = (c * power_of_two_recip(size)).max(0.0);
     let k = truncate(q);
     let k = if d < 0.0 && as_f64(k) == q {
         k.saturating_sub(1)
@@ -510,6 +516,15 @@ mod tests {
             }
         }
         assert!(hits > 100 && misses > 20, "{hits} hits, {misses} misses");
+    }
+
+    #[test]
+    fn a_power_of_twos_reciprocal_from_its_bits_is_the_division() {
+        for level in 0..40 {
+            let size = f64::from_bits((1023 + level) << 52);
+            assert_eq!(size, 2f64.powi(level as i32));
+            assert_eq!(power_of_two_recip(size).to_bits(), size.recip().to_bits());
+        }
     }
 
     #[test]
