@@ -85,8 +85,8 @@ impl WithSimd for BruteForce<'_> {
     fn with_simd<S: Simd>(self, _simd: S) -> Self::Output {
         // Plain loops, not closures: a closure handed to an iterator
         // adapter is compiled on its own, without the target's features
-        // (here the population count), and the distances then take
-        // several times as many instructions.
+        // (here the population count), and the distances then take twice
+        // as long.
         let mut train = Vec::with_capacity(self.train.len());
         for t in self.train {
             train.push(words(t));
