@@ -2,9 +2,9 @@
 //! ([`hamming`]), and each query's two nearest neighbours among many
 //! ([`two_nearest_each`]), the brute-force loop compiled
 //! for the processor's instruction set at run time (`pulp`'s dispatch:
-//! the population count is one instruction with x86-64-v3, a bit-twiddling
-//! sequence without). Distances are integers, so every path gives the same
-//! answer.
+//! with AVX2 the compiler counts a descriptor's bits with byte shuffles on
+//! one 256-bit vector, without it with 128-bit arithmetic). Distances are
+//! integers, so every path gives the same answer.
 
 use pulp::{Arch, Simd, WithSimd};
 
@@ -85,8 +85,7 @@ impl WithSimd for BruteForce<'_> {
     fn with_simd<S: Simd>(self, _simd: S) -> Self::Output {
         // Plain loops, not closures: a closure handed to an iterator
         // adapter is compiled on its own, without the target's features
-        // (here the population count), and the distances then take twice
-        // as long.
+        // (here AVX2), and the distances then take twice as long.
         let mut train = Vec::with_capacity(self.train.len());
         for t in self.train {
             train.push(words(t));
