@@ -339,7 +339,8 @@ mod tests {
                 if let Some(simd) = pulp::x86::V3::try_new() {
                     let first = u - u % lanes::LANES;
                     if first + lanes::LANES <= w {
-                        let [a, b, c, d] = lanes::paths(simd, &exposure, first, v);
+                        let [a, b, c, d] =
+                            lanes::paths(simd, &exposure, [first, v], exposure.ray_y(v));
                         paths.push([a, b, c, d].into_iter().nth(u % lanes::LANES).unwrap());
                     }
                 }

@@ -17,49 +17,26 @@ struct Four {
     v: f64x4,
 }
 
-impl Add for Four {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self {
-            simd: self.simd,
-            v: self.simd.add_f64x4(self.v, o.v),
+/// `Four`'s operator `$op` (`$method`) as the vector instruction `$simd`.
+macro_rules! lanewise {
+    ($op:ident, $method:ident, $simd:ident) => {
+        impl $op for Four {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Self {
+                    simd: self.simd,
+                    v: self.simd.$simd(self.v, o.v),
+                }
+            }
         }
-    }
+    };
 }
 
-impl Sub for Four {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self {
-            simd: self.simd,
-            v: self.simd.sub_f64x4(self.v, o.v),
-        }
-    }
-}
-
-impl Mul for Four {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        Self {
-            simd: self.simd,
-            v: self.simd.mul_f64x4(self.v, o.v),
-        }
-    }
-}
-
-impl Div for Four {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, o: Self) -> Self {
-        Self {
-            simd: self.simd,
-            v: self.simd.div_f64x4(self.v, o.v),
-        }
-    }
-}
+lanewise!(Add, add, add_f64x4);
+lanewise!(Sub, sub, sub_f64x4);
+lanewise!(Mul, mul, mul_f64x4);
+lanewise!(Div, div, div_f64x4);
 
 impl Arith for Four {
     #[inline(always)]
@@ -78,13 +55,14 @@ impl Arith for Four {
     }
 }
 
-/// The paths of the pixels `u..u + 4` of row `v`, computed together.
+/// The paths of the pixels `u..u + 4` of row `v`, computed together; `y`
+/// is the row's [`Exposure::ray_y`].
 #[inline(always)]
-pub(super) fn paths(simd: V3, e: &Exposure<'_>, u: usize, v: usize) -> [Path<f64>; LANES] {
+pub(super) fn paths(simd: V3, e: &Exposure<'_>, [u, v]: [usize; 2], y: f64) -> [Path<f64>; LANES] {
     let four = |x: [f64; LANES]| Four { simd, v: cast(x) };
     let x: [f64; LANES] = std::array::from_fn(|l| e.ray_x[u + l]);
     let depth: [f64; LANES] = std::array::from_fn(|l| e.depth(u + l, v));
-    let path = e.path(four(x), four([e.ray_y(v); LANES]), four(depth));
+    let path = e.path(four(x), four([y; LANES]), four(depth));
     let lanes = |f: Four| -> [f64; LANES] { cast(f.v) };
     let (u0, v0, u1, v1) = (
         lanes(path.u0),
@@ -123,11 +101,12 @@ impl pulp::NullaryFnOnce for Row<'_, '_> {
             v,
             row,
         } = self;
+        let y = e.ray_y(v);
         let whole = row.len() / LANES * LANES;
         let (head, tail) = row.split_at_mut(whole);
         for (chunk, out) in head.chunks_exact_mut(LANES).enumerate() {
             let u = chunk * LANES;
-            for (l, (out, path)) in out.iter_mut().zip(paths(simd, e, u, v)).enumerate() {
+            for (l, (out, path)) in out.iter_mut().zip(paths(simd, e, [u, v], y)).enumerate() {
                 *out = e.integrate(u + l, v, &path);
             }
         }
