@@ -22,7 +22,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use gpodo_datasets::bags::BagInfo;
 use gpodo_datasets::bags::import::{TopicMap, import_bag};
 use gpodo_datasets::bags::write::{write_mcap, written_topic_map};
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
+use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 
 /// The topic map of `experiments/husky-bags.yaml`.
 const HUSKY: &str = "imu: /imu/data

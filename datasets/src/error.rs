@@ -176,26 +176,6 @@ pub enum DatasetError {
     /// A gpodo data type rejected what it was given.
     #[error(transparent)]
     Model(#[from] gpodo_traits::Error),
-    /// The simulator could not continue (e.g. the chassis cannot be placed
-    /// on terrain that is too steep).
-    #[error("simulation failed: {detail}")]
-    Simulation {
-        /// What went wrong.
-        detail: String,
-    },
-}
-
-/// `Ok(())` when `ok`, otherwise [`DatasetError::InvalidConfig`] naming
-/// `field` and what was `expected`.
-pub(crate) fn require(ok: bool, field: &str, expected: &str) -> Result<(), DatasetError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(DatasetError::InvalidConfig {
-            field: field.to_owned(),
-            expected: expected.to_owned(),
-        })
-    }
 }
 
 impl From<gpodo_traits::InvalidCameraField> for DatasetError {

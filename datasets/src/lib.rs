@@ -1,16 +1,13 @@
-//! Rover data for gpodo: the simulated ExoTeR-like testbed (the embedded
-//! default dataset), loaders for logged rover runs and residual tables, and
+//! Rover data for gpodo: loaders for logged rover runs and residual tables,
 //! the residual dataset of the paper's §IV-C built from logs and a motion
-//! model; and ROS bags (MCAP and ROS 1) read by their magic bytes
-//! ([`bags`]).
+//! model, and ROS bags (MCAP and ROS 1) read by their magic bytes
+//! ([`bags`]). The simulated testbed that writes such logs is
+//! `gpodo-testbed`.
 
 pub mod bags;
-pub mod camera;
 mod error;
 pub mod log;
-pub mod real_images;
 pub mod residuals;
-pub mod sim;
 pub mod speed_check;
 pub mod table;
 

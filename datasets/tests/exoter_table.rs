@@ -89,7 +89,7 @@ fn simulated_residual_inputs_have_the_real_tables_columns() {
     // The residual dataset built from the ExoTeR-like rover's logs uses the
     // authors' column names, in their order, so a regressor trained on one
     // can be run on the other.
-    let config = gpodo_datasets::sim::preset::SimulatorConfig {
+    let config = gpodo_testbed::sim::preset::SimulatorConfig {
         training_runs: 1,
         training_run_secs: 5.0,
         test_max_secs: 5.0,

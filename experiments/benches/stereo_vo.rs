@@ -13,12 +13,12 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
-use gpodo_datasets::sim::soil::{Soil, SoilMap};
-use gpodo_datasets::sim::terrain::Terrain;
-use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
 use gpodo_frontends::vo::stereo::{StereoFrames, StereoVo, StereoVoParams};
 use gpodo_frontends::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
+use gpodo_testbed::camera::{FramePose, RenderedFrames};
+use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
+use gpodo_testbed::sim::soil::{Soil, SoilMap};
+use gpodo_testbed::sim::terrain::Terrain;
 use gpodo_traits::CameraParams;
 use gpodo_vision::orb::OrbParams;
 use gpodo_vision::stereo::stereo_features;

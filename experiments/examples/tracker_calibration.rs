@@ -1,5 +1,5 @@
 //! The statistical tracker beside the stereo VO on the same rendered
-//! requests (`gpodo_experiments::tracker_calibration`): writes one row per
+//! requests (`gpodo_experiments::commands::tracker_calibration`): writes one row per
 //! request to `OUT/requests.csv` and prints both trackers' curves over
 //! geometric overlap, gap and drive.
 //!
@@ -12,7 +12,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use gpodo_experiments::tracker_calibration::{
+use gpodo_experiments::commands::tracker_calibration::{
     BinSummary, Drive, Observation, by_overlap, observe_all, summarise,
 };
 use gpodo_frontends::vo::SimulatedVoParams;

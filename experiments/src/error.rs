@@ -60,9 +60,12 @@ pub enum ConfigError {
 /// Why an experiment failed.
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
-    /// Reading or simulating data failed.
+    /// Reading or preparing data failed.
     #[error(transparent)]
     Dataset(#[from] gpodo_datasets::DatasetError),
+    /// Simulating the testbed or rendering its camera failed.
+    #[error(transparent)]
+    Testbed(#[from] gpodo_testbed::TestbedError),
     /// A ROS bag could not be imported.
     #[error(transparent)]
     Bag(#[from] gpodo_datasets::bags::import::ImportError),

@@ -13,24 +13,18 @@
 //! 4. [`report`]: Markdown, JSON, CSV and SVG from the results;
 //! 5. [`runner`]: drives the stages for `gpodo run`, recording each run.
 //!
-//! [`error`] holds the errors of the first three stages, [`output`] the
-//! atomic file writes every stage that writes shares. See
-//! `ARCHITECTURE.md` for the path of one `gpodo run`.
+//! [`error`] holds the errors of the first three stages; [`util`] the
+//! leaves every stage may use (atomic file writes, CPU time, memory,
+//! stopping, shards); [`commands`] the other commands' domain logic
+//! (`simulate`, `import`, `live`, the tracker's calibration), testable
+//! without the binary. See `ARCHITECTURE.md` for the path of one `gpodo
+//! run`.
 
-pub mod bag_frames;
+pub mod commands;
 pub mod config;
-pub mod cpu;
 pub mod error;
 pub mod execute;
-pub mod import;
-pub mod live;
-pub mod memory;
-pub mod output;
 pub mod plan;
-pub mod rendered_frames;
 pub mod report;
 pub mod runner;
-pub mod shard;
-pub mod simulate;
-pub mod stop;
-pub mod tracker_calibration;
+pub mod util;

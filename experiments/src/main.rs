@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
-use gpodo_datasets::sim::preset::Preset;
+use gpodo_experiments::commands::simulate::{SimulateOptions, simulate_to};
 use gpodo_experiments::config::ExperimentConfig;
 use gpodo_experiments::execute::bench::run_bench;
 use gpodo_experiments::execute::models::{fit_model, predict_csv};
@@ -14,7 +14,7 @@ use gpodo_experiments::plan::load_plan;
 use gpodo_experiments::report::bench::write_bench_report;
 use gpodo_experiments::report::sweep::write_sweep_report;
 use gpodo_experiments::runner::{RunOptions, Shard, results_dir, run_sweep};
-use gpodo_experiments::simulate::{SimulateOptions, simulate_to};
+use gpodo_testbed::sim::preset::Preset;
 
 /// Learning odometry residuals with Gaussian processes, and using them to
 /// decide when a rover must look.
@@ -454,7 +454,7 @@ fn import(
     out: &Path,
     rover: Option<&Path>,
 ) -> anyhow::Result<()> {
-    use gpodo_experiments::import::{import_bags, read_topic_map, unit_check};
+    use gpodo_experiments::commands::import::{import_bags, read_topic_map, unit_check};
     let map = read_topic_map(topics)?;
     let imported = import_bags(files, &map, out, |one| {
         let (log, report) = (&one.log, &one.report);
@@ -536,7 +536,7 @@ fn main() -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .with_ansi(colour_on_stderr())
         .init();
-    gpodo_experiments::stop::install_ctrl_c()?;
+    gpodo_experiments::util::stop::install_ctrl_c()?;
     match cli.command {
         Command::Run {
             file,
@@ -547,7 +547,7 @@ fn main() -> anyhow::Result<()> {
         } => match run(&file, out, resume, force, shard, cli.quiet) {
             // Stopped by Ctrl-C: the runner's message, and the status a
             // shell gives an interrupted command.
-            Err(e) if gpodo_experiments::stop::requested() => {
+            Err(e) if gpodo_experiments::util::stop::requested() => {
                 eprintln!("{}", e.root_cause());
                 std::process::exit(130);
             }
@@ -606,19 +606,21 @@ fn main() -> anyhow::Result<()> {
             max_outputs,
             idle_exit_secs,
             dds_interfaces,
-        } => gpodo_experiments::live::live(&gpodo_experiments::live::LiveOptions {
-            model,
-            rover,
-            topics,
-            replay,
-            out,
-            rows,
-            realtime,
-            domain_id,
-            max_outputs,
-            idle_exit_secs,
-            dds_interfaces,
-        }),
+        } => gpodo_experiments::commands::live::live(
+            &gpodo_experiments::commands::live::LiveOptions {
+                model,
+                rover,
+                topics,
+                replay,
+                out,
+                rows,
+                realtime,
+                domain_id,
+                max_outputs,
+                idle_exit_secs,
+                dds_interfaces,
+            },
+        ),
         Command::Simulate {
             format,
             preset,
@@ -654,13 +656,19 @@ fn main() -> anyhow::Result<()> {
                 training_run_secs,
                 test_max_secs,
                 format: match format {
-                    SimulateFormat::Csv => gpodo_experiments::simulate::SimulateFormat::Csv,
-                    SimulateFormat::Mcap => gpodo_experiments::simulate::SimulateFormat::Mcap,
-                    SimulateFormat::Png => gpodo_experiments::simulate::SimulateFormat::Png,
+                    SimulateFormat::Csv => {
+                        gpodo_experiments::commands::simulate::SimulateFormat::Csv
+                    }
+                    SimulateFormat::Mcap => {
+                        gpodo_experiments::commands::simulate::SimulateFormat::Mcap
+                    }
+                    SimulateFormat::Png => {
+                        gpodo_experiments::commands::simulate::SimulateFormat::Png
+                    }
                 },
                 units,
                 imu: !no_imu,
-                camera: camera.then_some(gpodo_experiments::simulate::CameraOutput {
+                camera: camera.then_some(gpodo_experiments::commands::simulate::CameraOutput {
                     scale: camera_scale,
                     fps: camera_fps,
                 }),

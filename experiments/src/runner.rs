@@ -1,7 +1,7 @@
 //! Runs a sweep: the shared work once, then every run in parallel (rayon),
 //! each appended to the record as it finishes; resumable; shardable for
 //! cluster array jobs (`--shard i/N`, or Slurm's `SLURM_ARRAY_TASK_ID`
-//! with the count the folder records; [`crate::shard`]), each shard
+//! with the count the folder records; [`crate::util::shard`]), each shard
 //! writing `runs.<i>.jsonl`.
 
 use std::collections::BTreeSet;
@@ -15,10 +15,10 @@ use crate::execute::records::{
 };
 use crate::execute::results::ExperimentResults;
 use crate::execute::shared::{SharedCounts, SharedWork};
-use crate::output::{slug, write_atomically};
 use crate::plan::{PlanFile, RunSpec, SweepPlan};
 use crate::report::write_report;
-pub use crate::shard::{Shard, ShardError};
+use crate::util::output::{slug, write_atomically};
+pub use crate::util::shard::{Shard, ShardError};
 use indicatif::{
     MultiProgress, ParallelProgressIterator, ProgressBar, ProgressDrawTarget, ProgressStyle,
 };
@@ -150,7 +150,7 @@ pub fn run_sweep(plan: &SweepPlan, options: &RunOptions) -> Result<SweepOutcome,
 ///
 /// # Errors
 /// [`RunnerError::Pipeline`] when the shared work fails,
-/// [`RunnerError::Stopped`] after [`crate::stop::request`].
+/// [`RunnerError::Stopped`] after [`crate::util::stop::request`].
 pub fn run_in_memory(
     plan: &SweepPlan,
     observer: &RunObserver<'_>,
@@ -161,17 +161,17 @@ pub fn run_in_memory(
     plan.runs
         .par_iter()
         .map(|run| {
-            if crate::stop::requested() {
+            if crate::util::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
             let results = shared.results(&run.config);
-            if crate::stop::requested() {
+            if crate::util::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
             match results {
                 Ok(mut results) => {
                     results.duration_secs = start.elapsed().as_secs_f64();
-                    results.cpu_secs = crate::cpu::process_cpu_secs();
+                    results.cpu_secs = crate::util::cpu::process_cpu_secs();
                     observer(run, &results);
                     Ok(None)
                 }
@@ -247,7 +247,7 @@ pub fn run_sweep_observed(
         MultiProgress::new()
     };
     let shared = SharedWork::build(&configs, Some(&multi))?;
-    if crate::stop::requested() {
+    if crate::util::stop::requested() {
         return Err(RunnerError::Stopped);
     }
     let bar = if options.quiet {
@@ -267,12 +267,12 @@ pub fn run_sweep_observed(
     todo.par_iter()
         .progress_with(bar.clone())
         .try_for_each(|run| -> Result<(), RunnerError> {
-            if crate::stop::requested() {
+            if crate::util::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
             let results = shared.results(&run.config);
             // A run the stop cut short records nothing.
-            if crate::stop::requested() {
+            if crate::util::stop::requested() {
                 return Err(RunnerError::Stopped);
             }
             let mut results = match results {
@@ -290,7 +290,7 @@ pub fn run_sweep_observed(
             };
             // A run's wall time: since the sweep started (shared work included).
             results.duration_secs = start.elapsed().as_secs_f64();
-            results.cpu_secs = crate::cpu::process_cpu_secs();
+            results.cpu_secs = crate::util::cpu::process_cpu_secs();
             writer.append(&RunRecord::new(run, &results))?;
             observer(run, &results);
             if details {

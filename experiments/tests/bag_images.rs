@@ -11,16 +11,16 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use gpodo_datasets::bags::OnDamage;
+use gpodo_datasets::bags::frames::{BagFrames, camera_from_info};
 use gpodo_datasets::bags::images::{CameraTopics, read_stereo};
 use gpodo_datasets::bags::messages::RosMessage;
 use gpodo_datasets::bags::topic::read_topic;
-use gpodo_datasets::sim::preset::Preset;
-use gpodo_experiments::bag_frames::{BagFrames, camera_from_info};
-use gpodo_experiments::simulate::{
+use gpodo_experiments::commands::simulate::{
     CameraOutput, SimulateFormat, SimulateOptions, Written, simulate_to,
 };
 use gpodo_frontends::vo::stereo::{StereoFrames, StereoVo, StereoVoParams};
 use gpodo_frontends::vo::{FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry};
+use gpodo_testbed::sim::preset::Preset;
 use gpodo_traits::CameraParams;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
@@ -108,7 +108,7 @@ fn gpodos_rendered_bag_reads_back_as_its_pngs_and_the_stereo_vo_tracks_on_it() {
             index: k,
             time_secs: times[k],
         };
-        let (l, r) = gpodo_frontends::vo::stereo::StereoFrameSource::pair(&source, frame).unwrap();
+        let (l, r) = gpodo_traits::StereoFrameSource::pair(&source, frame).unwrap();
         let png_l =
             gpodo_vision::png_io::read_png_gray(&frames_dir.join(format!("left/{k:06}.png")))
                 .unwrap();
@@ -122,7 +122,7 @@ fn gpodos_rendered_bag_reads_back_as_its_pngs_and_the_stereo_vo_tracks_on_it() {
         index: 20,
         time_secs: times[19] + 1.0,
     };
-    let missing = gpodo_frontends::vo::stereo::StereoFrameSource::pair(&source, late).unwrap_err();
+    let missing = gpodo_traits::StereoFrameSource::pair(&source, late).unwrap_err();
     assert!(missing.contains("no stereo pair"), "{missing}");
 
     // The stereo VO on the recorded frames, against the bag's ground truth.

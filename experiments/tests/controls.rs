@@ -214,8 +214,8 @@ fn the_baselines_track_as_the_authors_did_and_differ_in_selection_only() {
 /// keeps the paper's route.
 #[test]
 fn the_seeds_and_curves_files_draw_a_route_per_seed() {
-    use gpodo_datasets::sim::route::Route;
     use gpodo_experiments::config::DatasetSpec;
+    use gpodo_testbed::sim::route::Route;
     for (file, want) in [
         ("paper.yaml", Route::Paper),
         ("paper-seeds.yaml", Route::Random),

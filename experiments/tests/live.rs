@@ -15,8 +15,8 @@ use std::process::Command;
 use gpodo_datasets::bags::messages::{Odometry, RosMessage};
 use gpodo_datasets::bags::topic::read_topic;
 use gpodo_datasets::bags::write::WheelUnits;
-use gpodo_datasets::sim::preset::Preset;
-use gpodo_experiments::simulate::{SimulateFormat, SimulateOptions, simulate_to};
+use gpodo_experiments::commands::simulate::{SimulateFormat, SimulateOptions, simulate_to};
+use gpodo_testbed::sim::preset::Preset;
 
 use common::{GPODO, assert_succeeded};
 

@@ -9,12 +9,12 @@
 use std::path::{Path, PathBuf};
 
 use gpodo_datasets::bags::write::WheelUnits;
-use gpodo_datasets::sim::preset::Preset;
-use gpodo_experiments::error::{ConfigError, PipelineError};
-use gpodo_experiments::import::{import_bags, read_topic_map, unit_check};
-use gpodo_experiments::simulate::{
+use gpodo_experiments::commands::import::{import_bags, read_topic_map, unit_check};
+use gpodo_experiments::commands::simulate::{
     CameraOutput, SimulateFormat, SimulateOptions, Written, median_rate_hz, simulate_to,
 };
+use gpodo_experiments::error::{ConfigError, PipelineError};
+use gpodo_testbed::sim::preset::Preset;
 
 /// One 60-s training run and the test traverse of seed 3.
 fn options(format: SimulateFormat, imu: bool) -> SimulateOptions {

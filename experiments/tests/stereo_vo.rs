@@ -9,16 +9,16 @@
 
 use std::sync::Arc;
 
-use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
-use gpodo_datasets::sim::soil::{Soil, SoilMap};
-use gpodo_datasets::sim::terrain::Terrain;
-use gpodo_experiments::rendered_frames::{FramePose, RenderedFrames};
 use gpodo_frontends::vo::stereo::{
     LocalMapPlacement, OverlapDenominator, StereoFrames, StereoVo, StereoVoParams,
 };
 use gpodo_frontends::vo::{
     FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry, VoMeasurement,
 };
+use gpodo_testbed::camera::{FramePose, RenderedFrames};
+use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec};
+use gpodo_testbed::sim::soil::{Soil, SoilMap};
+use gpodo_testbed::sim::terrain::Terrain;
 use gpodo_traits::CameraParams;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector6};
 
@@ -75,7 +75,11 @@ fn frames(soil: Soil, poses: &[FramePose], params: &StereoVoParams) -> Arc<Stere
         poses.to_vec(),
     );
     let orb = params.orb(&camera);
-    Arc::new(StereoFrames::with_orb(camera, Arc::new(source), orb))
+    // The true poses, for the local map's ground-truth placement control.
+    let true_poses = source.true_camera_poses();
+    Arc::new(
+        StereoFrames::with_orb(camera, Arc::new(source), orb).with_true_camera_poses(true_poses),
+    )
 }
 
 fn frame(k: usize) -> FrameRef {

@@ -32,7 +32,7 @@ seeds: [1, 2]
         slurm_task: None,
         quiet: true,
     };
-    gpodo_experiments::stop::request();
+    gpodo_experiments::util::stop::request();
     let err = run_sweep(&plan, &options).unwrap_err();
     assert!(matches!(err, RunnerError::Stopped), "{err}");
     assert!(err.to_string().contains("--resume"), "{err}");

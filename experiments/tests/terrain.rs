@@ -9,13 +9,13 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use gpodo_datasets::sim::soil::{Soil, SoilMap};
 use gpodo_experiments::execute::feature_supply::feature_supply;
 use gpodo_frontends::traverse::Traverse;
 use gpodo_frontends::vo::{
     CameraParams, FrameRef, SimulatedVo, SimulatedVoParams, TrackOutcome, TrackPurpose,
     TrackRequest, VisualOdometry,
 };
+use gpodo_testbed::sim::soil::{Soil, SoilMap};
 use gpodo_traits::BodyTwist;
 use nalgebra::{Isometry3, Vector3};
 use statrs::function::gamma::gamma_lr;

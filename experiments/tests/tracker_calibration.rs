@@ -10,7 +10,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use gpodo_experiments::tracker_calibration::{
+use gpodo_experiments::commands::tracker_calibration::{
     BinSummary, Drive, by_overlap, differences, observe_all, summarise,
 };
 use gpodo_frontends::vo::SimulatedVoParams;

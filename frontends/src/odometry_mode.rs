@@ -154,7 +154,9 @@ impl OdometryMode {
         let magnitude = a.mean.abs();
         let variance = match self.covariance {
             CovarianceSource::AbsoluteResidualAsVariance => magnitude,
-            _ => magnitude.component_mul(&magnitude),
+            CovarianceSource::PredictiveVariance | CovarianceSource::AbsoluteResidual => {
+                magnitude.component_mul(&magnitude)
+            }
         };
         Ok(WindowOdometry {
             correction,

@@ -17,12 +17,12 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gpodo_datasets::residuals::{ResidualConfig, log_steps, residual_dataset_from_steps};
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_kinematics::spec::MotionModelSpec;
 use gpodo_node::diagnostics::percentile;
 use gpodo_node::{LiveModel, LiveSettings};
 use gpodo_regressors::RegressorSpec;
 use gpodo_regressors::model_file::{ModelFile, Provenance, RowRecipe};
+use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 use gpodo_traits::ProprioceptiveSample;
 
 /// Training rows, as in the authors' ExoTeR table.

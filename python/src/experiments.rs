@@ -254,7 +254,7 @@ pub fn run_experiment<'py>(
         .detach(|| load_plan_with(Path::new(&file), text.as_deref(), seeds.as_deref()))
         .map_err(|e| config_error(&e, from_dict.then_some(file.as_path())))?;
     let name = plan.name.clone();
-    gpodo_experiments::stop::clear();
+    gpodo_experiments::util::stop::clear();
     let (tx, rx) = mpsc::channel();
     let rx = Mutex::new(rx);
     let next = || match rx.lock() {
@@ -270,7 +270,7 @@ pub fn run_experiment<'py>(
                     && interrupted.is_none()
                     && let Err(e) = callback.call1((done, total, key))
                 {
-                    gpodo_experiments::stop::request();
+                    gpodo_experiments::util::stop::request();
                     interrupted = Some(e);
                 }
             }
@@ -280,12 +280,12 @@ pub fn run_experiment<'py>(
         if interrupted.is_none()
             && let Err(e) = py.check_signals()
         {
-            gpodo_experiments::stop::request();
+            gpodo_experiments::util::stop::request();
             interrupted = Some(e);
         }
     }
     let outcome = py.detach(|| worker.join());
-    gpodo_experiments::stop::clear();
+    gpodo_experiments::util::stop::clear();
     if let Some(e) = interrupted {
         return Err(e);
     }

@@ -245,7 +245,7 @@ impl ModelFile {
                         .map(|s| SavedState::StreamingSparseGp(Box::new(s)));
                     (state, Box::new(m), report)
                 }
-                _ => {
+                RegressorSpec::Zero { .. } | RegressorSpec::Knn(_) | RegressorSpec::External(_) => {
                     return Err(ModelFileError::NotSavable {
                         label: spec.label(),
                         why: "only exact_gp, sparse_gp, ilgr, sparse_spectrum and streaming_sparse_gp models can be saved"
@@ -456,7 +456,10 @@ impl Predictor {
     pub fn log_marginal_likelihoods(&self) -> Option<Vec<f64>> {
         match &self.model {
             Rebuilt::ExactGp(m) => Some(m.log_marginal_likelihoods()),
-            _ => None,
+            Rebuilt::SparseGp(_)
+            | Rebuilt::Ilgr(_)
+            | Rebuilt::SparseSpectrum(_)
+            | Rebuilt::StreamingSparseGp(_) => None,
         }
     }
 

@@ -12,15 +12,19 @@
 //!
 //! All three are object safe, so an experiment configuration chooses the
 //! implementations at run time (`Box<dyn MotionModel>` and so on). This crate
-//! depends on nothing else of gpodo's.
+//! depends on nothing else of gpodo's but `gpodo-vision`, the leaf crate of
+//! image primitives, for the [`gpodo_vision::GrayImage`] a frame source
+//! gives.
 //!
 //! Beside the traits: [`SampleMatrix`] (rows of samples), [`ResidualDataset`]
 //! and [`Standardizer`], the one z-scoring of inputs and targets every crate
-//! uses, and [`CameraParams`], the one camera that the rendered stereo pair
-//! and the front end's tracker share.
+//! uses, [`CameraParams`], the one camera that the rendered stereo pair
+//! and the front end's tracker share, and [`StereoFrameSource`], the seam
+//! through which the rendered or recorded images reach the stereo VO.
 
 pub mod camera;
 mod error;
+mod frames;
 mod matrix;
 mod motion;
 mod regressor;
@@ -30,6 +34,7 @@ mod standardize;
 
 pub use camera::{CameraParams, InvalidCameraField};
 pub use error::Error;
+pub use frames::{FrameRef, StereoFrameSource};
 pub use matrix::SampleMatrix;
 pub use motion::{BodyTwist, MotionEstimate, MotionModel};
 pub use regressor::{

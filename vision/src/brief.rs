@@ -5,7 +5,12 @@
 use std::sync::OnceLock;
 
 use crate::GrayImage;
-use crate::orb::{Descriptor, PATCH_RADIUS};
+
+/// A 256-bit binary descriptor.
+pub type Descriptor = [u8; 32];
+
+/// Radius of the orientation disc and of the pattern (pixels).
+pub(crate) const PATCH_RADIUS: isize = 15;
 
 /// `x.round()` as an integer, by truncating `x ± ½` (no call to the C
 /// library's `round` where the CPU has no rounding instruction).

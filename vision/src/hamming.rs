@@ -8,7 +8,7 @@
 
 use pulp::{Arch, Simd, WithSimd};
 
-use crate::orb::Descriptor;
+use crate::brief::Descriptor;
 
 /// The descriptor's bits as four 64-bit words.
 #[inline(always)]

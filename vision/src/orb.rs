@@ -30,13 +30,12 @@
 //! image's pixels with the pyramid's pixel-centre convention (ORB-SLAM2
 //! multiplies by the scale, which moves a top-level keypoint by 1.3 px).
 
-use crate::brief::describe;
+pub use crate::brief::Descriptor;
+use crate::brief::{PATCH_RADIUS, describe};
 use crate::fast::score_map;
 use crate::pyramid::{Pyramid, gaussian_blur};
 use crate::{GrayImage, VisionError};
 
-/// Radius of the orientation disc and of the pattern (pixels).
-pub(crate) const PATCH_RADIUS: isize = 15;
 /// Keypoints' distance from a level's edge (ORB-SLAM2's `EDGE_THRESHOLD`).
 const EDGE: usize = 19;
 /// Side of a grid cell (pixels of the level).
@@ -126,9 +125,6 @@ pub struct KeyPoint {
     /// FAST score.
     pub score: u8,
 }
-
-/// A 256-bit binary descriptor.
-pub type Descriptor = [u8; 32];
 
 pub use crate::hamming::hamming;
 

@@ -14,69 +14,9 @@ use gpodo_vision::GrayImage;
 use serde::{Deserialize, Serialize};
 
 use super::OnDamage;
+pub use super::messages::{CameraInfo, CompressedImage, Image};
 use super::messages::{Header, RosMessage};
 use super::topic::{TopicError, TopicRequest, read_topics};
-
-/// `sensor_msgs/Image`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Image {
-    /// Header (the stamp is the exposure's).
-    pub header: Header,
-    /// Rows.
-    pub height: u32,
-    /// Columns.
-    pub width: u32,
-    /// Pixel encoding (`mono8`, `bgr8`, `rgb8`, …).
-    pub encoding: String,
-    /// Whether multi-byte pixels are big-endian.
-    pub is_bigendian: u8,
-    /// Bytes per row.
-    pub step: u32,
-    /// The pixels, `step` bytes per row.
-    #[serde(skip)]
-    pub data: Vec<u8>,
-}
-
-/// `sensor_msgs/CompressedImage`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CompressedImage {
-    /// Header.
-    pub header: Header,
-    /// The compression (`png`, `jpeg`, or image_transport's
-    /// `mono8; png compressed`, …).
-    pub format: String,
-    /// The compressed stream.
-    #[serde(skip)]
-    pub data: Vec<u8>,
-}
-
-/// `sensor_msgs/CameraInfo`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CameraInfo {
-    /// Header.
-    pub header: Header,
-    /// Rows.
-    pub height: u32,
-    /// Columns.
-    pub width: u32,
-    /// Distortion model (`plumb_bob`, …).
-    pub distortion_model: String,
-    /// Distortion coefficients.
-    pub d: Vec<f64>,
-    /// Intrinsic matrix, row-major.
-    pub k: [f64; 9],
-    /// Rectification rotation, row-major.
-    pub r: [f64; 9],
-    /// Projection matrix of the rectified image, row-major 3 × 4 (for the
-    /// right camera of a pair, `P[3] = −f · baseline`).
-    pub p: [f64; 12],
-    /// Binning (x, y).
-    pub binning: [u32; 2],
-    /// Region of interest: x offset, y offset, height, width.
-    pub roi: [u32; 4],
-    /// Whether the region of interest is rectified.
-    pub roi_do_rectify: bool,
-}
 
 /// Why a recorded image could not become a grey image.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

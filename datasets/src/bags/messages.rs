@@ -3,12 +3,11 @@
 //! `sensor_msgs/Imu`, `sensor_msgs/NavSatFix`, `nav_msgs/Odometry`,
 //! `geometry_msgs/PoseStamped`, `PoseWithCovarianceStamped`,
 //! `TwistStamped`, `tf2_msgs/TFMessage`, and a camera's
-//! `sensor_msgs/Image`, `CompressedImage` and `CameraInfo`
-//! ([`super::images`]).
+//! `sensor_msgs/Image`, `CompressedImage` and `CameraInfo` (made grey
+//! images by [`super::images`]).
 
 use serde::Serialize;
 
-pub use super::images::{CameraInfo, CompressedImage, Image};
 use super::ros1_type_name;
 use super::wire::{WireError, WireReader};
 
@@ -19,6 +18,67 @@ pub struct Header {
     pub stamp_ns: i64,
     /// Coordinate frame.
     pub frame_id: String,
+}
+
+/// `sensor_msgs/Image`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Image {
+    /// Header (the stamp is the exposure's).
+    pub header: Header,
+    /// Rows.
+    pub height: u32,
+    /// Columns.
+    pub width: u32,
+    /// Pixel encoding (`mono8`, `bgr8`, `rgb8`, …).
+    pub encoding: String,
+    /// Whether multi-byte pixels are big-endian.
+    pub is_bigendian: u8,
+    /// Bytes per row.
+    pub step: u32,
+    /// The pixels, `step` bytes per row.
+    #[serde(skip)]
+    pub data: Vec<u8>,
+}
+
+/// `sensor_msgs/CompressedImage`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CompressedImage {
+    /// Header.
+    pub header: Header,
+    /// The compression (`png`, `jpeg`, or image_transport's
+    /// `mono8; png compressed`, …).
+    pub format: String,
+    /// The compressed stream.
+    #[serde(skip)]
+    pub data: Vec<u8>,
+}
+
+/// `sensor_msgs/CameraInfo`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CameraInfo {
+    /// Header.
+    pub header: Header,
+    /// Rows.
+    pub height: u32,
+    /// Columns.
+    pub width: u32,
+    /// Distortion model (`plumb_bob`, …).
+    pub distortion_model: String,
+    /// Distortion coefficients.
+    pub d: Vec<f64>,
+    /// Intrinsic matrix, row-major.
+    pub k: [f64; 9],
+    /// Rectification rotation, row-major.
+    pub r: [f64; 9],
+    /// Projection matrix of the rectified image, row-major 3 × 4 (for the
+    /// right camera of a pair, `P[3] = −f · baseline`).
+    pub p: [f64; 12],
+    /// Binning (x, y).
+    pub binning: [u32; 2],
+    /// Region of interest: x offset, y offset, height, width.
+    pub roi: [u32; 4],
+    /// Whether the region of interest is rectified.
+    pub roi_do_rectify: bool,
 }
 
 /// `geometry_msgs/Pose`: position and unit quaternion `[x, y, z, w]`.

@@ -7,11 +7,14 @@
 //! ([`wire`]); [`BagInfo`] is what `gpodo bag info` prints (what `ros2 bag
 //! info` shows); [`write::write_mcap`] writes a rover log as a ROS 2 MCAP.
 
+mod cdr_write;
 mod damage;
 pub mod enu;
+pub mod frames;
 pub mod images;
 pub mod import;
 mod info;
+mod log_messages;
 mod mcap_walk;
 pub mod messages;
 pub mod tf;

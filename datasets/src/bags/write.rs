@@ -20,239 +20,53 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use nalgebra::UnitQuaternion;
-
+pub use super::cdr_write::EPOCH_NS;
+use super::cdr_write::{Cdr, stamp_ns};
 use super::import::{GroundTruthSource, JointMap, JointRef, TopicMap};
+pub use super::log_messages::{DiagnosticStatus, diagnostic_array_message, odometry_message};
+use super::log_messages::{
+    imu_message, imu_schema, joint_state_schema, odometry_schema, pose_stamped,
+    pose_stamped_schema, tf_message, tf_schema,
+};
 use crate::DatasetError;
 use crate::log::RoverLog;
 use crate::log::write::StagedFile;
 
-/// The time the log's 0 s is written at: 2023-11-14T22:13:20Z, in
-/// nanoseconds since the Unix epoch.
-pub const EPOCH_NS: u64 = 1_700_000_000_000_000_000;
-
-/// The separator between a schema and its dependencies in `ros2msg`
-/// schemas (as `rosbag2` writes them).
-const SEPARATOR: &str =
-    "================================================================================\n";
-
-pub(super) const TIME: &str = "int32 sec\nuint32 nanosec\n";
-pub(super) const HEADER: &str = "builtin_interfaces/Time stamp\nstring frame_id\n";
-const VECTOR3: &str = "float64 x\nfloat64 y\nfloat64 z\n";
-const POINT: &str = "float64 x\nfloat64 y\nfloat64 z\n";
-const QUATERNION: &str = "float64 x\nfloat64 y\nfloat64 z\nfloat64 w\n";
-const POSE: &str = "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n";
-const TRANSFORM: &str = "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n";
-const TWIST: &str = "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n";
-
-/// A `ros2msg` schema: the type's own definition, then each dependency
-/// under `MSG: <name>`.
-pub(super) fn schema(definition: &str, dependencies: &[(&str, &str)]) -> String {
-    let mut text = definition.to_string();
-    for (name, body) in dependencies {
-        text.push_str(SEPARATOR);
-        text.push_str(&format!("MSG: {name}\n"));
-        text.push_str(body);
-    }
-    text
-}
-
-fn joint_state_schema() -> String {
-    schema(
-        "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n",
-        &[
-            ("std_msgs/Header", HEADER),
-            ("builtin_interfaces/Time", TIME),
-        ],
-    )
-}
-
-fn imu_schema() -> String {
-    schema(
-        "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\n\
-         geometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\n\
-         geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n",
-        &[
-            ("std_msgs/Header", HEADER),
-            ("builtin_interfaces/Time", TIME),
-            ("geometry_msgs/Quaternion", QUATERNION),
-            ("geometry_msgs/Vector3", VECTOR3),
-        ],
-    )
-}
-
-fn pose_stamped_schema() -> String {
-    schema(
-        "std_msgs/Header header\ngeometry_msgs/Pose pose\n",
-        &[
-            ("std_msgs/Header", HEADER),
-            ("builtin_interfaces/Time", TIME),
-            ("geometry_msgs/Pose", POSE),
-            ("geometry_msgs/Point", POINT),
-            ("geometry_msgs/Quaternion", QUATERNION),
-        ],
-    )
-}
-
-fn tf_schema() -> String {
-    schema(
-        "geometry_msgs/TransformStamped[] transforms\n",
-        &[
-            (
-                "geometry_msgs/TransformStamped",
-                "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n",
-            ),
-            ("std_msgs/Header", HEADER),
-            ("builtin_interfaces/Time", TIME),
-            ("geometry_msgs/Transform", TRANSFORM),
-            ("geometry_msgs/Vector3", VECTOR3),
-            ("geometry_msgs/Quaternion", QUATERNION),
-        ],
-    )
-}
-
-fn odometry_schema() -> String {
-    schema(
-        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n\
-         geometry_msgs/TwistWithCovariance twist\n",
-        &[
-            ("std_msgs/Header", HEADER),
-            ("builtin_interfaces/Time", TIME),
-            (
-                "geometry_msgs/PoseWithCovariance",
-                "geometry_msgs/Pose pose\nfloat64[36] covariance\n",
-            ),
-            ("geometry_msgs/Pose", POSE),
-            ("geometry_msgs/Point", POINT),
-            ("geometry_msgs/Quaternion", QUATERNION),
-            (
-                "geometry_msgs/TwistWithCovariance",
-                "geometry_msgs/Twist twist\nfloat64[36] covariance\n",
-            ),
-            ("geometry_msgs/Twist", TWIST),
-            ("geometry_msgs/Vector3", VECTOR3),
-        ],
-    )
-}
-
-/// Little-endian CDR after the 4-byte encapsulation header; alignment
-/// counts from after that header.
-pub(super) struct Cdr(pub(super) Vec<u8>);
-
-impl Cdr {
-    pub(super) fn new() -> Self {
-        Self(vec![0, 1, 0, 0])
-    }
-
-    pub(super) fn align(&mut self, n: usize) {
-        while !(self.0.len() - 4).is_multiple_of(n) {
-            self.0.push(0);
-        }
-    }
-
-    pub(super) fn u32(&mut self, v: u32) {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-    }
-
-    fn i32(&mut self, v: i32) {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-    }
-
-    pub(super) fn f64s(&mut self, v: &[f64]) {
-        for x in v {
-            self.align(8);
-            self.0.extend(x.to_le_bytes());
-        }
-    }
-
-    pub(super) fn sequence(&mut self, v: &[f64]) {
-        self.u32(v.len() as u32);
-        self.f64s(v);
-    }
-
-    pub(super) fn string(&mut self, s: &str) {
-        self.u32(s.len() as u32 + 1);
-        self.0.extend(s.as_bytes());
-        self.0.push(0);
-    }
-
-    pub(super) fn header(&mut self, stamp_ns: u64, frame: &str) {
-        // `sec` is an int32: fine until 2038.
-        self.i32((stamp_ns / 1_000_000_000) as i32);
-        self.u32((stamp_ns % 1_000_000_000) as u32);
-        self.string(frame);
-    }
-}
-
-/// A `geometry_msgs/PoseStamped` in `frame`, stamped `stamp_ns`.
-fn pose_stamped(stamp_ns: u64, frame: &str, pose: &nalgebra::Isometry3<f64>) -> Vec<u8> {
-    let r = pose.rotation;
-    let mut m = Cdr::new();
-    m.header(stamp_ns, frame);
-    m.f64s(pose.translation.vector.as_slice());
-    m.f64s(&[r.i, r.j, r.k, r.w]);
-    m.0
-}
-
-/// A `nav_msgs/msg/Odometry` in CDR: `frame` → `child` at `stamp_ns`,
-/// the pose and the twist (in `child`) each with its row-major 6 × 6
-/// covariance (x, y, z, then rotation about x, y, z).
-pub fn odometry_message(
-    stamp_ns: u64,
-    frame: &str,
-    child: &str,
-    pose: &nalgebra::Isometry3<f64>,
-    pose_covariance: &[f64; 36],
-    twist: &gpodo_traits::BodyTwist,
-    twist_covariance: &[f64; 36],
+/// A `sensor_msgs/JointState` of sample `s`: every joint in `names`
+/// order, the wheels in `units`.
+fn joint_state_message(
+    t: u64,
+    names: &[String],
+    s: &gpodo_traits::ProprioceptiveSample,
+    units: WheelUnits,
 ) -> Vec<u8> {
-    let r = pose.rotation;
-    let mut o = Cdr::new();
-    o.header(stamp_ns, frame);
-    o.string(child);
-    o.f64s(pose.translation.vector.as_slice());
-    o.f64s(&[r.i, r.j, r.k, r.w]);
-    o.f64s(pose_covariance);
-    o.f64s(twist.linear_mps.as_slice());
-    o.f64s(twist.angular_radps.as_slice());
-    o.f64s(twist_covariance);
-    o.0
-}
-
-/// One `diagnostic_msgs/msg/DiagnosticStatus`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct DiagnosticStatus {
-    /// 0 OK, 1 WARN, 2 ERROR, 3 STALE.
-    pub level: u8,
-    /// The component's name.
-    pub name: String,
-    /// A one-line summary of its state.
-    pub message: String,
-    /// The hardware it runs on (may be empty).
-    pub hardware_id: String,
-    /// Key-value pairs of figures.
-    pub values: Vec<(String, String)>,
-}
-
-/// A `diagnostic_msgs/msg/DiagnosticArray` in CDR, stamped `stamp_ns`.
-pub fn diagnostic_array_message(stamp_ns: u64, status: &[DiagnosticStatus]) -> Vec<u8> {
-    let mut d = Cdr::new();
-    d.header(stamp_ns, "");
-    d.u32(status.len() as u32);
-    for s in status {
-        d.0.push(s.level);
-        d.string(&s.name);
-        d.string(&s.message);
-        d.string(&s.hardware_id);
-        d.u32(s.values.len() as u32);
-        for (key, value) in &s.values {
-            d.string(key);
-            d.string(value);
-        }
+    let mut m = Cdr::new();
+    m.header(t, "base_link");
+    m.u32(names.len() as u32);
+    for n in names {
+        m.string(n);
     }
-    d.0
+    let wheel = |j: &gpodo_traits::JointState| {
+        (
+            j.position_rad / units.position_scale,
+            j.rate_radps / units.rate_scale,
+        )
+    };
+    let all: Vec<(f64, f64)> = s
+        .wheels
+        .iter()
+        .map(wheel)
+        .chain(
+            s.steering
+                .iter()
+                .chain(&s.bogies)
+                .map(|j| (j.position_rad, j.rate_radps)),
+        )
+        .collect();
+    m.sequence(&all.iter().map(|j| j.0).collect::<Vec<_>>());
+    m.sequence(&all.iter().map(|j| j.1).collect::<Vec<_>>());
+    m.sequence(&[]);
+    m.0
 }
 
 /// An MCAP of ROS 2 `nav_msgs/msg/Odometry` topics, built in memory and
@@ -337,11 +151,6 @@ fn ros2_writer() -> Result<mcap::Writer<Cursor<Vec<u8>>>, mcap::McapError> {
         .profile("ros2")
         .chunk_size(Some(CHUNK_BYTES))
         .create(Cursor::new(Vec::new()))
-}
-
-/// The stamp of a log time (s): [`EPOCH_NS`] plus whole nanoseconds.
-pub(super) fn stamp_ns(time_secs: f64) -> u64 {
-    EPOCH_NS.saturating_add_signed((time_secs * 1e9).round() as i64)
 }
 
 fn joint_names(log: &RoverLog) -> Vec<String> {
@@ -621,57 +430,10 @@ pub fn write_mcap_with_camera(
     let mut frame_next = 0;
     for (k, (s, p)) in log.samples.iter().zip(&log.ground_truth).enumerate() {
         let t = stamp_ns(s.time_secs);
-        let mut m = Cdr::new();
-        m.header(t, "base_link");
-        m.u32(names.len() as u32);
-        for n in &names {
-            m.string(n);
-        }
-        let wheel = |j: &gpodo_traits::JointState| {
-            (
-                j.position_rad / units.position_scale,
-                j.rate_radps / units.rate_scale,
-            )
-        };
-        let all: Vec<(f64, f64)> = s
-            .wheels
-            .iter()
-            .map(wheel)
-            .chain(
-                s.steering
-                    .iter()
-                    .chain(&s.bogies)
-                    .map(|j| (j.position_rad, j.rate_radps)),
-            )
-            .collect();
-        m.sequence(&all.iter().map(|j| j.0).collect::<Vec<_>>());
-        m.sequence(&all.iter().map(|j| j.1).collect::<Vec<_>>());
-        m.sequence(&[]);
-
-        let imu_message = s.imu.map(|imu| {
-            let yaw = p.rotation.euler_angles().2;
-            let q = UnitQuaternion::from_euler_angles(imu.roll_rad, imu.pitch_rad, yaw);
-            let mut i = Cdr::new();
-            i.header(t, "base_link");
-            i.f64s(&[q.i, q.j, q.k, q.w]);
-            i.f64s(&[0.0; 9]);
-            i.f64s(imu.gyro_radps.as_slice());
-            i.f64s(&[0.0; 9]);
-            i.f64s(imu.accel_mps2.as_slice());
-            i.f64s(&[0.0; 9]);
-            i.0
-        });
-
-        let r = p.rotation;
-        let position = p.translation.vector;
+        let joint_state = joint_state_message(t, &names, s, units);
+        let imu_data = s.imu.map(|imu| imu_message(t, &imu, p));
         let g = pose_stamped(t, "world", p);
-
-        let mut f = Cdr::new();
-        f.u32(1);
-        f.header(t, "world");
-        f.string("base_link");
-        f.f64s(position.as_slice());
-        f.f64s(&[r.i, r.j, r.k, r.w]);
+        let f = tf_message(t, p);
 
         let mut out = Vec::new();
         if let Some(channel) = vo_channel {
@@ -691,11 +453,11 @@ pub fn write_mcap_with_camera(
                 frame_next += 1;
             }
         }
-        out.push((joints, m.0, t));
-        if let (Some(channel), Some(message)) = (imu, imu_message) {
+        out.push((joints, joint_state, t));
+        if let (Some(channel), Some(message)) = (imu, imu_data) {
             out.push((channel, message, t));
         }
-        out.extend([(pose, g, t), (tf, f.0, t)]);
+        out.extend([(pose, g, t), (tf, f, t)]);
         if let (Some(channel), Some(twist)) = (odom, s.odometry) {
             let o = odometry_message(t, "odom", "base_link", p, &[0.0; 36], &twist, &[0.0; 36]);
             out.push((channel, o, t));

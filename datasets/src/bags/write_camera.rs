@@ -7,7 +7,7 @@
 use gpodo_traits::CameraParams;
 use gpodo_vision::GrayImage;
 
-use super::write::{Cdr, HEADER, TIME, schema, stamp_ns};
+use super::cdr_write::{Cdr, HEADER, TIME, schema, stamp_ns};
 use crate::DatasetError;
 
 /// One rendered (or recorded) stereo pair: left, then right.

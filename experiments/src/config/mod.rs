@@ -23,11 +23,11 @@ mod validate;
 use std::path::PathBuf;
 
 use gpodo_datasets::residuals::ResidualConfig;
-use gpodo_datasets::sim::preset::Preset;
 use gpodo_frontends::FrontendParams;
 use gpodo_frontends::params::VoSpec;
 pub use gpodo_kinematics::spec::{AttitudeWithoutImu, MotionModelSpec};
 use gpodo_regressors::RegressorSpec;
+use gpodo_testbed::sim::preset::Preset;
 use serde::{Deserialize, Serialize};
 
 pub use bench::{BenchSettings, PrequentialSettings, RefitStart};
@@ -112,7 +112,7 @@ pub enum DatasetSpec {
         /// default) or `random` (drawn per seed with the same length and
         /// terrain statistics).
         #[serde(default)]
-        route: gpodo_datasets::sim::route::Route,
+        route: gpodo_testbed::sim::route::Route,
         /// Override of the preset's motion-capture jitter per frame (m), the
         /// white noise of the ground-truth positions: differenced over one
         /// 80-ms step it is most of a per-step residual's noise, over a 1-s

@@ -126,7 +126,10 @@ impl ExperimentConfig {
                     "at least one `train` and one `test` log",
                 ))
             }
-            _ => Ok(()),
+            DatasetSpec::Simulated { .. }
+            | DatasetSpec::Logs { .. }
+            | DatasetSpec::Bags { .. }
+            | DatasetSpec::ResidualTable { .. } => Ok(()),
         }
     }
 }

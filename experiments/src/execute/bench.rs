@@ -245,7 +245,12 @@ fn bench_one(
         label: label.clone(),
         source,
     };
-    crate::execute::fit::check_memory(spec, &label, &rows.train, crate::memory::available_bytes())?;
+    crate::execute::fit::check_memory(
+        spec,
+        &label,
+        &rows.train,
+        crate::util::memory::available_bytes(),
+    )?;
     tracing::info!(regressor = %label, n = rows.train.len(), "benchmarking");
     let mut model = spec.build()?;
     let fit = model.fit(&rows.train).map_err(wrap)?;

@@ -5,17 +5,16 @@
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
-use gpodo_datasets::camera::{GroundMaps, SceneSpec, SensorSpec};
+use gpodo_datasets::bags::frames::BagFrames;
 use gpodo_frontends::traverse::Traverse;
-use gpodo_frontends::vo::FrameRef;
-use gpodo_frontends::vo::stereo::StereoFrames;
+use gpodo_frontends::vo::stereo::{LocalMapPlacement, StereoFrames};
+use gpodo_testbed::camera::{FramePose, GroundMaps, RenderedFrames, SceneSpec, SensorSpec};
+use gpodo_traits::{CameraParams, FrameRef};
 use rayon::prelude::*;
 
-use crate::bag_frames::BagFrames;
 use crate::config::ExperimentConfig;
 use crate::error::PipelineError;
 use crate::execute::data::PreparedData;
-use crate::rendered_frames::RenderedFrames;
 
 /// A dataset's ground maps, built the first time a run asks for them (or
 /// why they could not be).
@@ -70,7 +69,12 @@ fn fixed_rate_frames(config: &ExperimentConfig, times: &[f64]) -> Vec<usize> {
         .iter()
         .filter_map(|s| match s.selector {
             SelectorSpec::FixedRate { fps } => FixedRate::new(fps).ok(),
-            _ => None,
+            SelectorSpec::ResidualSchedule(_)
+            | SelectorSpec::UncertaintyBudget(_)
+            | SelectorSpec::MaxGap { .. }
+            | SelectorSpec::Hysteresis { .. }
+            | SelectorSpec::Oracle(_)
+            | SelectorSpec::FrontLoaded(_) => None,
         })
         .flat_map(|mut selector| {
             times
@@ -152,18 +156,38 @@ fn camera_sources(
     Ok(traverses
         .iter()
         .map(|t| {
-            let source = RenderedFrames::from_traverse(
+            let source = RenderedFrames::new(
                 Arc::clone(&ground),
                 vo.camera,
                 SensorSpec::default(),
                 *seed,
-                t,
+                traverse_frame_poses(&vo.camera, t),
             );
-            Some(Arc::new(StereoFrames::with_orb(
-                vo.camera,
-                Arc::new(source),
-                vo.orb(&vo.camera),
-            )))
+            let true_poses = source.true_camera_poses();
+            let frames = StereoFrames::with_orb(vo.camera, Arc::new(source), vo.orb(&vo.camera));
+            Some(Arc::new(
+                if vo.local_map_placement == LocalMapPlacement::GroundTruth {
+                    frames.with_true_camera_poses(true_poses)
+                } else {
+                    frames
+                },
+            ))
         })
         .collect())
+}
+
+/// The rendered camera's pose for each frame of `traverse`'s camera
+/// stream: the traverse's ground truth at the frame's time, blurred by the
+/// motion over `camera`'s exposure centred there.
+pub(crate) fn traverse_frame_poses(camera: &CameraParams, traverse: &Traverse) -> Vec<FramePose> {
+    let half = 0.5 * camera.exposure_secs;
+    traverse
+        .camera_times_secs()
+        .iter()
+        .map(|&t| FramePose {
+            world_from_body: traverse.ground_truth_at(t),
+            exposure_motion: traverse.ground_truth_at(t - half).inverse()
+                * traverse.ground_truth_at(t + half),
+        })
+        .collect()
 }

@@ -3,18 +3,19 @@
 //! rows, and the rows standardised as the regressors see them.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use gpodo_frontends::tum::StampedPose;
 
+use gpodo_datasets::bags::import::TopicMap;
 use gpodo_datasets::log::{RoverLog, read_log_csv};
 use gpodo_datasets::residuals::{
     LogStep, ResidualConfig, StepWindows, log_steps, residual_dataset_from_steps,
 };
-use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_datasets::speed_check::{median_speed_ratio, unit_warning};
 use gpodo_datasets::table::{TableSpec, read_residual_table, split_fraction};
 use gpodo_kinematics::RoverDescription;
+use gpodo_testbed::sim::preset::SimulatorConfig;
 use gpodo_traits::Standardizer;
 use gpodo_traits::{MotionModel, ResidualDataset};
 
@@ -125,12 +126,13 @@ pub(crate) struct PreparedData {
     pub(crate) recorded_vo: BTreeMap<String, Vec<StampedPose>>,
     /// Per recording (log name), its stereo camera's frames, when the
     /// topic map names a `camera:`.
-    pub(crate) recorded_cameras: BTreeMap<String, std::sync::Arc<crate::bag_frames::BagFrames>>,
+    pub(crate) recorded_cameras:
+        BTreeMap<String, std::sync::Arc<gpodo_datasets::bags::frames::BagFrames>>,
     /// Where each soil lies (a simulated testbed only), for the simulated
     /// tracker's feature supply.
-    pub(crate) soils: Option<gpodo_datasets::sim::soil::SoilMap>,
+    pub(crate) soils: Option<gpodo_testbed::sim::soil::SoilMap>,
     /// The simulated testbed's terrain and seed, for the rendered camera.
-    pub(crate) terrain: Option<(gpodo_datasets::sim::terrain::Terrain, u64)>,
+    pub(crate) terrain: Option<(gpodo_testbed::sim::terrain::Terrain, u64)>,
     /// The gyro bias the simulator drew from (rad/s), for the odometry's
     /// covariance when the experiment leaves it unset.
     pub(crate) gyro_bias_radps: Option<f64>,
@@ -161,7 +163,12 @@ fn attitude_source(
                 attitude_without_imu: AttitudeWithoutImu::GroundTruth,
                 ..
             } => Attitude::GroundTruth,
-            _ => Attitude::Level,
+            MotionModelSpec::WeightedJacobian {
+                attitude_without_imu: AttitudeWithoutImu::Level,
+                ..
+            }
+            | MotionModelSpec::SkidSteer { .. }
+            | MotionModelSpec::ReportedOdometry { .. } => Attitude::Level,
         }),
     }
 }
@@ -410,118 +417,138 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             test,
             train_fraction,
             topics,
-        } => {
-            let imported = std::cell::RefCell::new(Vec::new());
-            let vo = std::cell::RefCell::new(BTreeMap::new());
-            let cameras = std::cell::RefCell::new(BTreeMap::new());
-            let read = |paths: &[PathBuf]| {
-                paths
-                    .iter()
-                    .map(|p| {
-                        let path = p.clone();
-                        let name = path
-                            .file_stem()
-                            .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
-                        let (mut log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
-                        if let Some(camera) = &topics.camera {
-                            let frames = recorded_camera(&path, camera, topics.skip_damaged, &report, &mut log)?;
-                            cameras.borrow_mut().insert(name.clone(), std::sync::Arc::new(frames));
-                        }
-                        tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
-                        imported.borrow_mut().push(import_summary(&name, &report));
-                        if !report.vo_poses.is_empty() {
-                            let poses = report
-                                .vo_poses
-                                .iter()
-                                .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
-                                .collect();
-                            vo.borrow_mut().insert(name.clone(), poses);
-                        }
-                        Ok(log)
-                    })
-                    .collect::<Result<Vec<_>, PipelineError>>()
-            };
-            let (mut train, mut test) = (read(train)?, read(test)?);
-            let mut vo = vo.into_inner();
-            let mut cameras = cameras.into_inner();
-            if let Some(fraction) = train_fraction {
-                // A held-out part replays its recording's VO and reads its
-                // recording's camera.
-                for log in &train {
-                    if let Some(poses) = vo.get(&log.name).cloned() {
-                        vo.insert(format!("{}-test", log.name), poses);
-                    }
-                    if let Some(frames) = cameras.get(&log.name).cloned() {
-                        cameras.insert(format!("{}-test", log.name), frames);
-                    }
-                }
-                let (mut kept, mut held_out) = (Vec::new(), Vec::new());
-                for log in &train {
-                    let (a, b) = log.split_in_time(*fraction)?;
-                    kept.push(a);
-                    held_out.push(b);
-                }
-                held_out.append(&mut test);
-                (train, test) = (kept, held_out);
-            }
-            let split = train_fraction.map_or_else(String::new, |f| {
-                format!(
-                    ", each training recording cut at {:.0} % of its duration (the rest tests)",
-                    100.0 * f
-                )
-            });
-            let source = format!(
-                "ROS bags at {} Hz, at most {} s bridged{split} ({})",
-                topics.rate_hz,
-                topics.max_gap_secs,
-                imported.into_inner().join("; ")
-            );
-            let mut prepared = from_logs(config, &train, &test, source, None)?;
-            prepared.recorded_vo = vo;
-            prepared.recorded_cameras = cameras;
-            Ok(prepared)
-        }
+        } => prepare_bags(config, train, test, *train_fraction, topics),
         DatasetSpec::ResidualTable {
             path,
             inputs,
             targets,
             train_fraction,
-        } => {
-            let spec = TableSpec {
-                inputs: inputs.clone(),
-                targets: targets.clone(),
-            };
-            let data = read_residual_table(&path.clone(), &spec)?;
-            let (train, test) = split_fraction(&data, *train_fraction)?;
-            Ok(PreparedData {
-                summary: DatasetSummary {
-                    source: format!("residual table {}", path.display()),
-                    train_runs: Vec::new(),
-                    test_runs: Vec::new(),
-                    n_train: train.len(),
-                    n_test: test.len(),
-                    input_names: train.input_names.clone(),
-                    target_names: train.target_names.clone(),
-                    terrain_max_slope_deg: None,
-                    attitude: Attitude::Imu,
-                    yaw_rate_without_imu: None,
-                    speed_ratio: None,
-                },
-                train,
-                test,
-                test_windows: None,
-                motion_model: None,
-                dead_reckoning: Vec::new(),
-                test_logs: Vec::new(),
-                model: None,
-                recorded_vo: BTreeMap::new(),
-                recorded_cameras: BTreeMap::new(),
-                soils: None,
-                terrain: None,
-                gyro_bias_radps: None,
-            })
-        }
+        } => prepare_table(path, inputs.as_ref(), targets, *train_fraction),
     }
+}
+
+/// A `bags` dataset: each recording imported through the topic map, with
+/// its recorded VO and camera; a training recording cut at
+/// `train_fraction` gives its held-out part to the tests.
+fn prepare_bags(
+    config: &ExperimentConfig,
+    train: &[PathBuf],
+    test: &[PathBuf],
+    train_fraction: Option<f64>,
+    topics: &TopicMap,
+) -> Result<PreparedData, PipelineError> {
+    let imported = std::cell::RefCell::new(Vec::new());
+    let vo = std::cell::RefCell::new(BTreeMap::new());
+    let cameras = std::cell::RefCell::new(BTreeMap::new());
+    let read = |paths: &[PathBuf]| {
+        paths
+            .iter()
+            .map(|p| {
+                let path = p.clone();
+                let name = path
+                    .file_stem()
+                    .map_or_else(|| "recording".into(), |s| s.to_string_lossy().into_owned());
+                let (mut log, report) = gpodo_datasets::bags::import::import_bag(&path, &name, topics)?;
+                if let Some(camera) = &topics.camera {
+                    let frames = recorded_camera(&path, camera, topics.skip_damaged, &report, &mut log)?;
+                    cameras.borrow_mut().insert(name.clone(), std::sync::Arc::new(frames));
+                }
+                tracing::info!(bag = %path.display(), rows = report.rows, dropped = report.rows_dropped, "bag imported");
+                imported.borrow_mut().push(import_summary(&name, &report));
+                if !report.vo_poses.is_empty() {
+                    let poses = report
+                        .vo_poses
+                        .iter()
+                        .map(|&(time_secs, pose)| StampedPose { time_secs, pose })
+                        .collect();
+                    vo.borrow_mut().insert(name.clone(), poses);
+                }
+                Ok(log)
+            })
+            .collect::<Result<Vec<_>, PipelineError>>()
+    };
+    let (mut train, mut test) = (read(train)?, read(test)?);
+    let mut vo = vo.into_inner();
+    let mut cameras = cameras.into_inner();
+    if let Some(fraction) = train_fraction {
+        // A held-out part replays its recording's VO and reads its
+        // recording's camera.
+        for log in &train {
+            if let Some(poses) = vo.get(&log.name).cloned() {
+                vo.insert(format!("{}-test", log.name), poses);
+            }
+            if let Some(frames) = cameras.get(&log.name).cloned() {
+                cameras.insert(format!("{}-test", log.name), frames);
+            }
+        }
+        let (mut kept, mut held_out) = (Vec::new(), Vec::new());
+        for log in &train {
+            let (a, b) = log.split_in_time(fraction)?;
+            kept.push(a);
+            held_out.push(b);
+        }
+        held_out.append(&mut test);
+        (train, test) = (kept, held_out);
+    }
+    let split = train_fraction.map_or_else(String::new, |f| {
+        format!(
+            ", each training recording cut at {:.0} % of its duration (the rest tests)",
+            100.0 * f
+        )
+    });
+    let source = format!(
+        "ROS bags at {} Hz, at most {} s bridged{split} ({})",
+        topics.rate_hz,
+        topics.max_gap_secs,
+        imported.into_inner().join("; ")
+    );
+    let mut prepared = from_logs(config, &train, &test, source, None)?;
+    prepared.recorded_vo = vo;
+    prepared.recorded_cameras = cameras;
+    Ok(prepared)
+}
+
+/// A residual table: its rows split at `train_fraction`, with no logs
+/// behind them.
+fn prepare_table(
+    path: &Path,
+    inputs: Option<&Vec<String>>,
+    targets: &[String],
+    train_fraction: f64,
+) -> Result<PreparedData, PipelineError> {
+    let spec = TableSpec {
+        inputs: inputs.cloned(),
+        targets: targets.to_vec(),
+    };
+    let data = read_residual_table(path, &spec)?;
+    let (train, test) = split_fraction(&data, train_fraction)?;
+    Ok(PreparedData {
+        summary: DatasetSummary {
+            source: format!("residual table {}", path.display()),
+            train_runs: Vec::new(),
+            test_runs: Vec::new(),
+            n_train: train.len(),
+            n_test: test.len(),
+            input_names: train.input_names.clone(),
+            target_names: train.target_names.clone(),
+            terrain_max_slope_deg: None,
+            attitude: Attitude::Imu,
+            yaw_rate_without_imu: None,
+            speed_ratio: None,
+        },
+        train,
+        test,
+        test_windows: None,
+        motion_model: None,
+        dead_reckoning: Vec::new(),
+        test_logs: Vec::new(),
+        model: None,
+        recorded_vo: BTreeMap::new(),
+        recorded_cameras: BTreeMap::new(),
+        soils: None,
+        terrain: None,
+        gyro_bias_radps: None,
+    })
 }
 
 /// The stereo camera of the bag at `path` as frames for the stereo VO, on
@@ -533,7 +560,7 @@ fn recorded_camera(
     skip_damaged: bool,
     report: &gpodo_datasets::bags::import::ImportReport,
     log: &mut RoverLog,
-) -> Result<crate::bag_frames::BagFrames, PipelineError> {
+) -> Result<gpodo_datasets::bags::frames::BagFrames, PipelineError> {
     use gpodo_datasets::bags::OnDamage;
     let on_damage = if skip_damaged {
         OnDamage::Skip
@@ -544,7 +571,7 @@ fn recorded_camera(
         .map_err(gpodo_datasets::bags::import::ImportError::from)?;
     let base_ns = (report.start_epoch_secs * 1e9).round() as i64;
     // Stamps are whole nanoseconds; the base carries an f64's rounding.
-    let frames = crate::bag_frames::BagFrames::new(recording, base_ns, 1e-3);
+    let frames = gpodo_datasets::bags::frames::BagFrames::new(recording, base_ns, 1e-3);
     let (first, last) = match (log.samples.first(), log.samples.last()) {
         (Some(a), Some(b)) => (a.time_secs, b.time_secs),
         _ => (0.0, 0.0),

@@ -6,9 +6,9 @@
 //! over ±[`RATE_HALF_WINDOW_SECS`] around the frame. See
 //! `frontends/README.md` for the model and its sources.
 
-use gpodo_datasets::sim::soil::SoilMap;
 use gpodo_frontends::traverse::Traverse;
 use gpodo_frontends::vo::CameraParams;
+use gpodo_testbed::sim::soil::SoilMap;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 /// Half the window over which a frame's body rate is measured (s): long

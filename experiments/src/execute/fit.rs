@@ -13,7 +13,7 @@ pub(crate) fn fit_and_score(
     progress: Option<std::sync::Arc<dyn gpodo_traits::FitProgress>>,
 ) -> Result<(RegressorResult, Box<dyn ResidualRegressor>), PipelineError> {
     let (label, train) = (spec.label(), &rows.train);
-    check_memory(spec, &label, train, crate::memory::available_bytes())?;
+    check_memory(spec, &label, train, crate::util::memory::available_bytes())?;
     tracing::info!(regressor = %label, n = train.len(), "fitting");
     let mut model = spec.build()?;
     model.set_progress(progress);
@@ -52,8 +52,8 @@ pub(crate) fn check_memory(
         (Some(needed), Some(available)) if needed > available => Err(PipelineError::TooLarge {
             label: label.to_string(),
             rows: n,
-            needed: crate::memory::show_bytes(needed),
-            available: crate::memory::show_bytes(available),
+            needed: crate::util::memory::show_bytes(needed),
+            available: crate::util::memory::show_bytes(available),
         }),
         _ => Ok(()),
     }

@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use gpodo_datasets::sim::preset::SimulatorConfig;
 use gpodo_regressors::metrics::Evaluation;
 use gpodo_regressors::model_file::{ModelFile, ModelFileError, Provenance, RowRecipe};
+use gpodo_testbed::sim::preset::SimulatorConfig;
 use gpodo_traits::{Predictions, SampleMatrix};
 
 use crate::config::{DatasetSpec, ExperimentConfig};
@@ -78,7 +78,12 @@ pub fn fit_model(config: &ExperimentConfig, label: &str) -> Result<FittedModel, 
         code_version: code_version(),
         training_rows: rows.train.len(),
     };
-    crate::execute::fit::check_memory(spec, label, &rows.train, crate::memory::available_bytes())?;
+    crate::execute::fit::check_memory(
+        spec,
+        label,
+        &rows.train,
+        crate::util::memory::available_bytes(),
+    )?;
     let (mut file, model) = ModelFile::fit(spec, &rows.train, Some(scaler), provenance)?;
     file.label = label.to_string();
     file.rows = row_recipe(config);
@@ -185,7 +190,7 @@ pub fn predict_csv(model: &Path, input: &Path, out: &Path) -> Result<usize, Mode
         text.push_str(&values.join(","));
         text.push('\n');
     }
-    crate::output::write_atomically(out, text.as_bytes()).map_err(|e| ModelError::Csv {
+    crate::util::output::write_atomically(out, text.as_bytes()).map_err(|e| ModelError::Csv {
         path: out.to_path_buf(),
         detail: e.to_string(),
     })?;

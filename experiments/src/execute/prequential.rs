@@ -119,7 +119,7 @@ fn fit_baseline(
         baseline,
         &baseline.label(),
         data,
-        crate::memory::available_bytes(),
+        crate::util::memory::available_bytes(),
     )?;
     let t = Instant::now();
     let fitted = fit_untimed(baseline, data, warm)?;

@@ -16,8 +16,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::ExperimentConfig;
 use crate::execute::results::ExperimentResults;
-use crate::output::write_atomically;
 use crate::plan::RunSpec;
+use crate::util::output::write_atomically;
 
 /// Table I figures of one regressor in one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -142,7 +142,7 @@ fn fit_shared(
     // Without a spinner the fit still hears a stop (Ctrl-C).
     let sink: Option<Arc<dyn gpodo_traits::FitProgress>> = Some(match spinner.as_ref() {
         Some(s) => Arc::clone(s) as Arc<dyn gpodo_traits::FitProgress>,
-        None => Arc::new(crate::stop::StopOnRequest),
+        None => Arc::new(crate::util::stop::StopOnRequest),
     });
     let (mut result, model) = if absolute {
         let rows = ModelRows {
@@ -244,7 +244,7 @@ impl SharedWork {
         fits.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let run = |(key, (spec, absolute, p)): (String, FitJob<'_>)| {
             let fitted = fit_shared(spec, absolute, &p, progress).map_err(|e| {
-                if crate::stop::requested() {
+                if crate::util::stop::requested() {
                     tracing::info!(regressor = %spec.label(), "fit stopped");
                 } else {
                     tracing::warn!(regressor = %spec.label(), error = %e, "fit failed; the runs that use it are recorded as failed");
@@ -258,7 +258,7 @@ impl SharedWork {
         // run one at a time: each checks the memory it needs before it
         // starts, a check two at once could both pass. The rest then run in
         // parallel.
-        let available = crate::memory::available_bytes();
+        let available = crate::util::memory::available_bytes();
         let threads = rayon::current_num_threads() as u64;
         let (large, rest): (Vec<_>, Vec<_>) = fits
             .into_iter()
@@ -414,7 +414,7 @@ impl gpodo_traits::FitProgress for FitSpinner {
             "{}: start {start}, iteration {iteration}, objective {objective:.2}",
             self.label
         ));
-        crate::stop::control_flow()
+        crate::util::stop::control_flow()
     }
 }
 

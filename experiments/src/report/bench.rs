@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use crate::execute::bench::{BenchResults, BenchRow};
 use crate::execute::latency::Latency;
 use crate::execute::prequential::FitRecord;
-use crate::output::write_file;
 use crate::report::table::{Align, Table};
+use crate::util::output::write_file;
 
 /// Writes `bench.md` and `bench.json` into `dir` and returns their paths.
 ///

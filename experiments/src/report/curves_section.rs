@@ -111,140 +111,16 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
             continue;
         };
         let suffix = if many { format!("_{g}") } else { String::new() };
-        let s = &mut out.markdown;
-        let _ = writeln!(
-            s,
-            "## Frames-versus-error curves{}\n\nEach curve is one policy with one knob varied; every point is a scheme run on all {} seeds ({:?}), all schemes sharing each seed's data and tracker streams. Mean over seeds with a 95 % percentile-bootstrap interval ({RESAMPLES} resamples of seeds). Figure: `plots/curves{suffix}.svg` (one panel per policy, its back end's fixed rates in grey).\n",
-            if many {
-                format!(" (`{setting}`)")
-            } else {
-                String::new()
-            },
-            curves.seeds.len(),
-            curves.seeds
-        );
-        let mut points = Table::new(&[
-            "curve",
-            "scheme",
-            "frames",
-            "compute [s]",
-            "RMSE [m] (95 % CI)",
-        ])
-        .align(&[1], Align::Left)
-        .with_csv(&[
-            "curve",
-            "back_end",
-            "scheme",
-            "frames_mean",
-            "compute_mean_s",
-            "rmse_mean_m",
-            "rmse_low_m",
-            "rmse_high_m",
-        ]);
+        let label = if many {
+            format!(" (`{setting}`)")
+        } else {
+            String::new()
+        };
+        write_intro(&mut out.markdown, &label, &curves, &suffix);
         let summaries: Vec<Vec<PointSummary>> =
             curves.curves.iter().map(|c| summarise(c, seed)).collect();
-        for (c, summary) in curves.curves.iter().zip(&summaries) {
-            for p in summary {
-                points.push(vec![
-                    c.name.clone(),
-                    p.label.clone(),
-                    format!("{:.0}", p.frames),
-                    format!("{:.1}", p.compute),
-                    interval(&p.rmse, 3),
-                ]);
-                points.push_csv(vec![
-                    c.name.clone(),
-                    c.back_end.clone(),
-                    p.label.clone(),
-                    p.frames.to_string(),
-                    p.compute.to_string(),
-                    p.rmse.estimate.to_string(),
-                    p.rmse.low.to_string(),
-                    p.rmse.high.to_string(),
-                ]);
-            }
-        }
-        let baseline = curves.baseline.as_ref();
-        let baseline_name =
-            baseline.map_or("the first scheme".to_string(), |(l, _)| format!("`{l}`"));
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-        let mut reach = Table::new(&[
-            "curve".to_string(),
-            "back end".to_string(),
-            "2.5 fps RMSE of the back end [m]".to_string(),
-            "frames to within 10 % of it (95 % CI)".to_string(),
-            format!(
-                "frames to within 10 % of {baseline_name} ({:.3} m)",
-                baseline.map_or(f64::NAN, |(_, r)| mean(r))
-            ),
-        ])
-        .align(&[1], Align::Left)
-        .with_csv(&[
-            "curve",
-            "back_end",
-            "reference",
-            "reference_rmse_m",
-            "outcome",
-            "frames",
-            "frames_low",
-            "frames_high",
-            "share_of_resamples_reaching_or_best_ratio",
-        ]);
-        for c in &curves.curves {
-            let own = c
-                .reference
-                .as_ref()
-                .map(|r| (r, reach_cells(frames_to_reach(c, r, seed))));
-            let paper = baseline.map(|(_, r)| reach_cells(frames_to_reach(c, r, seed)));
-            reach.push(vec![
-                c.name.clone(),
-                c.back_end.clone(),
-                own.as_ref()
-                    .map_or("–".into(), |(r, _)| format!("{:.3}", mean(r))),
-                own.as_ref()
-                    .map_or("–".into(), |(_, (cell, _))| cell.clone()),
-                paper.as_ref().map_or("–".into(), |(cell, _)| cell.clone()),
-            ]);
-            let mut rows = Vec::new();
-            if let Some((r, (_, csv))) = &own {
-                rows.push(("back end 2.5 fps".to_string(), mean(r), csv.clone()));
-            }
-            if let (Some((label, r)), Some((_, csv))) = (baseline, &paper) {
-                rows.push((label.clone(), mean(r), csv.clone()));
-            }
-            for (reference, rmse, csv) in rows {
-                let mut row = vec![
-                    c.name.clone(),
-                    c.back_end.clone(),
-                    reference,
-                    rmse.to_string(),
-                ];
-                row.extend(csv);
-                reach.push_csv(row);
-            }
-        }
-        let mut budget = Table::new(&[
-            "curve",
-            "frames",
-            "seeds in range",
-            "RMSE [m] (95 % CI)",
-            "fixed rate, same back end [m]",
-            "Δ RMSE [m] (95 % CI)",
-            "gating vs fixed rate",
-        ])
-        .align(&[6], Align::Left)
-        .with_csv(&[
-            "curve",
-            "budget_frames",
-            "seeds",
-            "rmse_mean_m",
-            "rmse_low_m",
-            "rmse_high_m",
-            "fixed_mean_m",
-            "difference_mean_m",
-            "difference_low_m",
-            "difference_high_m",
-        ]);
+        let points = points_table(&curves, &summaries);
+        let reach = reach_table(&curves, seed);
         let mut paired = Table::new(&["curve"]).with_csv(&[
             "curve",
             "against",
@@ -254,132 +130,9 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
             "against_rmse_m",
             "difference_m",
         ]);
-        for c in &curves.curves {
-            let fixed = if c.fixed_rate {
-                None
-            } else {
-                curves.fixed_rate_of(&c.back_end)
-            };
-            if !c.fixed_rate && fixed.is_none() {
-                continue;
-            }
-            for b in BUDGETS {
-                let r = at_budget(c, fixed, &curves.seeds, b, seed);
-                let Some(mean) = r.rmse_mean else { continue };
-                let fixed_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
-                budget.push(vec![
-                    c.name.clone(),
-                    format!("{b:.0}"),
-                    format!("{}/{}", r.seeds.len(), curves.seeds.len()),
-                    interval(&mean, 3),
-                    format!("{fixed_mean:.3}"),
-                    r.difference
-                        .as_ref()
-                        .map_or("– (is the fixed rate)".into(), |d| {
-                            format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
-                        }),
-                    r.difference
-                        .as_ref()
-                        .map_or("–", |d| verdict(d, r.seeds.len()))
-                        .to_string(),
-                ]);
-                let d = r.difference.unwrap_or(Interval {
-                    estimate: 0.0,
-                    low: 0.0,
-                    high: 0.0,
-                    defined: 1.0,
-                });
-                budget.push_csv(vec![
-                    c.name.clone(),
-                    b.to_string(),
-                    r.seeds.len().to_string(),
-                    mean.estimate.to_string(),
-                    mean.low.to_string(),
-                    mean.high.to_string(),
-                    fixed_mean.to_string(),
-                    d.estimate.to_string(),
-                    d.low.to_string(),
-                    d.high.to_string(),
-                ]);
-                for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
-                    paired.push_csv(vec![
-                        c.name.clone(),
-                        fixed.map_or(String::new(), |f| f.name.clone()),
-                        b.to_string(),
-                        s.to_string(),
-                        rm.to_string(),
-                        f.to_string(),
-                        (rm - f).to_string(),
-                    ]);
-                }
-            }
-        }
-        let mut twin = Table::new(&[
-            "curve",
-            "zero-residual twin",
-            "frames",
-            "seeds in range",
-            "RMSE [m]",
-            "twin RMSE [m]",
-            "Δ RMSE [m] (95 % CI)",
-            "regressor vs zero residuals",
-        ])
-        .align(&[1, 7], Align::Left)
-        .with_csv(&[
-            "curve",
-            "twin",
-            "budget_frames",
-            "seeds",
-            "rmse_mean_m",
-            "twin_mean_m",
-            "difference_mean_m",
-            "difference_low_m",
-            "difference_high_m",
-        ]);
-        for c in &curves.curves {
-            let Some(z) = curves.zero_twin_of(c) else {
-                continue;
-            };
-            for b in BUDGETS {
-                let r = at_budget(c, Some(z), &curves.seeds, b, seed);
-                let (Some(m), Some(d)) = (r.rmse_mean, r.difference) else {
-                    continue;
-                };
-                let twin_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
-                twin.push(vec![
-                    c.name.clone(),
-                    z.name.clone(),
-                    format!("{b:.0}"),
-                    format!("{}/{}", r.seeds.len(), curves.seeds.len()),
-                    format!("{:.3}", m.estimate),
-                    format!("{twin_mean:.3}"),
-                    format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high),
-                    verdict(&d, r.seeds.len()).to_string(),
-                ]);
-                twin.push_csv(vec![
-                    c.name.clone(),
-                    z.name.clone(),
-                    b.to_string(),
-                    r.seeds.len().to_string(),
-                    m.estimate.to_string(),
-                    twin_mean.to_string(),
-                    d.estimate.to_string(),
-                    d.low.to_string(),
-                    d.high.to_string(),
-                ]);
-                for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
-                    paired.push_csv(vec![
-                        c.name.clone(),
-                        z.name.clone(),
-                        b.to_string(),
-                        s.to_string(),
-                        rm.to_string(),
-                        f.to_string(),
-                        (rm - f).to_string(),
-                    ]);
-                }
-            }
-        }
+        let budget = budget_table(&curves, seed, &mut paired);
+        let twin = twin_table(&curves, seed, &mut paired);
+        let s = &mut out.markdown;
         let _ = writeln!(s, "Points of every curve:\n\n{}", points.markdown());
         let _ = writeln!(
             s,
@@ -409,25 +162,313 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
             .push((format!("curves_at_budget{suffix}.csv"), budget));
         out.tables
             .push((format!("curves_paired{suffix}.csv"), paired));
-        let drawn = |c: &Curve| -> Option<(&str, &[PointSummary])> {
-            let i = curves.curves.iter().position(|x| x.name == c.name)?;
-            Some((curves.curves[i].name.as_str(), summaries[i].as_slice()))
-        };
-        let panels: Vec<Panel<'_>> = curves
-            .curves
-            .iter()
-            .filter(|c| !c.fixed_rate)
-            .filter_map(|c| {
-                let control = curves.fixed_rate_of(&c.back_end).and_then(&drawn);
-                Some((drawn(c)?, control))
-            })
-            .collect();
-        match curves_svg(&panels) {
-            Ok(svg) => out.figures.push((format!("curves{suffix}.svg"), svg)),
-            Err(e) => {
-                let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");
-            }
+        if let Err(e) = draw_figure(&mut out, &curves, &summaries, &suffix) {
+            let _ = writeln!(out.markdown, "(The figure could not be drawn: {e}.)\n");
         }
     }
     (!out.markdown.is_empty()).then_some(out)
+}
+
+/// The section's heading and what its numbers are.
+fn write_intro(s: &mut String, label: &str, curves: &Curves, suffix: &str) {
+    let _ = writeln!(
+        s,
+        "## Frames-versus-error curves{}\n\nEach curve is one policy with one knob varied; every point is a scheme run on all {} seeds ({:?}), all schemes sharing each seed's data and tracker streams. Mean over seeds with a 95 % percentile-bootstrap interval ({RESAMPLES} resamples of seeds). Figure: `plots/curves{suffix}.svg` (one panel per policy, its back end's fixed rates in grey).\n",
+        label,
+        curves.seeds.len(),
+        curves.seeds
+    );
+}
+
+/// Every point of every curve: frames, compute and RMSE over seeds.
+fn points_table(curves: &Curves, summaries: &[Vec<PointSummary>]) -> Table {
+    let mut points = Table::new(&[
+        "curve",
+        "scheme",
+        "frames",
+        "compute [s]",
+        "RMSE [m] (95 % CI)",
+    ])
+    .align(&[1], Align::Left)
+    .with_csv(&[
+        "curve",
+        "back_end",
+        "scheme",
+        "frames_mean",
+        "compute_mean_s",
+        "rmse_mean_m",
+        "rmse_low_m",
+        "rmse_high_m",
+    ]);
+    for (c, summary) in curves.curves.iter().zip(summaries) {
+        for p in summary {
+            points.push(vec![
+                c.name.clone(),
+                p.label.clone(),
+                format!("{:.0}", p.frames),
+                format!("{:.1}", p.compute),
+                interval(&p.rmse, 3),
+            ]);
+            points.push_csv(vec![
+                c.name.clone(),
+                c.back_end.clone(),
+                p.label.clone(),
+                p.frames.to_string(),
+                p.compute.to_string(),
+                p.rmse.estimate.to_string(),
+                p.rmse.low.to_string(),
+                p.rmse.high.to_string(),
+            ]);
+        }
+    }
+    points
+}
+
+/// Table (a): the frames each curve needs to come within 10 % of its own
+/// back end's 2.5 fps RMSE, and of the experiment's first scheme.
+fn reach_table(curves: &Curves, seed: u64) -> Table {
+    let baseline = curves.baseline.as_ref();
+    let baseline_name = baseline.map_or("the first scheme".to_string(), |(l, _)| format!("`{l}`"));
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let mut reach = Table::new(&[
+        "curve".to_string(),
+        "back end".to_string(),
+        "2.5 fps RMSE of the back end [m]".to_string(),
+        "frames to within 10 % of it (95 % CI)".to_string(),
+        format!(
+            "frames to within 10 % of {baseline_name} ({:.3} m)",
+            baseline.map_or(f64::NAN, |(_, r)| mean(r))
+        ),
+    ])
+    .align(&[1], Align::Left)
+    .with_csv(&[
+        "curve",
+        "back_end",
+        "reference",
+        "reference_rmse_m",
+        "outcome",
+        "frames",
+        "frames_low",
+        "frames_high",
+        "share_of_resamples_reaching_or_best_ratio",
+    ]);
+    for c in &curves.curves {
+        let own = c
+            .reference
+            .as_ref()
+            .map(|r| (r, reach_cells(frames_to_reach(c, r, seed))));
+        let paper = baseline.map(|(_, r)| reach_cells(frames_to_reach(c, r, seed)));
+        reach.push(vec![
+            c.name.clone(),
+            c.back_end.clone(),
+            own.as_ref()
+                .map_or("–".into(), |(r, _)| format!("{:.3}", mean(r))),
+            own.as_ref()
+                .map_or("–".into(), |(_, (cell, _))| cell.clone()),
+            paper.as_ref().map_or("–".into(), |(cell, _)| cell.clone()),
+        ]);
+        let mut rows = Vec::new();
+        if let Some((r, (_, csv))) = &own {
+            rows.push(("back end 2.5 fps".to_string(), mean(r), csv.clone()));
+        }
+        if let (Some((label, r)), Some((_, csv))) = (baseline, &paper) {
+            rows.push((label.clone(), mean(r), csv.clone()));
+        }
+        for (reference, rmse, csv) in rows {
+            let mut row = vec![
+                c.name.clone(),
+                c.back_end.clone(),
+                reference,
+                rmse.to_string(),
+            ];
+            row.extend(csv);
+            reach.push_csv(row);
+        }
+    }
+    reach
+}
+
+/// Table (b): RMSE at the paper's budgets, paired per seed with the fixed
+/// rate of the same back end; each seed's pair goes into `paired`.
+fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
+    let mut budget = Table::new(&[
+        "curve",
+        "frames",
+        "seeds in range",
+        "RMSE [m] (95 % CI)",
+        "fixed rate, same back end [m]",
+        "Δ RMSE [m] (95 % CI)",
+        "gating vs fixed rate",
+    ])
+    .align(&[6], Align::Left)
+    .with_csv(&[
+        "curve",
+        "budget_frames",
+        "seeds",
+        "rmse_mean_m",
+        "rmse_low_m",
+        "rmse_high_m",
+        "fixed_mean_m",
+        "difference_mean_m",
+        "difference_low_m",
+        "difference_high_m",
+    ]);
+    for c in &curves.curves {
+        let fixed = if c.fixed_rate {
+            None
+        } else {
+            curves.fixed_rate_of(&c.back_end)
+        };
+        if !c.fixed_rate && fixed.is_none() {
+            continue;
+        }
+        for b in BUDGETS {
+            let r = at_budget(c, fixed, &curves.seeds, b, seed);
+            let Some(mean) = r.rmse_mean else { continue };
+            let fixed_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
+            budget.push(vec![
+                c.name.clone(),
+                format!("{b:.0}"),
+                format!("{}/{}", r.seeds.len(), curves.seeds.len()),
+                interval(&mean, 3),
+                format!("{fixed_mean:.3}"),
+                r.difference
+                    .as_ref()
+                    .map_or("– (is the fixed rate)".into(), |d| {
+                        format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
+                    }),
+                r.difference
+                    .as_ref()
+                    .map_or("–", |d| verdict(d, r.seeds.len()))
+                    .to_string(),
+            ]);
+            let d = r.difference.unwrap_or(Interval {
+                estimate: 0.0,
+                low: 0.0,
+                high: 0.0,
+                defined: 1.0,
+            });
+            budget.push_csv(vec![
+                c.name.clone(),
+                b.to_string(),
+                r.seeds.len().to_string(),
+                mean.estimate.to_string(),
+                mean.low.to_string(),
+                mean.high.to_string(),
+                fixed_mean.to_string(),
+                d.estimate.to_string(),
+                d.low.to_string(),
+                d.high.to_string(),
+            ]);
+            for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
+                paired.push_csv(vec![
+                    c.name.clone(),
+                    fixed.map_or(String::new(), |f| f.name.clone()),
+                    b.to_string(),
+                    s.to_string(),
+                    rm.to_string(),
+                    f.to_string(),
+                    (rm - f).to_string(),
+                ]);
+            }
+        }
+    }
+    budget
+}
+
+/// Table (c): each curve against its zero-residual twin at equal frames;
+/// each seed's pair goes into `paired`.
+fn twin_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
+    let mut twin = Table::new(&[
+        "curve",
+        "zero-residual twin",
+        "frames",
+        "seeds in range",
+        "RMSE [m]",
+        "twin RMSE [m]",
+        "Δ RMSE [m] (95 % CI)",
+        "regressor vs zero residuals",
+    ])
+    .align(&[1, 7], Align::Left)
+    .with_csv(&[
+        "curve",
+        "twin",
+        "budget_frames",
+        "seeds",
+        "rmse_mean_m",
+        "twin_mean_m",
+        "difference_mean_m",
+        "difference_low_m",
+        "difference_high_m",
+    ]);
+    for c in &curves.curves {
+        let Some(z) = curves.zero_twin_of(c) else {
+            continue;
+        };
+        for b in BUDGETS {
+            let r = at_budget(c, Some(z), &curves.seeds, b, seed);
+            let (Some(m), Some(d)) = (r.rmse_mean, r.difference) else {
+                continue;
+            };
+            let twin_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
+            twin.push(vec![
+                c.name.clone(),
+                z.name.clone(),
+                format!("{b:.0}"),
+                format!("{}/{}", r.seeds.len(), curves.seeds.len()),
+                format!("{:.3}", m.estimate),
+                format!("{twin_mean:.3}"),
+                format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high),
+                verdict(&d, r.seeds.len()).to_string(),
+            ]);
+            twin.push_csv(vec![
+                c.name.clone(),
+                z.name.clone(),
+                b.to_string(),
+                r.seeds.len().to_string(),
+                m.estimate.to_string(),
+                twin_mean.to_string(),
+                d.estimate.to_string(),
+                d.low.to_string(),
+                d.high.to_string(),
+            ]);
+            for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
+                paired.push_csv(vec![
+                    c.name.clone(),
+                    z.name.clone(),
+                    b.to_string(),
+                    s.to_string(),
+                    rm.to_string(),
+                    f.to_string(),
+                    (rm - f).to_string(),
+                ]);
+            }
+        }
+    }
+    twin
+}
+
+/// The figure: one panel per policy, its back end's fixed rate in grey.
+fn draw_figure(
+    out: &mut CurvesSection,
+    curves: &Curves,
+    summaries: &[Vec<PointSummary>],
+    suffix: &str,
+) -> Result<(), String> {
+    let drawn = |c: &Curve| -> Option<(&str, &[PointSummary])> {
+        let i = curves.curves.iter().position(|x| x.name == c.name)?;
+        Some((curves.curves[i].name.as_str(), summaries[i].as_slice()))
+    };
+    let panels: Vec<Panel<'_>> = curves
+        .curves
+        .iter()
+        .filter(|c| !c.fixed_rate)
+        .filter_map(|c| {
+            let control = curves.fixed_rate_of(&c.back_end).and_then(&drawn);
+            Some((drawn(c)?, control))
+        })
+        .collect();
+    let svg = curves_svg(&panels).map_err(|e| e.to_string())?;
+    out.figures.push((format!("curves{suffix}.svg"), svg));
+    Ok(())
 }

@@ -10,9 +10,9 @@ use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::tum::{StampedPose, format_tum};
 
 use crate::execute::results::ExperimentResults;
-use crate::output::{slug, write_file};
 use crate::report::run::markdown;
 use crate::report::{loss_strips, plots};
+use crate::util::output::{slug, write_file};
 
 /// Writes `report.md` and `metrics.json` into `dir` (created if needed),
 /// the residual rows, and with schemes the trajectories and (when `plots`)

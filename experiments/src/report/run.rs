@@ -132,7 +132,12 @@ fn clamped(reg: &RegressorResult) -> Option<(&'static str, &'static str, usize, 
             ("m", "inducing points", "inducing_points", p.inducing.count)
         }
         gpodo_regressors::RegressorSpec::Knn(p) => ("k", "neighbours", "k", p.k),
-        _ => return None,
+        gpodo_regressors::RegressorSpec::Zero { .. }
+        | gpodo_regressors::RegressorSpec::ExactGp(_)
+        | gpodo_regressors::RegressorSpec::Ilgr(_)
+        | gpodo_regressors::RegressorSpec::SparseSpectrum(_)
+        | gpodo_regressors::RegressorSpec::StreamingSparseGp(_)
+        | gpodo_regressors::RegressorSpec::External(_) => return None,
     };
     let used = reg
         .fit

@@ -11,13 +11,13 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::execute::records::{RecordError, RunRecord, read_records, record_files};
-use crate::output::write_atomically;
 use crate::plan::PlanFile;
 use crate::report::aggregate::{ablations, table_one, table_two, tradeoff_svg};
 use crate::report::curves_section::curves_section;
 use crate::report::sensitivity::sensitivity_section;
 use crate::report::sensitivity_plot::sensitivity_svg;
 use crate::report::table::Table;
+use crate::util::output::write_atomically;
 
 pub use crate::report::aggregate::Stat;
 
@@ -174,12 +174,98 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
     let tables_dir = dir.join("tables");
     std::fs::create_dir_all(&tables_dir).map_err(|e| io(&tables_dir, e))?;
     let records = &merged.records;
+    let mut s = String::new();
+    write_header(&mut s, &merged);
+    s.push('\n');
+    let write_table = |file: &str, table: &Table| -> Result<(), ReportError> {
+        let path = tables_dir.join(file);
+        write_atomically(&path, table.csv_text().as_bytes()).map_err(|e| io(&path, e))
+    };
+    if let Some(t) = table_one(records) {
+        let _ = writeln!(
+            s,
+            "## Table I — residual prediction\n\nPooled over the outputs, on the test rows; mean ± std over the runs of each setting (seeds). The last column divides by the exact GP of the same run.\n\n{}",
+            t.markdown()
+        );
+        write_table("table1.csv", &t)?;
+    }
+    if let Some(t) = table_two(records) {
+        let _ = writeln!(
+            s,
+            "## Table II — localisation and mapping\n\nMean ± std over the runs of each setting (seeds); ratios to the first scheme of the same run.\n\n{}",
+            t.markdown()
+        );
+        write_table("table2.csv", &t)?;
+        if let Some(svg) = tradeoff_svg(records) {
+            let plots = dir.join("plots");
+            std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
+            let path = plots.join("tradeoff.svg");
+            write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
+            let _ = writeln!(
+                s,
+                "Frames processed against trajectory RMSE: `plots/tradeoff.svg`.\n"
+            );
+        }
+    }
+    let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
+    if let Some((markdown, table, effects)) = sensitivity_section(records, bootstrap_seed) {
+        s.push_str(&markdown);
+        write_table("sensitivity.csv", &table)?;
+        match sensitivity_svg(&effects) {
+            Ok(svg) => {
+                let plots = dir.join("plots");
+                std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
+                let path = plots.join("sensitivity.svg");
+                write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
+            }
+            Err(e) => {
+                let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");
+            }
+        }
+    }
+    if let Some(section) = curves_section(records, bootstrap_seed) {
+        s.push_str(&section.markdown);
+        for (file, table) in &section.tables {
+            write_table(file, table)?;
+        }
+        let plots = dir.join("plots");
+        std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
+        for (file, svg) in &section.figures {
+            let path = plots.join(file);
+            write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
+        }
+    }
+    for (i, (dim, table)) in ablations(records, merged.plan.as_ref())
+        .into_iter()
+        .enumerate()
+    {
+        let _ = writeln!(
+            s,
+            "## Ablation: `{dim}`\n\nMean ± std over every run with each value (other swept values and seeds pooled); best (lowest) in bold. Regressors are numbered as in the experiment.\n\n{}",
+            table.markdown()
+        );
+        write_table(&format!("ablation_{i}.csv"), &table)?;
+    }
+    let markdown = dir.join(file_name);
+    write_atomically(&markdown, s.as_bytes()).map_err(|e| io(&markdown, e))?;
+    Ok(SweepReport {
+        markdown,
+        runs: records.len(),
+        missing: merged.missing.len(),
+        duplicates: merged.duplicates.len(),
+        failed: merged.failed.len(),
+    })
+}
+
+/// The report's heading and what it was made from: the runs, their code,
+/// the plan, and the runs missing, failed or recorded twice.
+fn write_header(s: &mut String, merged: &MergedRecords) {
+    let records = &merged.records;
     let name = merged
         .plan
         .as_ref()
         .map(|p| p.name.clone())
         .unwrap_or_else(|| records[0].config.name.clone());
-    let mut s = String::new();
     let _ = writeln!(s, "# Sweep `{name}`\n");
     if let Some(d) = &records[0].config.description {
         let _ = writeln!(s, "{}\n", d.trim());
@@ -264,83 +350,4 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
                 .join("; ")
         );
     }
-    s.push('\n');
-    let write_table = |file: &str, table: &Table| -> Result<(), ReportError> {
-        let path = tables_dir.join(file);
-        write_atomically(&path, table.csv_text().as_bytes()).map_err(|e| io(&path, e))
-    };
-    if let Some(t) = table_one(records) {
-        let _ = writeln!(
-            s,
-            "## Table I — residual prediction\n\nPooled over the outputs, on the test rows; mean ± std over the runs of each setting (seeds). The last column divides by the exact GP of the same run.\n\n{}",
-            t.markdown()
-        );
-        write_table("table1.csv", &t)?;
-    }
-    if let Some(t) = table_two(records) {
-        let _ = writeln!(
-            s,
-            "## Table II — localisation and mapping\n\nMean ± std over the runs of each setting (seeds); ratios to the first scheme of the same run.\n\n{}",
-            t.markdown()
-        );
-        write_table("table2.csv", &t)?;
-        if let Some(svg) = tradeoff_svg(records) {
-            let plots = dir.join("plots");
-            std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
-            let path = plots.join("tradeoff.svg");
-            write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
-            let _ = writeln!(
-                s,
-                "Frames processed against trajectory RMSE: `plots/tradeoff.svg`.\n"
-            );
-        }
-    }
-    let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
-    if let Some((markdown, table, effects)) = sensitivity_section(records, bootstrap_seed) {
-        s.push_str(&markdown);
-        write_table("sensitivity.csv", &table)?;
-        match sensitivity_svg(&effects) {
-            Ok(svg) => {
-                let plots = dir.join("plots");
-                std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
-                let path = plots.join("sensitivity.svg");
-                write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
-            }
-            Err(e) => {
-                let _ = writeln!(s, "(The figure could not be drawn: {e}.)\n");
-            }
-        }
-    }
-    if let Some(section) = curves_section(records, bootstrap_seed) {
-        s.push_str(&section.markdown);
-        for (file, table) in &section.tables {
-            write_table(file, table)?;
-        }
-        let plots = dir.join("plots");
-        std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
-        for (file, svg) in &section.figures {
-            let path = plots.join(file);
-            write_atomically(&path, svg.as_bytes()).map_err(|e| io(&path, e))?;
-        }
-    }
-    for (i, (dim, table)) in ablations(records, merged.plan.as_ref())
-        .into_iter()
-        .enumerate()
-    {
-        let _ = writeln!(
-            s,
-            "## Ablation: `{dim}`\n\nMean ± std over every run with each value (other swept values and seeds pooled); best (lowest) in bold. Regressors are numbered as in the experiment.\n\n{}",
-            table.markdown()
-        );
-        write_table(&format!("ablation_{i}.csv"), &table)?;
-    }
-    let markdown = dir.join(file_name);
-    write_atomically(&markdown, s.as_bytes()).map_err(|e| io(&markdown, e))?;
-    Ok(SweepReport {
-        markdown,
-        runs: records.len(),
-        missing: merged.missing.len(),
-        duplicates: merged.duplicates.len(),
-        failed: merged.failed.len(),
-    })
 }

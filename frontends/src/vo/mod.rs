@@ -18,17 +18,9 @@ use nalgebra::{Isometry3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 pub use camera::CameraParams;
+pub use gpodo_traits::FrameRef;
 pub use replay::{ReplayVo, ReplayVoParams};
 pub use simulated::{SimulatedVo, SimulatedVoParams, TrackerErrorModel};
-
-/// A camera frame: its index in the traverse's camera stream and its time.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct FrameRef {
-    /// Index in the camera stream.
-    pub index: usize,
-    /// Time stamp (s).
-    pub time_secs: f64,
-}
 
 /// Why a frame is matched against another.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -396,7 +396,8 @@ impl SimulatedVo {
                     * ramp((p.search_radius_px - error_px) / p.search_softness_px);
                 1.0 - (1.0 - guided) * (1.0 - free)
             }
-            _ => free,
+            (TrackPurpose::Tracking, None)
+            | (TrackPurpose::Relocalisation | TrackPurpose::LoopClosure, _) => free,
         };
         Some((geometric * self.enough_features(request, overlap), overlap))
     }

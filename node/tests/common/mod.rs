@@ -7,10 +7,10 @@
 use std::path::{Path, PathBuf};
 
 use gpodo_datasets::residuals::{ResidualConfig, log_steps, residual_dataset_from_steps};
-use gpodo_datasets::sim::preset::{Preset, SimulatorConfig};
 use gpodo_kinematics::spec::MotionModelSpec;
 use gpodo_regressors::RegressorSpec;
 use gpodo_regressors::model_file::{ModelFile, Provenance, RowRecipe};
+use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 
 pub fn exoter_yaml() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
@@ -21,7 +21,7 @@ pub fn exoter_yaml() -> PathBuf {
 pub fn fitted(
     dir: &Path,
     absolute: bool,
-) -> (gpodo_datasets::sim::preset::SimulatedTestbed, PathBuf) {
+) -> (gpodo_testbed::sim::preset::SimulatedTestbed, PathBuf) {
     let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 5);
     config.training_runs = 1;
     config.training_run_secs = 60.0;

@@ -13,46 +13,46 @@ use super::{GradientTargets, GramCache, Linear, ParamKind, RatQuad, Stationary, 
 use crate::dense::trace;
 use crate::kernels::profile::Family;
 
-/// The name of a leaf kernel, as a kernel expression writes it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LeafName {
+/// Declares [`LeafName`], its written names and [`LeafName::ALL`] from one
+/// list, so that `ALL` cannot miss a variant.
+macro_rules! leaf_names {
+    ($($(#[doc = $doc:literal])* $variant:ident => $name:literal,)+) => {
+        /// The name of a leaf kernel, as a kernel expression writes it.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum LeafName {
+            $($(#[doc = $doc])* $variant,)+
+        }
+
+        impl LeafName {
+            /// Every leaf, in the order error messages list them.
+            pub const ALL: [Self; [$(stringify!($variant)),+].len()] = [$(Self::$variant),+];
+
+            /// The name as written.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $name,)+
+                }
+            }
+        }
+    };
+}
+
+leaf_names! {
     /// `rbf`: squared exponential with ARD.
-    Rbf,
+    Rbf => "rbf",
     /// `matern52`: Matérn 5/2 with ARD.
-    Matern52,
+    Matern52 => "matern52",
     /// `matern32`: Matérn 3/2 with ARD.
-    Matern32,
+    Matern32 => "matern32",
     /// `linear`: linear with one variance per input.
-    Linear,
+    Linear => "linear",
     /// `white`: white noise.
-    White,
+    White => "white",
     /// `ratquad`: rational quadratic with ARD (GPy's `RatQuad`).
-    RatQuad,
+    RatQuad => "ratquad",
 }
 
 impl LeafName {
-    /// Every leaf, in the order error messages list them.
-    pub const ALL: [Self; 6] = [
-        Self::Rbf,
-        Self::Matern52,
-        Self::Matern32,
-        Self::Linear,
-        Self::White,
-        Self::RatQuad,
-    ];
-
-    /// The name as written.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Rbf => "rbf",
-            Self::Matern52 => "matern52",
-            Self::Matern32 => "matern32",
-            Self::Linear => "linear",
-            Self::White => "white",
-            Self::RatQuad => "ratquad",
-        }
-    }
-
     /// The names, comma-separated (for messages).
     pub fn listed() -> String {
         Self::ALL

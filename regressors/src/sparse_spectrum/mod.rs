@@ -175,7 +175,8 @@ fn features(state: &SparseSpectrumState, x: &[f64]) -> DVector<f64> {
 /// row.
 ///
 /// # Errors
-/// [`RegressorError::InvalidData`] if the density cannot be sampled.
+/// [`RegressorError::InvalidData`] if the density cannot be sampled, or
+/// the kernel has none (linear, white, rational quadratic).
 pub fn draw_frequencies(
     leaf: LeafName,
     lengthscales: &[f64],
@@ -186,7 +187,14 @@ pub fn draw_frequencies(
     let nu: Option<f64> = match leaf {
         LeafName::Matern52 => Some(2.5),
         LeafName::Matern32 => Some(1.5),
-        _ => None,
+        LeafName::Rbf => None,
+        LeafName::Linear | LeafName::White | LeafName::RatQuad => {
+            return Err(RegressorError::InvalidData {
+                detail: format!(
+                    "sparse_spectrum frequencies: `{leaf}` has no spectral density to sample"
+                ),
+            });
+        }
     };
     let chi = nu
         .map(|nu| ChiSquared::new(2.0 * nu))

@@ -63,7 +63,11 @@ impl SparseSpectrumParams {
             KernelExpr::Leaf(leaf @ (LeafName::Rbf | LeafName::Matern52 | LeafName::Matern32)) => {
                 Some(leaf)
             }
-            _ => None,
+            // No spectral density to sample features from: a stationary
+            // kernel's is needed (Bochner), and a new leaf must be decided.
+            KernelExpr::Leaf(LeafName::Linear | LeafName::White | LeafName::RatQuad)
+            | KernelExpr::Sum(_)
+            | KernelExpr::Product(_) => None,
         }
     }
 

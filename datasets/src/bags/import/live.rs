@@ -7,8 +7,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use gpodo_traits::{ImuSample, JointState as Joint};
 
-use super::TopicMap;
-use super::roles::{JointGroups, joint_groups};
+use super::{JointRef, TopicMap};
 use crate::bags::messages::{Imu, JointState};
 
 /// An IMU message in the body frame: `world_from_body`, the gyro and the
@@ -24,6 +23,22 @@ pub(super) fn imu_in_body(
         body_from_imu * Vector3::from(m.angular_velocity),
         body_from_imu * Vector3::from(m.linear_acceleration),
     )
+}
+
+/// The mapped joints by group (wheels, steering, bogies), each in name
+/// order: the rover's order.
+pub(super) type JointGroups = [(&'static str, Vec<(String, JointRef)>); 3];
+
+/// The joint groups of the map (empty without a joints role).
+pub(super) fn joint_groups(map: &TopicMap) -> JointGroups {
+    match &map.joints {
+        Some(j) => [
+            ("wheels", j.wheels.clone().into_iter().collect()),
+            ("steering", j.steering.clone().into_iter().collect()),
+            ("bogies", j.bogies.clone().into_iter().collect()),
+        ],
+        None => [("wheels", vec![]), ("steering", vec![]), ("bogies", vec![])],
+    }
 }
 
 /// Position and rate of every mapped joint of a message, in `groups`

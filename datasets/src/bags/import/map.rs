@@ -6,8 +6,10 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::ImportError;
 use super::heading::GnssHeading;
 use crate::bags::tf::TfPair;
+use crate::bags::topic::TopicRequest;
 
 fn default_rate() -> f64 {
     10.0
@@ -164,4 +166,102 @@ pub struct TopicMap {
     /// seconds lost (default `false`: damage stops the import).
     #[serde(default)]
     pub skip_damaged: bool,
+}
+
+impl TopicMap {
+    /// The map's settings that need no bag to check.
+    pub(super) fn check(&self) -> Result<(), ImportError> {
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
+            return Err(ImportError::Map(
+                "`rate_hz` must be a positive number".into(),
+            ));
+        }
+        if !(self.max_gap_secs.is_finite() && self.max_gap_secs > 0.0) {
+            return Err(ImportError::Map(
+                "`max_gap_secs` must be a positive number of seconds".into(),
+            ));
+        }
+        if self.imu.is_none() && self.gnss_heading == GnssHeading::Imu {
+            return Err(ImportError::Map(
+                "`gnss_heading: imu` needs an `imu` topic; without one, use `gnss_heading: course`"
+                    .into(),
+            ));
+        }
+        if self.camera.is_some() && self.vo.is_some() {
+            return Err(ImportError::Map(
+                "give `vo:` (a recorded VO to replay) or `camera:` (images for the stereo VO), not both: each sets the camera frames".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Every role's topic, to be read in one pass over the bag, in the order
+    /// [`super::import_bag`] takes them back: IMU, ground truth, odometry, VO,
+    /// joints.
+    pub(super) fn topic_requests(&self) -> Result<Vec<TopicRequest<'_>>, ImportError> {
+        let mut requests = Vec::new();
+        if let Some(topic) = &self.imu {
+            requests.push(TopicRequest {
+                topic,
+                role: "imu",
+                expected: &["sensor_msgs/Imu"],
+                optional: false,
+            });
+        }
+        match &self.ground_truth {
+            GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
+                topic,
+                role: "ground_truth",
+                expected: &[
+                    "nav_msgs/Odometry",
+                    "geometry_msgs/PoseStamped",
+                    "geometry_msgs/PoseWithCovarianceStamped",
+                    "sensor_msgs/NavSatFix",
+                ],
+                optional: false,
+            }),
+            GroundTruthSource::Tf { tf } => {
+                if tf.topics.is_empty() {
+                    return Err(ImportError::Map(
+                        "`ground_truth.tf.topics` must name at least one TF topic".into(),
+                    ));
+                }
+                requests.extend(tf.topics.iter().map(|topic| TopicRequest {
+                    topic,
+                    role: "ground_truth",
+                    expected: &["tf2_msgs/TFMessage"],
+                    optional: false,
+                }));
+            }
+        }
+        if let Some(topic) = &self.odometry {
+            requests.push(TopicRequest {
+                topic,
+                role: "odometry",
+                expected: &["nav_msgs/Odometry", "geometry_msgs/TwistStamped"],
+                optional: false,
+            });
+        }
+        if let Some(topic) = &self.vo {
+            requests.push(TopicRequest {
+                topic,
+                role: "vo",
+                expected: &[
+                    "nav_msgs/Odometry",
+                    "geometry_msgs/PoseStamped",
+                    "geometry_msgs/PoseWithCovarianceStamped",
+                ],
+                optional: true,
+            });
+        }
+        if let Some(j) = &self.joints {
+            requests.push(TopicRequest {
+                topic: &j.topic,
+                role: "joints",
+                expected: &["sensor_msgs/JointState"],
+                optional: false,
+            });
+        }
+        Ok(requests)
+    }
 }

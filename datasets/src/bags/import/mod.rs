@@ -26,14 +26,12 @@ use serde::Serialize;
 use gpodo_traits::{BodyTwist, ImuSample, JointState as Joint, ProprioceptiveSample};
 
 use super::messages::RosMessage;
-use super::topic::{Stamped, TopicError, TopicRequest, read_topics};
+use super::topic::{Stamped, TopicError, read_topics};
 use super::{Damage, OnDamage};
 use crate::log::RoverLog;
 use heading::course_headings;
-use roles::{
-    GroundTruth, JointGroups, ground_truth_stream, imu_stream, joint_groups, joint_stream,
-    odometry_stream,
-};
+use live::{JointGroups, joint_groups};
+use roles::{GroundTruth, ground_truth_stream, imu_stream, joint_stream, odometry_stream};
 use stream::{Clock, Stream, common_span};
 
 /// What an import did with each stream.
@@ -198,91 +196,8 @@ pub fn import_bag(
     name: &str,
     map: &TopicMap,
 ) -> Result<(RoverLog, ImportReport), ImportError> {
-    if !(map.rate_hz.is_finite() && map.rate_hz > 0.0) {
-        return Err(ImportError::Map(
-            "`rate_hz` must be a positive number".into(),
-        ));
-    }
-    if !(map.max_gap_secs.is_finite() && map.max_gap_secs > 0.0) {
-        return Err(ImportError::Map(
-            "`max_gap_secs` must be a positive number of seconds".into(),
-        ));
-    }
-    if map.imu.is_none() && map.gnss_heading == GnssHeading::Imu {
-        return Err(ImportError::Map(
-            "`gnss_heading: imu` needs an `imu` topic; without one, use `gnss_heading: course`"
-                .into(),
-        ));
-    }
-    // Every role's topic, read in one pass over the bag.
-    let mut requests = Vec::new();
-    if let Some(topic) = &map.imu {
-        requests.push(TopicRequest {
-            topic,
-            role: "imu",
-            expected: &["sensor_msgs/Imu"],
-            optional: false,
-        });
-    }
-    match &map.ground_truth {
-        GroundTruthSource::Topic(topic) => requests.push(TopicRequest {
-            topic,
-            role: "ground_truth",
-            expected: &[
-                "nav_msgs/Odometry",
-                "geometry_msgs/PoseStamped",
-                "geometry_msgs/PoseWithCovarianceStamped",
-                "sensor_msgs/NavSatFix",
-            ],
-            optional: false,
-        }),
-        GroundTruthSource::Tf { tf } => {
-            if tf.topics.is_empty() {
-                return Err(ImportError::Map(
-                    "`ground_truth.tf.topics` must name at least one TF topic".into(),
-                ));
-            }
-            requests.extend(tf.topics.iter().map(|topic| TopicRequest {
-                topic,
-                role: "ground_truth",
-                expected: &["tf2_msgs/TFMessage"],
-                optional: false,
-            }));
-        }
-    }
-    if let Some(topic) = &map.odometry {
-        requests.push(TopicRequest {
-            topic,
-            role: "odometry",
-            expected: &["nav_msgs/Odometry", "geometry_msgs/TwistStamped"],
-            optional: false,
-        });
-    }
-    if let Some(topic) = &map.vo {
-        requests.push(TopicRequest {
-            topic,
-            role: "vo",
-            expected: &[
-                "nav_msgs/Odometry",
-                "geometry_msgs/PoseStamped",
-                "geometry_msgs/PoseWithCovarianceStamped",
-            ],
-            optional: true,
-        });
-    }
-    if let Some(j) = &map.joints {
-        requests.push(TopicRequest {
-            topic: &j.topic,
-            role: "joints",
-            expected: &["sensor_msgs/JointState"],
-            optional: false,
-        });
-    }
-    if map.camera.is_some() && map.vo.is_some() {
-        return Err(ImportError::Map(
-            "give `vo:` (a recorded VO to replay) or `camera:` (images for the stereo VO), not both: each sets the camera frames".into(),
-        ));
-    }
+    map.check()?;
+    let requests = map.topic_requests()?;
     let on_damage = if map.skip_damaged {
         OnDamage::Skip
     } else {
@@ -338,24 +253,7 @@ pub fn import_bag(
     }
     let (start, end) = common_span(&mut streams);
     let dt = 1.0 / map.rate_hz;
-    let rows = if end > start {
-        ((end - start) / dt).floor() + 1.0
-    } else {
-        0.0
-    };
-    let messages = streams.iter().map(|s| s.times.len()).max().unwrap_or(0);
-    let limit = ROWS_PER_MESSAGE.saturating_mul(messages.max(1));
-    if rows > limit as f64 {
-        return Err(ImportError::TooManyRows {
-            file: path.display().to_string(),
-            rate_hz: map.rate_hz,
-            span_secs: end - start,
-            rows,
-            limit,
-            messages,
-        });
-    }
-    let steps = rows as usize;
+    let steps = row_count(path, map, &streams, start, end)?;
     let mut samples = Vec::new();
     let mut ground_truth = Vec::new();
     let mut dropped = 0;
@@ -380,89 +278,15 @@ pub fn import_bag(
             dropped += 1;
             continue;
         }
-        let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
-        let mut at = 0;
-        for (g, (_, refs)) in groups.iter().enumerate() {
-            for _ in refs {
-                let v = jv.as_deref().unwrap_or(&[]);
-                group_joints[g].push(Joint {
-                    position_rad: v.get(at).copied().unwrap_or(0.0),
-                    rate_radps: v.get(at + 1).copied().unwrap_or(0.0),
-                });
-                at += 2;
-            }
-        }
-        let [wheels, steering, bogies] = group_joints;
-        samples.push(ProprioceptiveSample {
-            time_secs: t - start,
-            wheels,
-            steering,
-            bogies,
-            imu: i.map(|i| {
-                let (roll, pitch) = roll_pitch(&i[0..4]);
-                ImuSample {
-                    gyro_radps: Vector3::new(i[4], i[5], i[6]),
-                    accel_mps2: Vector3::new(i[7], i[8], i[9]),
-                    roll_rad: roll,
-                    pitch_rad: pitch,
-                }
-            }),
-            attitude_rad: None,
-            contact_angles_rad: None,
-            odometry: ov.map(|o| BodyTwist {
-                linear_mps: Vector3::new(o[0], o[1], o[2]),
-                angular_radps: Vector3::new(o[3], o[4], o[5]),
-            }),
-        });
-        // GNSS gives no orientation: the IMU's (its yaw replaced by the
-        // heading below), or level without an IMU.
-        let q = if gnss {
-            i.map_or([0.0, 0.0, 0.0, 1.0], |i| [i[0], i[1], i[2], i[3]])
-        } else {
-            [g[3], g[4], g[5], g[6]]
-        };
-        ground_truth.push(Isometry3::from_parts(
-            Translation3::new(g[0], g[1], g[2]),
-            UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2])),
-        ));
+        let (sample, pose) = sample_at(t - start, i, g, ov, jv, &groups, gnss);
+        samples.push(sample);
+        ground_truth.push(pose);
     }
-    let reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
+    let mut reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
     // Visual odometry: its poses on the log's clock, and its stamps within
     // the log as the camera frames.
-    let mut vo_poses: Vec<(f64, Isometry3<f64>)> = vo_messages
-        .iter()
-        .flatten()
-        .filter_map(|s| {
-            let (h, p) = match &s.message {
-                RosMessage::Odometry(m) => (&m.header, &m.pose),
-                RosMessage::PoseStamped(h, p) | RosMessage::PoseWithCovarianceStamped(h, p, _) => {
-                    (h, p)
-                }
-                _ => return None,
-            };
-            let [x, y, z, w] = p.orientation;
-            let pose = Isometry3::from_parts(
-                Translation3::from(Vector3::from(p.position)),
-                UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-            );
-            Some((clock.at(s, h.stamp_ns) - start, pose))
-        })
-        .collect();
-    let vo_messages_read = vo_poses.len();
-    let vo_out_of_order = vo_poses.windows(2).filter(|w| w[1].0 < w[0].0).count();
-    vo_poses.sort_by(|a, b| a.0.total_cmp(&b.0));
-    vo_poses.dedup_by(|b, a| a.0 == b.0);
-    let mut reports = reports;
-    if let Some(topic) = &map.vo {
-        reports.push(StreamReport {
-            role: "vo".into(),
-            topic: topic.clone(),
-            messages: vo_messages_read,
-            duplicates: vo_messages_read - vo_poses.len(),
-            out_of_order: vo_out_of_order,
-            ..StreamReport::default()
-        });
-    }
+    let (vo_poses, vo_report) = vo_on_clock(map, vo_messages.as_deref(), &clock, start);
+    reports.extend(vo_report);
     let camera_times_secs: Vec<f64> = match (samples.first(), samples.last()) {
         (Some(first), Some(last)) => vo_poses
             .iter()
@@ -474,21 +298,7 @@ pub fn import_bag(
     let gnss_heading = (gnss && map.gnss_heading == GnssHeading::Course)
         .then(|| course_headings(&samples, &mut ground_truth));
     if samples.is_empty() {
-        let detail = reports
-            .iter()
-            .map(|r| {
-                format!(
-                    "{} `{}`: {} messages, {} rows in gaps",
-                    r.role, r.topic, r.messages, r.rows_in_gaps
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("; ");
-        return Err(ImportError::Empty {
-            file: path.display().to_string(),
-            gap: map.max_gap_secs,
-            detail,
-        });
+        return Err(nothing_imported(path, map, &reports));
     }
     let names = |g: usize| {
         groups[g]
@@ -517,6 +327,162 @@ pub fn import_bag(
         vo_poses,
     };
     Ok((log, report))
+}
+
+/// One row of the log at `time_secs`: the sample from the streams' values
+/// there (IMU `i`, odometry `ov`, joints `jv` in `groups` order) and the
+/// ground truth `g` (with the IMU's orientation when the ground truth is
+/// GNSS, which gives none).
+fn sample_at(
+    time_secs: f64,
+    i: Option<&[f64]>,
+    g: &[f64],
+    ov: Option<Vec<f64>>,
+    jv: Option<Vec<f64>>,
+    groups: &JointGroups,
+    gnss: bool,
+) -> (ProprioceptiveSample, Isometry3<f64>) {
+    let mut group_joints: [Vec<Joint>; 3] = [vec![], vec![], vec![]];
+    let mut at = 0;
+    for (g, (_, refs)) in groups.iter().enumerate() {
+        for _ in refs {
+            let v = jv.as_deref().unwrap_or(&[]);
+            group_joints[g].push(Joint {
+                position_rad: v.get(at).copied().unwrap_or(0.0),
+                rate_radps: v.get(at + 1).copied().unwrap_or(0.0),
+            });
+            at += 2;
+        }
+    }
+    let [wheels, steering, bogies] = group_joints;
+    let sample = ProprioceptiveSample {
+        time_secs,
+        wheels,
+        steering,
+        bogies,
+        imu: i.map(|i| {
+            let (roll, pitch) = roll_pitch(&i[0..4]);
+            ImuSample {
+                gyro_radps: Vector3::new(i[4], i[5], i[6]),
+                accel_mps2: Vector3::new(i[7], i[8], i[9]),
+                roll_rad: roll,
+                pitch_rad: pitch,
+            }
+        }),
+        attitude_rad: None,
+        contact_angles_rad: None,
+        odometry: ov.map(|o| BodyTwist {
+            linear_mps: Vector3::new(o[0], o[1], o[2]),
+            angular_radps: Vector3::new(o[3], o[4], o[5]),
+        }),
+    };
+    // GNSS gives no orientation: the IMU's (its yaw replaced by the
+    // heading below), or level without an IMU.
+    let q = if gnss {
+        i.map_or([0.0, 0.0, 0.0, 1.0], |i| [i[0], i[1], i[2], i[3]])
+    } else {
+        [g[3], g[4], g[5], g[6]]
+    };
+    let pose = Isometry3::from_parts(
+        Translation3::new(g[0], g[1], g[2]),
+        UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2])),
+    );
+    (sample, pose)
+}
+
+/// The recorded VO's poses on the log's clock (s from `start`), in time
+/// order without repeated stamps, and what was read of its topic.
+fn vo_on_clock(
+    map: &TopicMap,
+    vo_messages: Option<&[Stamped]>,
+    clock: &Clock,
+    start: f64,
+) -> (Vec<(f64, Isometry3<f64>)>, Option<StreamReport>) {
+    let mut poses: Vec<(f64, Isometry3<f64>)> = vo_messages
+        .into_iter()
+        .flatten()
+        .filter_map(|s| {
+            let (h, p) = match &s.message {
+                RosMessage::Odometry(m) => (&m.header, &m.pose),
+                RosMessage::PoseStamped(h, p) | RosMessage::PoseWithCovarianceStamped(h, p, _) => {
+                    (h, p)
+                }
+                _ => return None,
+            };
+            let [x, y, z, w] = p.orientation;
+            let pose = Isometry3::from_parts(
+                Translation3::from(Vector3::from(p.position)),
+                UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+            );
+            Some((clock.at(s, h.stamp_ns) - start, pose))
+        })
+        .collect();
+    let read = poses.len();
+    let out_of_order = poses.windows(2).filter(|w| w[1].0 < w[0].0).count();
+    poses.sort_by(|a, b| a.0.total_cmp(&b.0));
+    poses.dedup_by(|b, a| a.0 == b.0);
+    let report = map.vo.as_ref().map(|topic| StreamReport {
+        role: "vo".into(),
+        topic: topic.clone(),
+        messages: read,
+        duplicates: read - poses.len(),
+        out_of_order,
+        ..StreamReport::default()
+    });
+    (poses, report)
+}
+
+/// How many rows the common span holds at the map's rate.
+///
+/// # Errors
+/// [`ImportError::TooManyRows`] when they are more than
+/// [`ROWS_PER_MESSAGE`] per message of the busiest stream (a rate or a
+/// stamp that is wrong, usually).
+fn row_count(
+    path: &Path,
+    map: &TopicMap,
+    streams: &[&mut Stream],
+    start: f64,
+    end: f64,
+) -> Result<usize, ImportError> {
+    let dt = 1.0 / map.rate_hz;
+    let rows = if end > start {
+        ((end - start) / dt).floor() + 1.0
+    } else {
+        0.0
+    };
+    let messages = streams.iter().map(|s| s.times.len()).max().unwrap_or(0);
+    let limit = ROWS_PER_MESSAGE.saturating_mul(messages.max(1));
+    if rows > limit as f64 {
+        return Err(ImportError::TooManyRows {
+            file: path.display().to_string(),
+            rate_hz: map.rate_hz,
+            span_secs: end - start,
+            rows,
+            limit,
+            messages,
+        });
+    }
+    Ok(rows as usize)
+}
+
+/// The error of an import that kept no row, with what each stream gave.
+fn nothing_imported(path: &Path, map: &TopicMap, reports: &[StreamReport]) -> ImportError {
+    let detail = reports
+        .iter()
+        .map(|r| {
+            format!(
+                "{} `{}`: {} messages, {} rows in gaps",
+                r.role, r.topic, r.messages, r.rows_in_gaps
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    ImportError::Empty {
+        file: path.display().to_string(),
+        gap: map.max_gap_secs,
+        detail,
+    }
 }
 
 /// The header stamp of a message (ns), the first transform's for TF.

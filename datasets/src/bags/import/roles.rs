@@ -7,9 +7,9 @@ use std::path::Path;
 
 use nalgebra::UnitQuaternion;
 
-use super::live::{imu_in_body, joint_values};
+use super::live::{JointGroups, imu_in_body, joint_values};
 use super::stream::{Clock, Stream};
-use super::{GroundTruthSource, ImportError, JointRef, TimeSource, TopicMap};
+use super::{GroundTruthSource, ImportError, TimeSource, TopicMap};
 use crate::bags::enu::LocalEnu;
 use crate::bags::messages::RosMessage;
 use crate::bags::tf::compose;
@@ -176,22 +176,6 @@ pub(super) fn odometry_stream(
             ))
         }
         _ => None,
-    }
-}
-
-/// The mapped joints by group (wheels, steering, bogies), each in name
-/// order: the rover's order.
-pub(super) type JointGroups = [(&'static str, Vec<(String, JointRef)>); 3];
-
-/// The joint groups of the map (empty without a joints role).
-pub(super) fn joint_groups(map: &TopicMap) -> JointGroups {
-    match &map.joints {
-        Some(j) => [
-            ("wheels", j.wheels.clone().into_iter().collect()),
-            ("steering", j.steering.clone().into_iter().collect()),
-            ("bogies", j.bogies.clone().into_iter().collect()),
-        ],
-        None => [("wheels", vec![]), ("steering", vec![]), ("bogies", vec![])],
     }
 }
 

@@ -1,33 +1,19 @@
-//! A camera's stereo frames for the stereo VO: where the images come from
-//! ([`StereoFrameSource`]) and each frame's features, computed once and
-//! shared by every VO that holds the same [`StereoFrames`].
+//! A camera's stereo frames for the stereo VO: the images of a
+//! [`StereoFrameSource`] and each frame's features, computed once and
+//! shared by every VO that holds the same [`StereoFrames`]; and, for the
+//! controls that see ground truth, the true camera poses that whoever
+//! built the frames handed down with them.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
+use gpodo_traits::StereoFrameSource;
 use gpodo_vision::GrayImage;
 use gpodo_vision::orb::OrbParams;
 use gpodo_vision::stereo::{StereoFeatures, stereo_features};
 use nalgebra::Isometry3;
 
 use crate::vo::{CameraParams, FrameRef};
-
-/// Where the stereo VO gets its images: the rendered camera, or a
-/// recording's image topics.
-pub trait StereoFrameSource: Send + Sync {
-    /// The rectified grey pair (left, right) of `frame`.
-    ///
-    /// # Errors
-    /// A message naming the frame and what could not be had.
-    fn pair(&self, frame: FrameRef) -> Result<(GrayImage, GrayImage), String>;
-
-    /// The true `world_from_camera` of `frame`'s left camera, where the
-    /// source knows it (a rendered camera does, a recording does not):
-    /// for controls that see ground truth, never for tracking.
-    fn true_camera_pose(&self, _frame: FrameRef) -> Option<Isometry3<f64>> {
-        None
-    }
-}
 
 /// What a frame gives the VO, computed once: its stereo features and a
 /// whole-image signature for place recognition.
@@ -82,6 +68,10 @@ pub struct StereoFrames {
     camera: CameraParams,
     orb: OrbParams,
     source: Arc<dyn StereoFrameSource>,
+    /// The true `world_from_camera` of each frame's left camera, indexed
+    /// as the camera stream, when the builder knows them (a rendered
+    /// camera does, a recording does not).
+    true_camera_poses: Option<Vec<Isometry3<f64>>>,
     /// One slot per frame asked for: the first asker computes it, and
     /// every other (another scheme's thread) waits for that result.
     cache: Mutex<HashMap<usize, Arc<OnceLock<Cached>>>>,
@@ -106,7 +96,18 @@ impl StereoFrames {
             orb,
             camera,
             source,
+            true_camera_poses: None,
             cache: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// These frames with the true `world_from_camera` of each frame's left
+    /// camera (indexed as the camera stream): for controls that see ground
+    /// truth (`LocalMapPlacement::GroundTruth`), never for tracking.
+    pub fn with_true_camera_poses(self, poses: Vec<Isometry3<f64>>) -> Self {
+        Self {
+            true_camera_poses: Some(poses),
+            ..self
         }
     }
 
@@ -115,10 +116,10 @@ impl StereoFrames {
         &self.camera
     }
 
-    /// The source's true `world_from_camera` of `frame`'s left camera, if
-    /// it knows it ([`StereoFrameSource::true_camera_pose`]).
+    /// The true `world_from_camera` of `frame`'s left camera, if it was
+    /// handed down ([`Self::with_true_camera_poses`]).
     pub fn true_camera_pose(&self, frame: FrameRef) -> Option<Isometry3<f64>> {
-        self.source.true_camera_pose(frame)
+        self.true_camera_poses.as_ref()?.get(frame.index).copied()
     }
 
     /// The features of `frame`, from the cache or computed (and cached):

@@ -9,5 +9,5 @@ pub mod p3p;
 pub mod pose;
 pub mod tracker;
 
-pub use frames::{FrameFeatures, StereoFrameSource, StereoFrames};
+pub use frames::{FrameFeatures, StereoFrames};
 pub use tracker::{LocalMapPlacement, OverlapDenominator, StereoVo, StereoVoParams};

@@ -1,0 +1,205 @@
+//! `gpodo live`: a saved model run as on the robot, from a recording
+//! (`--replay`) or on ROS 2 (a build with the `ros2` feature).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+
+/// What `gpodo live` was asked.
+#[derive(Debug, Clone, Default)]
+pub struct LiveOptions {
+    /// The model file.
+    pub model: PathBuf,
+    /// The rover description.
+    pub rover: PathBuf,
+    /// The topic map.
+    pub topics: PathBuf,
+    /// A recording to replay instead of subscribing.
+    pub replay: Option<PathBuf>,
+    /// Where a replay writes its odometry (MCAP).
+    pub out: Option<PathBuf>,
+    /// Where a replay writes its input rows (CSV).
+    pub rows: Option<PathBuf>,
+    /// Replay at the recorded speed rather than as fast as it can.
+    pub realtime: bool,
+    /// The DDS domain (default `$ROS_DOMAIN_ID`, else 0).
+    pub domain_id: Option<u16>,
+    /// On ROS 2, stop after this many outputs.
+    pub max_outputs: Option<usize>,
+    /// On ROS 2, stop after this many seconds without input.
+    pub idle_exit_secs: Option<f64>,
+    /// On ROS 2, the network interfaces DDS uses (empty: all).
+    pub dds_interfaces: Vec<std::net::IpAddr>,
+}
+
+/// Runs `gpodo live`.
+///
+/// # Errors
+/// A model, rover, topic map or recording that cannot be used, named;
+/// DDS failing; ROS 2 asked of a build without it.
+pub fn live(options: &LiveOptions) -> anyhow::Result<()> {
+    let map = crate::commands::import::read_topic_map(&options.topics)?;
+    let description = gpodo_kinematics::RoverDescription::from_path(&options.rover)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", options.rover.display()))?;
+    let mut model = gpodo_node::LiveModel::load(
+        &options.model,
+        &options.rover,
+        map.imu.is_some(),
+        false,
+        gpodo_node::LiveSettings::default(),
+    )?;
+    match (&options.replay, &options.out) {
+        (Some(bag), Some(out)) => {
+            let pace = if options.realtime {
+                gpodo_node::replay::Pace::Recorded
+            } else {
+                gpodo_node::replay::Pace::Fast
+            };
+            replay(
+                bag,
+                out,
+                options.rows.as_deref(),
+                pace,
+                &map,
+                &description,
+                &mut model,
+            )
+        }
+        (Some(_), None) => anyhow::bail!("`--replay` needs `--out`, the MCAP to write"),
+        _ => on_ros2(options, &map, &description, &mut model),
+    }
+}
+
+fn replay(
+    bag: &Path,
+    out: &Path,
+    rows: Option<&Path>,
+    pace: gpodo_node::replay::Pace,
+    map: &gpodo_datasets::bags::import::TopicMap,
+    description: &gpodo_kinematics::RoverDescription,
+    model: &mut gpodo_node::LiveModel,
+) -> anyhow::Result<()> {
+    let summary = gpodo_node::replay::replay(
+        bag,
+        map,
+        description,
+        model,
+        out,
+        rows,
+        gpodo_node::replay::Playback {
+            pace,
+            stop: &crate::util::stop::requested,
+        },
+    )?;
+    if summary.stopped {
+        println!("stopped before the recording's end; what was replayed is kept");
+    }
+    for reason in summary.skipped.iter().take(5) {
+        tracing::warn!("joint state not used: {reason}");
+    }
+    if summary.skipped.len() > 5 {
+        tracing::warn!("{} more joint states not used", summary.skipped.len() - 5);
+    }
+    for (input, rows) in &summary.out_of_range {
+        tracing::warn!("`{input}` outside the training range in {rows} rows");
+    }
+    println!(
+        "wrote {} ({} odometry messages on each of {}, from {} joint states and {} IMU messages)",
+        out.display(),
+        summary.outputs,
+        gpodo_node::replay::OUTPUT_TOPICS.join(" and "),
+        summary.joint_messages,
+        summary.imu_messages
+    );
+    if let Some(rows) = rows {
+        println!("wrote {} ({} rows)", rows.display(), summary.rows);
+    }
+    if let Some((p50, p99)) = summary.latency_secs {
+        println!(
+            "latency of an output: p50 {:.3} ms, p99 {:.3} ms; the node's work sustains {:.0} joint states a second",
+            p50 * 1e3,
+            p99 * 1e3,
+            summary.outputs as f64 / summary.processing_secs.max(1e-12)
+        );
+    }
+    Ok(())
+}
+
+/// The domain: the option, else `$ROS_DOMAIN_ID`, else 0.
+fn domain_id(option: Option<u16>) -> anyhow::Result<u16> {
+    match (option, std::env::var("ROS_DOMAIN_ID")) {
+        (Some(d), _) => Ok(d),
+        (None, Ok(v)) if !v.trim().is_empty() => v
+            .trim()
+            .parse()
+            .with_context(|| format!("ROS_DOMAIN_ID={v:?}: expected a domain id (0–232)")),
+        _ => Ok(0),
+    }
+}
+
+#[cfg(feature = "ros2")]
+fn on_ros2(
+    options: &LiveOptions,
+    map: &gpodo_datasets::bags::import::TopicMap,
+    description: &gpodo_kinematics::RoverDescription,
+    model: &mut gpodo_node::LiveModel,
+) -> anyhow::Result<()> {
+    use gpodo_node::ros2::{DIAGNOSTICS_TOPIC, Ros2Settings, run};
+    let settings = Ros2Settings {
+        domain_id: domain_id(options.domain_id)?,
+        max_outputs: options.max_outputs,
+        idle_exit_secs: options.idle_exit_secs,
+        interfaces: options.dds_interfaces.clone(),
+        ..Ros2Settings::default()
+    };
+    let joints = map.joints.as_ref().map_or("", |j| j.topic.as_str());
+    tracing::info!(
+        "on ROS 2 (DDS domain {}): {} from {joints}{}, publishing {} and {DIAGNOSTICS_TOPIC}",
+        settings.domain_id,
+        model.summary().label,
+        map.imu
+            .as_ref()
+            .map_or(String::new(), |t| format!(" and {t}")),
+        gpodo_node::replay::OUTPUT_TOPICS.join(", "),
+    );
+    let summary = run(
+        map,
+        description,
+        model,
+        &settings,
+        &crate::util::stop::requested,
+    )?;
+    if let Some(reason) = &summary.last_skip {
+        tracing::warn!(
+            "{} joint states not used; the last: {reason}",
+            summary.skipped
+        );
+    }
+    if summary.undecodable > 0 {
+        tracing::warn!("{} messages could not be decoded", summary.undecodable);
+    }
+    let latency = summary.latency_secs.map_or(String::new(), |(p50, p99)| {
+        format!("; latency p50 {:.3} ms, p99 {:.3} ms", p50 * 1e3, p99 * 1e3)
+    });
+    println!(
+        "published {} odometry messages on each of {}, from {} joint states and {} IMU messages{latency}",
+        summary.outputs,
+        gpodo_node::replay::OUTPUT_TOPICS.join(" and "),
+        summary.joint_messages,
+        summary.imu_messages
+    );
+    Ok(())
+}
+
+#[cfg(not(feature = "ros2"))]
+fn on_ros2(
+    options: &LiveOptions,
+    _map: &gpodo_datasets::bags::import::TopicMap,
+    _description: &gpodo_kinematics::RoverDescription,
+    _model: &mut gpodo_node::LiveModel,
+) -> anyhow::Result<()> {
+    domain_id(options.domain_id)?;
+    anyhow::bail!(
+        "this gpodo was built without ROS 2: give `--replay BAG --out OUT.mcap`, or build it with `cargo build --release --features ros2`"
+    )
+}
