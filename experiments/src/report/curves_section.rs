@@ -10,7 +10,7 @@ use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, RESAMPLES};
 use crate::report::curve_plot::{Panel, curves_svg};
 use crate::report::curves::{
-    BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting,
+    AtBudget, BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting,
     frames_to_reach, summarise,
 };
 use crate::report::table::{Align, Table};
@@ -360,17 +360,13 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
                 d.low.to_string(),
                 d.high.to_string(),
             ]);
-            for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
-                paired.push_csv(vec![
-                    c.name.clone(),
-                    fixed.map_or(String::new(), |f| f.name.clone()),
-                    b.to_string(),
-                    s.to_string(),
-                    rm.to_string(),
-                    f.to_string(),
-                    (rm - f).to_string(),
-                ]);
-            }
+            push_pairs(
+                paired,
+                &c.name,
+                fixed.map_or("", |f| f.name.as_str()),
+                b,
+                &r,
+            );
         }
     }
     budget
@@ -432,17 +428,7 @@ fn twin_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
                 d.low.to_string(),
                 d.high.to_string(),
             ]);
-            for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
-                paired.push_csv(vec![
-                    c.name.clone(),
-                    z.name.clone(),
-                    b.to_string(),
-                    s.to_string(),
-                    rm.to_string(),
-                    f.to_string(),
-                    (rm - f).to_string(),
-                ]);
-            }
+            push_pairs(paired, &c.name, &z.name, b, &r);
         }
     }
     twin
@@ -471,4 +457,20 @@ fn draw_figure(
     let svg = curves_svg(&panels).map_err(|e| e.to_string())?;
     out.figures.push((format!("curves{suffix}.svg"), svg));
     Ok(())
+}
+
+/// Each seed's pair of `r` (a curve at budget `b` against the curve named
+/// `against`) as a row of `paired`.
+fn push_pairs(paired: &mut Table, curve: &str, against: &str, b: f64, r: &AtBudget) {
+    for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
+        paired.push_csv(vec![
+            curve.to_string(),
+            against.to_string(),
+            b.to_string(),
+            s.to_string(),
+            rm.to_string(),
+            f.to_string(),
+            (rm - f).to_string(),
+        ]);
+    }
 }
