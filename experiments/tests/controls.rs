@@ -41,7 +41,7 @@ fn back_end_of(config: &ExperimentConfig, s: &SchemeSpec) -> (MotionPrior, Strin
 
 fn fps(s: &SchemeSpec) -> Option<f64> {
     match s.selector {
-        SelectorSpec::FixedRate { fps } => Some(fps),
+        SelectorSpec::FixedRate { fps, .. } => Some(fps),
         _ => None,
     }
 }

@@ -1,10 +1,13 @@
 //! The fixed-rate baseline of Table II: process a frame every `1/fps`
 //! seconds whatever the wheels say (ORB-SLAM 2.5 fps and 0.5 fps).
 //!
-//! The schedule is anchored at the first processed frame, so the rate does
-//! not drift when the camera's frame times are not multiples of the period:
-//! a frame is processed when it is the first at or after the next due time
-//! (within `tolerance_secs`, for time-stamp jitter).
+//! The schedule is anchored at the first camera frame it sees, delayed by
+//! the phase (0 by default), so the rate does not drift when the camera's
+//! frame times are not multiples of the period: a frame is processed when
+//! it is the first at or after the next due time (within `tolerance_secs`,
+//! for time-stamp jitter). Two phases of one rate process disjoint frames,
+//! as many of each, where the camera is fast enough to have them: the
+//! comparison's A/A control.
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
 
@@ -14,6 +17,7 @@ use crate::FrontendError;
 #[derive(Debug, Clone, PartialEq)]
 pub struct FixedRate {
     period_secs: f64,
+    phase_secs: f64,
     tolerance_secs: f64,
     next_due_secs: Option<f64>,
     name: String,
@@ -37,9 +41,38 @@ impl FixedRate {
         }
         Ok(Self {
             period_secs: 1.0 / fps,
+            phase_secs: 0.0,
             tolerance_secs: Self::DEFAULT_TOLERANCE_SECS,
             next_due_secs: None,
             name: format!("fixed_rate[{fps}fps]"),
+        })
+    }
+
+    /// The same rate with its first frame `phase_secs` after the first
+    /// camera frame.
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidSpec`] unless `0 ≤ phase_secs < 1/fps`.
+    pub fn with_phase(self, phase_secs: f64) -> Result<Self, FrontendError> {
+        if !(phase_secs >= 0.0 && phase_secs < self.period_secs) {
+            return Err(FrontendError::InvalidSpec {
+                selector: "fixed_rate".into(),
+                field: "phase_secs".into(),
+                expected: format!(
+                    "a delay in [0, {}) s (one period), not {phase_secs}",
+                    self.period_secs
+                ),
+            });
+        }
+        let name = if phase_secs == 0.0 {
+            self.name
+        } else {
+            format!("{}[phase {phase_secs}s]", self.name)
+        };
+        Ok(Self {
+            phase_secs,
+            name,
+            ..self
         })
     }
 
@@ -65,9 +98,13 @@ impl FrameSelector for FixedRate {
                 self.next_due_secs = Some(due);
                 FrameDecision::PROCESS
             }
-            None => {
+            None if self.phase_secs == 0.0 => {
                 self.next_due_secs = Some(t + self.period_secs);
                 FrameDecision::PROCESS
+            }
+            None => {
+                self.next_due_secs = Some(t + self.phase_secs);
+                self.decide(ctx)
             }
         }
     }
@@ -128,6 +165,29 @@ mod tests {
         assert_eq!(processed(&mut s, [5.0, 5.5].into_iter()), vec![5.0]);
         s.reset();
         assert_eq!(processed(&mut s, [5.5].into_iter()), vec![5.5]);
+    }
+
+    #[test]
+    fn two_phases_of_one_rate_process_disjoint_frames_as_many_of_each() {
+        let times = || (0..600).map(|k| 0.1 * k as f64 + 0.013);
+        let a = processed(&mut FixedRate::new(1.0).unwrap(), times());
+        let mut shifted = FixedRate::new(1.0).unwrap().with_phase(0.5).unwrap();
+        let b = processed(&mut shifted, times());
+        assert_eq!((a.len(), b.len()), (60, 60));
+        for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+            assert!((x - (k as f64 + 0.013)).abs() < 1e-9, "{a:?}");
+            assert!((y - (k as f64 + 0.513)).abs() < 1e-9, "{b:?}");
+        }
+        shifted.reset();
+        assert_eq!(processed(&mut shifted, times()), b);
+    }
+
+    #[test]
+    fn a_phase_of_a_period_or_more_is_rejected_with_the_field_name() {
+        for phase in [-0.1, 1.0, f64::NAN] {
+            let err = FixedRate::new(1.0).unwrap().with_phase(phase).unwrap_err();
+            assert!(err.to_string().contains("phase_secs"), "{err}");
+        }
     }
 
     #[test]

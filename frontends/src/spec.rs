@@ -32,6 +32,12 @@ pub enum SelectorSpec {
     FixedRate {
         /// Frames per second.
         fps: f64,
+        /// Delay of the first processed frame after the traverse's first
+        /// camera frame (s; default 0, in `[0, 1/fps)`): the same rate at
+        /// two phases processes disjoint frames, as many of each (the
+        /// comparison's A/A control).
+        #[serde(default, skip_serializing_if = "is_zero")]
+        phase_secs: f64,
     },
     /// The authors' quadratic schedule on the predicted residual.
     ResidualSchedule(ResidualScheduleParams),
@@ -82,7 +88,8 @@ impl SelectorSpec {
     /// A short label for reports.
     pub fn label(&self) -> String {
         match self {
-            Self::FixedRate { fps } => format!("fixed {fps} fps"),
+            Self::FixedRate { fps, phase_secs } if *phase_secs == 0.0 => format!("fixed {fps} fps"),
+            Self::FixedRate { fps, phase_secs } => format!("fixed {fps} fps, phase {phase_secs} s"),
             Self::ResidualSchedule(p) => format!(
                 "residual schedule (r_max {} m/s, {}–{} s)",
                 p.r_max_mps, p.t_cam_secs, p.t_max_secs
@@ -220,7 +227,9 @@ impl SelectorSpec {
     /// planned by the runner and cannot be built here.
     pub fn build(&self) -> Result<Box<dyn FrameSelector>, FrontendError> {
         Ok(match self {
-            Self::FixedRate { fps } => Box::new(FixedRate::new(*fps)?),
+            Self::FixedRate { fps, phase_secs } => {
+                Box::new(FixedRate::new(*fps)?.with_phase(*phase_secs)?)
+            }
             Self::ResidualSchedule(p) => Box::new(ResidualSchedule::new(*p)?),
             Self::UncertaintyBudget(p) => Box::new(UncertaintyBudget::new(*p)?),
             Self::MaxGap {
@@ -357,4 +366,10 @@ mod tests {
         spec.validate().unwrap();
         assert!(spec.build().is_err());
     }
+}
+
+/// Whether a default-zero field is left out of the resolved configuration
+/// (so that records written before it existed compare equal).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }

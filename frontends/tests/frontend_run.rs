@@ -514,7 +514,10 @@ fn a_replayed_log_runs_the_table_two_controls_and_the_hindsight_search() {
         budget_m2: 1e-5,
         ..UncertaintyBudgetParams::default()
     });
-    let fixed = |fps| SelectorSpec::FixedRate { fps };
+    let fixed = |fps| SelectorSpec::FixedRate {
+        fps,
+        phase_secs: 0.0,
+    };
     let policy = run("gated", &gated, gp(), &ctx);
     let on_zero = run("gated, zero residuals", &gated, zero(), &ctx);
     let dense = run("2.5 fps", &fixed(2.5), gp(), &ctx);
@@ -597,7 +600,10 @@ fn while_lost_a_gated_scheme_looks_every_0_4_s_and_a_fixed_rate_keeps_its_rate()
         max_distance_m: None,
         max_rotation_rad: None,
     };
-    let fixed = SelectorSpec::FixedRate { fps: 0.2 };
+    let fixed = SelectorSpec::FixedRate {
+        fps: 0.2,
+        phase_secs: 0.0,
+    };
     // Gaps between consecutive processed frames from a lost tracker.
     let lost_gaps = |run: &gpodo_frontends::FrontendRun| -> Vec<f64> {
         run.processed
@@ -709,7 +715,10 @@ fn the_odometry_mode_decides_correction_covariance_and_budget() {
         )
     };
     // One frame in 60 s: the trajectory is the odometry.
-    let once = SelectorSpec::FixedRate { fps: 0.01 };
+    let once = SelectorSpec::FixedRate {
+        fps: 0.01,
+        phase_secs: 0.0,
+    };
     let corrected = run(&once, OdometryMode::CORRECTED, predictions(true)).unwrap();
     let authors = run(&once, OdometryMode::AUTHORS, predictions(true)).unwrap();
     let uncorrected = run(&once, OdometryMode::CORRECTED, zero).unwrap();

@@ -68,7 +68,9 @@ fn fixed_rate_frames(config: &ExperimentConfig, times: &[f64]) -> Vec<usize> {
         .schemes
         .iter()
         .filter_map(|s| match s.selector {
-            SelectorSpec::FixedRate { fps } => FixedRate::new(fps).ok(),
+            SelectorSpec::FixedRate { fps, phase_secs } => FixedRate::new(fps)
+                .and_then(|s| s.with_phase(phase_secs))
+                .ok(),
             SelectorSpec::ResidualSchedule(_)
             | SelectorSpec::UncertaintyBudget(_)
             | SelectorSpec::MaxGap { .. }

@@ -142,7 +142,7 @@ impl Curves {
         }
         for c in curves.iter_mut() {
             let reference = config.schemes.iter().find(|s| {
-                matches!(s.selector, SelectorSpec::FixedRate { fps } if (fps - 2.5).abs() < 1e-9)
+                matches!(s.selector, SelectorSpec::FixedRate { fps, phase_secs } if (fps - 2.5).abs() < 1e-9 && phase_secs == 0.0)
                     && s.back_end(config) == c.back_end
             });
             c.reference = reference.and_then(|s| series(&s.label)).map(|p| p.rmse);
