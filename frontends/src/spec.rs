@@ -302,6 +302,12 @@ fn inner_for_odometry(
     })
 }
 
+/// Whether a default-zero field is left out of the resolved configuration
+/// (so that records written before it existed compare equal).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -366,10 +372,4 @@ mod tests {
         spec.validate().unwrap();
         assert!(spec.build().is_err());
     }
-}
-
-/// Whether a default-zero field is left out of the resolved configuration
-/// (so that records written before it existed compare equal).
-fn is_zero(x: &f64) -> bool {
-    *x == 0.0
 }
