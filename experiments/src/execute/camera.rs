@@ -181,7 +181,7 @@ fn camera_sources(
 /// The rendered camera's pose for each frame of `traverse`'s camera
 /// stream: the traverse's ground truth at the frame's time, blurred by the
 /// motion over `camera`'s exposure centred there.
-pub(crate) fn traverse_frame_poses(camera: &CameraParams, traverse: &Traverse) -> Vec<FramePose> {
+fn traverse_frame_poses(camera: &CameraParams, traverse: &Traverse) -> Vec<FramePose> {
     let half = 0.5 * camera.exposure_secs;
     traverse
         .camera_times_secs()
