@@ -165,15 +165,14 @@ fn camera_sources(
                 *seed,
                 traverse_frame_poses(&vo.camera, t),
             );
-            let true_poses = source.true_camera_poses();
+            // The true poses only for the control that reads them.
+            let true_poses = (vo.local_map_placement == LocalMapPlacement::GroundTruth)
+                .then(|| source.true_camera_poses());
             let frames = StereoFrames::with_orb(vo.camera, Arc::new(source), vo.orb(&vo.camera));
-            Some(Arc::new(
-                if vo.local_map_placement == LocalMapPlacement::GroundTruth {
-                    frames.with_true_camera_poses(true_poses)
-                } else {
-                    frames
-                },
-            ))
+            Some(Arc::new(match true_poses {
+                Some(poses) => frames.with_true_camera_poses(poses),
+                None => frames,
+            }))
         })
         .collect())
 }

@@ -423,7 +423,7 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             inputs,
             targets,
             train_fraction,
-        } => prepare_table(path, inputs.as_ref(), targets, *train_fraction),
+        } => prepare_table(path, inputs.as_deref(), targets, *train_fraction),
     }
 }
 
@@ -512,12 +512,12 @@ fn prepare_bags(
 /// behind them.
 fn prepare_table(
     path: &Path,
-    inputs: Option<&Vec<String>>,
+    inputs: Option<&[String]>,
     targets: &[String],
     train_fraction: f64,
 ) -> Result<PreparedData, PipelineError> {
     let spec = TableSpec {
-        inputs: inputs.cloned(),
+        inputs: inputs.map(<[String]>::to_vec),
         targets: targets.to_vec(),
     };
     let data = read_residual_table(path, &spec)?;
