@@ -8,7 +8,8 @@
 //! * [`vo`]: visual odometry behind one interface, simulated or replayed;
 //! * [`run::run_frontend`]: one run of a policy over a traverse — odometry,
 //!   tracking, keyframes, loop closing, relocalisation, online learning,
-//!   the optimised trajectory and Table II's metrics ([`metrics`]);
+//!   the optimised trajectory and Table II's metrics ([`metrics`]), with
+//!   the measures a rover team reads ([`rover_measures`]);
 //! * [`online`]: regressors learning from VO targets (§VI);
 //! * [`backend`]: the factrs pose graph;
 //! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
@@ -29,6 +30,7 @@ pub mod online;
 pub mod oracle;
 pub mod params;
 pub mod prediction;
+pub mod rover_measures;
 pub mod run;
 pub mod scheme;
 pub mod spec;

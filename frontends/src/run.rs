@@ -29,6 +29,7 @@ use crate::odometry::{OdometryIntegrator, OdometryInterval};
 use crate::odometry_mode::WindowOdometry;
 use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
+use crate::rover_measures::{RoverMeasures, SampledTruth, rover_measures};
 use crate::traverse::Traverse;
 use crate::vo::{
     ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
@@ -71,6 +72,10 @@ pub struct FrontendRun {
     pub online_targets: usize,
     /// Position errors of the final trajectory.
     pub metrics: TrajectoryMetrics,
+    /// Drift since the last look, relative pose error, compute per metre
+    /// and the RMSE's decomposition.
+    #[serde(default)]
+    pub rover: RoverMeasures,
     /// Weighted squared error of the pose graph before and after
     /// optimisation.
     pub graph_error: (f64, f64),
@@ -231,6 +236,7 @@ impl<'a> Session<'a> {
                 compute_ms: 0.0,
                 online_targets: 0,
                 metrics: TrajectoryMetrics::default(),
+                rover: RoverMeasures::default(),
                 graph_error: (0.0, 0.0),
                 graph_nodes: 0,
                 processed: Vec::new(),
@@ -696,6 +702,16 @@ impl<'a> Session<'a> {
         let cost = &self.params.cost;
         self.run.compute_ms =
             self.run.frames as f64 * cost.frame_ms + self.run.keyframes as f64 * cost.keyframe_ms;
+        self.run.rover = rover_measures(
+            &self.run.trajectory,
+            &SampledTruth {
+                times_secs: self.traverse.times_secs(),
+                ground_truth: self.traverse.ground_truth(),
+                distance_m: self.traverse.distances_m(),
+            },
+            &self.run.processed,
+            self.run.compute_ms,
+        );
         self.run.predictions = self.predictions;
         Ok(self.run)
     }

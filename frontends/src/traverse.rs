@@ -260,6 +260,11 @@ impl Traverse {
         self.cumulative_m[k]
     }
 
+    /// Ground-truth path length up to each sample (m).
+    pub fn distances_m(&self) -> &[f64] {
+        &self.cumulative_m
+    }
+
     /// Ground-truth path length of the whole traverse (m), over 1-s
     /// strides.
     pub fn path_length_m(&self) -> f64 {

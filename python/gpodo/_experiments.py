@@ -203,7 +203,13 @@ class Results:
         curve), the frames and keyframes processed, the trajectory errors
         (``rmse_m``, ``max_error_m``, ``final_error_m``,
         ``travel_distance_error_percent``, ``distance_m``) and the tracking
-        losses, seconds lost, loop closures and online targets."""
+        losses, seconds lost, loop closures and online targets, and what a
+        rover team reads: the drift since the last look
+        (``drift_since_look_max_m``, ``drift_since_look_p95_m``), the
+        relative pose error over 1 m and 10 s (``rpe_1m_m``,
+        ``rpe_10s_m``), the compute model per metre (``cpu_ms_per_m``) and
+        the RMSE at keyframes, other processed frames and between them
+        (``rmse_keyframes_m``, ``rmse_processed_m``, ``rmse_between_m``)."""
         pd = _pandas()
         rows = []
         for r in self._ok_runs():
@@ -223,6 +229,7 @@ class Results:
                 row.update(run["metrics"])
                 for k in ("tracking_losses", "lost_secs", "loop_closures", "online_targets"):
                     row[k] = run[k]
+                row.update(run.get("rover", {}))
                 rows.append(row)
         return pd.DataFrame(rows)
 

@@ -60,6 +60,8 @@ def test_paper_yaml_gives_the_command_lines_metrics(paper_cli):
     assert len(table2) == len(cli["schemes"])
     assert table2["frames"].tolist() == [s["run"]["frames"] for s in cli["schemes"]]
     assert table2["rmse_m"].tolist() == [s["run"]["metrics"]["rmse_m"] for s in cli["schemes"]]
+    assert table2["rpe_1m_m"].tolist() == [s["run"]["rover"]["rpe_1m_m"] for s in cli["schemes"]]
+    assert (table2["drift_since_look_max_m"] >= table2["drift_since_look_p95_m"]).all()
 
 
 def test_a_dict_runs_and_its_tables_and_trajectories_are_dataframes():

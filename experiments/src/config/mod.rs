@@ -76,6 +76,12 @@ pub struct ExperimentConfig {
     /// logs: `simulated` or `logs` data).
     #[serde(default)]
     pub schemes: Vec<SchemeSpec>,
+    /// The margin ε of the verdict "equivalent" (m): a paired Δ RMSE whose
+    /// 95 % interval lies within ±ε, across zero, is equivalent to its
+    /// comparison. Committed before the runs it judges; without it the
+    /// verdict has no "equivalent".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub equivalence_margin_m: Option<f64>,
 }
 
 /// A reference residual table.
@@ -180,6 +186,35 @@ impl ExperimentConfig {
             p.seed = seed;
         }
         self
+    }
+
+    /// The A/A pairs among the schemes: each fixed rate with a phase
+    /// (`phase_secs > 0`) and the first scheme of the same rate without
+    /// one and of the same back end, as (unshifted, shifted) indices. Both
+    /// process as many frames, none in common: what separates them is the
+    /// comparison's floor.
+    pub fn phase_pairs(&self) -> Vec<(usize, usize)> {
+        let rate = |s: &SchemeSpec| match s.selector {
+            gpodo_frontends::SelectorSpec::FixedRate { fps, phase_secs } => Some((fps, phase_secs)),
+            _ => None,
+        };
+        let mut pairs = Vec::new();
+        for (shifted, spec) in self.schemes.iter().enumerate() {
+            let Some((fps, phase)) = rate(spec) else {
+                continue;
+            };
+            if phase <= 0.0 {
+                continue;
+            }
+            let back_end = spec.back_end(self);
+            let unshifted = self.schemes.iter().position(|other| {
+                rate(other) == Some((fps, 0.0)) && other.back_end(self) == back_end
+            });
+            if let Some(unshifted) = unshifted {
+                pairs.push((unshifted, shifted));
+            }
+        }
+        pairs
     }
 
     /// The labels of the regressors, as reports print them.

@@ -75,6 +75,15 @@ impl ExperimentConfig {
             })?;
         }
         self.validate_schemes()?;
+        if let Some(margin) = self.equivalence_margin_m
+            && !(margin.is_finite() && margin > 0.0)
+        {
+            return Err(Issue::new(
+                "equivalence_margin_m",
+                format!("invalid equivalence margin {margin}"),
+                "a positive margin in metres",
+            ));
+        }
         if let gpodo_frontends::params::VoSpec::Replay(p) = &self.frontend.vo {
             let recorded =
                 matches!(&self.dataset, DatasetSpec::Bags { topics, .. } if topics.vo.is_some());

@@ -12,6 +12,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+use gpodo_frontends::metrics::{ErrorAgreement, error_agreement};
+use gpodo_frontends::rover_measures::RoverMeasures;
 use serde::{Deserialize, Serialize};
 
 use crate::config::ExperimentConfig;
@@ -69,6 +71,10 @@ pub struct SchemeMetrics {
     pub loop_closures: usize,
     /// Targets learned online.
     pub online_targets: usize,
+    /// Drift since the last look, relative pose error, compute per metre
+    /// and the RMSE's decomposition.
+    #[serde(default)]
+    pub rover: RoverMeasures,
 }
 
 /// Everything a run measured.
@@ -78,6 +84,57 @@ pub struct RunMetrics {
     pub regressors: Vec<RegressorMetrics>,
     /// One entry per scheme and test run.
     pub schemes: Vec<SchemeMetrics>,
+    /// How alike the two schemes of each A/A pair (a fixed rate and the
+    /// same rate at a phase, [`ExperimentConfig::phase_pairs`]) err, per
+    /// test run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared_errors: Vec<SharedError>,
+}
+
+/// The error agreement of one A/A pair on one test run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SharedError {
+    /// The fixed rate's label.
+    pub unshifted: String,
+    /// The same rate at a phase.
+    pub shifted: String,
+    /// The test run.
+    pub traverse: String,
+    /// How alike their position errors are.
+    pub agreement: ErrorAgreement,
+}
+
+/// The agreement of every A/A pair of `results` on every test run.
+fn shared_errors(results: &ExperimentResults) -> Vec<SharedError> {
+    let mut out = Vec::new();
+    for (unshifted, shifted) in results.config.phase_pairs() {
+        let (a, b) = (
+            &results.config.schemes[unshifted].label,
+            &results.config.schemes[shifted].label,
+        );
+        for traverse in results.traverses.iter() {
+            let run = |label: &str| {
+                results
+                    .schemes
+                    .iter()
+                    .find(|s| s.label == label && s.traverse == traverse.name())
+            };
+            let (Some(x), Some(y)) = (run(a), run(b)) else {
+                continue;
+            };
+            out.push(SharedError {
+                unshifted: a.clone(),
+                shifted: b.clone(),
+                traverse: traverse.name().to_string(),
+                agreement: error_agreement(
+                    &x.run.trajectory,
+                    &y.run.trajectory,
+                    traverse.ground_truth(),
+                ),
+            });
+        }
+    }
+    out
 }
 
 /// Wall-clock times of a run (not reproducible; kept apart).
@@ -151,6 +208,7 @@ impl RunRecord {
                 lost_secs: s.run.lost_secs,
                 loop_closures: s.run.loop_closures,
                 online_targets: s.run.online_targets,
+                rover: s.run.rover,
             })
             .collect();
         Self {
@@ -164,6 +222,7 @@ impl RunRecord {
             metrics: RunMetrics {
                 regressors,
                 schemes,
+                shared_errors: shared_errors(results),
             },
             timing: RunTiming {
                 fit_secs: results

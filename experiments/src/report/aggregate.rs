@@ -188,6 +188,9 @@ pub(crate) fn table_two(records: &[RunRecord]) -> Option<Table> {
         "frames / first",
         "RMSE / first",
         "VO losses",
+        "drift since look, p95 [m]",
+        "RPE 1 m [m]",
+        "compute [ms/m]",
     ])
     .with_csv(&[
         "setting",
@@ -205,6 +208,14 @@ pub(crate) fn table_two(records: &[RunRecord]) -> Option<Table> {
         "frames_ratio_first_mean",
         "rmse_ratio_first_mean",
         "tracking_losses_mean",
+        "drift_since_look_p95_m_mean",
+        "drift_since_look_max_m_mean",
+        "rpe_1m_m_mean",
+        "rpe_10s_m_mean",
+        "cpu_ms_per_m_mean",
+        "rmse_keyframes_m_mean",
+        "rmse_processed_m_mean",
+        "rmse_between_m_mean",
     ]);
     for key in order {
         let runs = &groups[&key];
@@ -237,8 +248,18 @@ pub(crate) fn table_two(records: &[RunRecord]) -> Option<Table> {
             Stat::of(&first(&|m| m.frames as f64)),
             Stat::of(&first(&|m| m.rmse_m)),
             Stat::of(&get(&|m| m.tracking_losses as f64)),
+            Stat::of(&get(&|m| m.rover.drift_since_look_p95_m)),
+            Stat::of(&get(&|m| m.rover.rpe_1m_m)),
+            Stat::of(&get(&|m| m.rover.cpu_ms_per_m)),
         ];
-        let digits = [0, 0, 3, 3, 3, 2, 2, 2, 1];
+        let digits = [0, 0, 3, 3, 3, 2, 2, 2, 1, 3, 3, 0];
+        let csv_only = [
+            Stat::of(&get(&|m| m.rover.drift_since_look_max_m)),
+            Stat::of(&get(&|m| m.rover.rpe_10s_m)),
+            Stat::of(&get(&|m| m.rover.rmse_keyframes_m)),
+            Stat::of(&get(&|m| m.rover.rmse_processed_m)),
+            Stat::of(&get(&|m| m.rover.rmse_between_m)),
+        ];
         let mut row = vec![
             key.0.clone(),
             label.clone(),
@@ -270,6 +291,14 @@ pub(crate) fn table_two(records: &[RunRecord]) -> Option<Table> {
             mean(&stats[6]),
             mean(&stats[7]),
             mean(&stats[8]),
+            mean(&stats[9]),
+            mean(&csv_only[0]),
+            mean(&stats[10]),
+            mean(&csv_only[1]),
+            mean(&stats[11]),
+            mean(&csv_only[2]),
+            mean(&csv_only[3]),
+            mean(&csv_only[4]),
         ]);
     }
     Some(table)

@@ -43,8 +43,17 @@ pub fn interpolate_log_frames(points: &[Point], frames: f64) -> Option<f64> {
 /// The section, empty when no row has a control.
 pub fn controls_section(s: &mut String, r: &ExperimentResults) {
     let spec = |label: &str| r.config.schemes.iter().find(|x| x.label == label);
+    // A fixed rate at a phase is an A/A control (the sweep report's floor),
+    // neither a point of the fixed-rate curve nor a gated scheme.
+    let is_phased = |x: &SchemeResult| {
+        spec(&x.label).is_some_and(
+            |p| matches!(p.selector, SelectorSpec::FixedRate { phase_secs, .. } if phase_secs > 0.0),
+        )
+    };
     let is_fixed = |x: &SchemeResult| {
-        spec(&x.label).is_some_and(|p| matches!(p.selector, SelectorSpec::FixedRate { .. }))
+        spec(&x.label).is_some_and(
+            |p| matches!(p.selector, SelectorSpec::FixedRate { phase_secs, .. } if phase_secs == 0.0),
+        )
     };
     let is_oracle =
         |x: &SchemeResult| spec(&x.label).is_some_and(|p| p.selector.oracle().is_some());
@@ -86,7 +95,10 @@ pub fn controls_section(s: &mut String, r: &ExperimentResults) {
         } else {
             String::new()
         };
-        for x in rows.iter().filter(|x| !is_fixed(x) && !is_oracle(x)) {
+        for x in rows
+            .iter()
+            .filter(|x| !is_fixed(x) && !is_phased(x) && !is_oracle(x))
+        {
             let fixed: Vec<&&SchemeResult> = rows
                 .iter()
                 .filter(|y| {
@@ -119,7 +131,7 @@ pub fn controls_section(s: &mut String, r: &ExperimentResults) {
         }
         for x in rows.iter().filter(|x| !zero_labels.contains(&x.residuals)) {
             let Some(px) = spec(&x.label) else { continue };
-            if is_fixed(x) || is_oracle(x) {
+            if is_fixed(x) || is_phased(x) || is_oracle(x) {
                 continue;
             }
             let control = rows.iter().find(|y| {

@@ -15,6 +15,7 @@
 use std::collections::BTreeMap;
 
 use gpodo_frontends::SelectorSpec;
+use gpodo_frontends::rover_measures::RoverMeasures;
 
 use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, bootstrap, mean_at};
@@ -38,6 +39,8 @@ pub struct KnobPoint {
     pub rmse: Vec<f64>,
     /// Compute proxy per seed (s).
     pub compute: Vec<f64>,
+    /// A rover team's measures per seed.
+    pub rover: Vec<RoverMeasures>,
 }
 
 /// One policy's curve.
@@ -87,7 +90,7 @@ impl Curves {
                 .schemes
                 .iter()
                 .find(|m| m.label == label && m.traverse == traverse)
-                .map(|m| (m.frames as f64, m.rmse_m, m.compute_s))
+                .map(|m| (m.frames as f64, m.rmse_m, m.compute_s, m.rover))
         };
         let series = |label: &str| -> Option<KnobPoint> {
             let mut point = KnobPoint {
@@ -95,12 +98,14 @@ impl Curves {
                 frames: Vec::new(),
                 rmse: Vec::new(),
                 compute: Vec::new(),
+                rover: Vec::new(),
             };
             for r in records {
-                let (f, e, c) = metric(r, label)?;
+                let (f, e, c, m) = metric(r, label)?;
                 point.frames.push(f);
                 point.rmse.push(e);
                 point.compute.push(c);
+                point.rover.push(m);
             }
             Some(point)
         };
@@ -195,6 +200,12 @@ pub struct PointSummary {
     pub compute: f64,
     /// Mean RMSE (m) and its interval.
     pub rmse: Interval,
+    /// Mean 95th percentile of the drift since the last look (m).
+    pub drift_since_look_p95_m: f64,
+    /// Mean relative pose error over 1 m (m).
+    pub rpe_1m_m: f64,
+    /// Mean compute model per metre (ms/m).
+    pub cpu_ms_per_m: f64,
 }
 
 /// Every point of `curve`, summarised over seeds.
@@ -205,7 +216,12 @@ pub fn summarise(curve: &Curve, seed: u64) -> Vec<PointSummary> {
         .filter_map(|p| {
             let n = p.rmse.len();
             let rmse = bootstrap(n, seed, |ix| Some(mean_at(&p.rmse, ix)))?;
+            let rover_mean =
+                |f: fn(&RoverMeasures) -> f64| p.rover.iter().map(f).sum::<f64>() / n as f64;
             Some(PointSummary {
+                drift_since_look_p95_m: rover_mean(|m| m.drift_since_look_p95_m),
+                rpe_1m_m: rover_mean(|m| m.rpe_1m_m),
+                cpu_ms_per_m: rover_mean(|m| m.cpu_ms_per_m),
                 label: p.label.clone(),
                 frames: p.frames.iter().sum::<f64>() / n as f64,
                 compute: p.compute.iter().sum::<f64>() / n as f64,
@@ -371,6 +387,61 @@ pub fn at_budget(
     out
 }
 
+/// Δ at equal compute: on each seed, the compute model's cost of the
+/// fixed-rate curve `fixed` at `budget` frames (interpolated in log
+/// frames), the RMSE of `curve` at that cost (interpolated in log compute)
+/// and of `fixed` at the budget, paired as [`at_budget`] pairs them.
+pub fn at_equal_compute(
+    curve: &Curve,
+    fixed: &Curve,
+    seeds: &[u64],
+    budget: f64,
+    seed: u64,
+) -> AtBudget {
+    let mut out = AtBudget {
+        budget,
+        seeds: Vec::new(),
+        rmse: Vec::new(),
+        fixed: Vec::new(),
+        rmse_mean: None,
+        difference: None,
+    };
+    for (s, &seed_value) in seeds.iter().enumerate() {
+        let along = |c: &Curve, y: fn(&KnobPoint, usize) -> f64| -> Vec<(f64, f64)> {
+            c.points.iter().map(|p| (p.frames[s], y(p, s))).collect()
+        };
+        let Some(cost) = interpolate_log_frames(&along(fixed, |p, s| p.compute[s]), budget) else {
+            continue;
+        };
+        let Some(f) = interpolate_log_frames(&along(fixed, |p, s| p.rmse[s]), budget) else {
+            continue;
+        };
+        let by_cost: Vec<(f64, f64)> = curve
+            .points
+            .iter()
+            .map(|p| (p.compute[s], p.rmse[s]))
+            .collect();
+        let Some(r) = interpolate_log_frames(&by_cost, cost) else {
+            continue;
+        };
+        out.seeds.push(seed_value);
+        out.rmse.push(r);
+        out.fixed.push(f);
+    }
+    let n = out.seeds.len();
+    if n > 0 {
+        out.rmse_mean = bootstrap(n, seed, |ix| Some(mean_at(&out.rmse, ix)));
+        let diff: Vec<f64> = out
+            .rmse
+            .iter()
+            .zip(&out.fixed)
+            .map(|(a, b)| a - b)
+            .collect();
+        out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
+    }
+    out
+}
+
 /// Groups `records` into sets of seeds of the same setting (swept values
 /// other than the seed), in first-seen order.
 pub fn by_setting(records: &[RunRecord]) -> Vec<(String, Vec<&RunRecord>)> {
@@ -404,6 +475,7 @@ mod tests {
             frames: frames.to_vec(),
             rmse: rmse.to_vec(),
             compute: frames.to_vec(),
+            rover: vec![RoverMeasures::default(); frames.len()],
         }
     }
 

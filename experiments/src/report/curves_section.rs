@@ -10,9 +10,10 @@ use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, RESAMPLES};
 use crate::report::curve_plot::{Panel, curves_svg};
 use crate::report::curves::{
-    AtBudget, BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget, by_setting,
-    frames_to_reach, summarise,
+    AtBudget, BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget,
+    at_equal_compute, by_setting, frames_to_reach, summarise,
 };
+use crate::report::floor::{Floor, floors, mde_cell, nearest};
 use crate::report::table::{Align, Table};
 
 /// What the section adds to a sweep report.
@@ -40,15 +41,20 @@ fn interval(i: &Interval, digits: usize) -> String {
 /// Fewest seeds for a verdict on a paired difference.
 pub const MIN_SEEDS_FOR_VERDICT: usize = 5;
 
-fn verdict(d: &Interval, seeds: usize) -> &'static str {
+/// The verdict on a paired Δ over `seeds` seeds: lower or higher when its
+/// interval excludes zero; equivalent when it crosses zero within ±ε
+/// (`margin`, the experiment's `equivalence_margin_m`); else not resolved.
+pub fn verdict(d: &Interval, seeds: usize, margin: Option<f64>) -> String {
     if seeds < MIN_SEEDS_FOR_VERDICT {
-        "too few seeds"
+        "too few seeds".into()
     } else if d.high < 0.0 {
-        "lower, 95 %"
+        "lower, 95 %".into()
     } else if d.low > 0.0 {
-        "higher, 95 %"
+        "higher, 95 %".into()
+    } else if let Some(e) = margin.filter(|e| -e < d.low && d.high < *e) {
+        format!("equivalent (within ±{e:.3} m)")
     } else {
-        "not resolved"
+        "not resolved".into()
     }
 }
 
@@ -130,8 +136,10 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
             "against_rmse_m",
             "difference_m",
         ]);
-        let budget = budget_table(&curves, seed, &mut paired);
-        let twin = twin_table(&curves, seed, &mut paired);
+        let floors = floors(runs, seed);
+        let margin = runs.first().and_then(|r| r.config.equivalence_margin_m);
+        let budget = budget_table(&curves, seed, &mut paired, &floors, margin);
+        let twin = twin_table(&curves, seed, &mut paired, margin);
         let s = &mut out.markdown;
         let _ = writeln!(s, "Points of every curve:\n\n{}", points.markdown());
         let _ = writeln!(
@@ -142,7 +150,7 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
         );
         let _ = writeln!(
             s,
-            "(b) RMSE at the paper's budgets (each seed's curve interpolated in log frames, never extrapolated), paired per seed with the fixed-rate curve of the same back end at the same frames (Δ < 0: the policy is better than fixed rate at equal frames). Per-seed pairs: `tables/curves_paired{suffix}.csv`.\n\n{}",
+            "(b) RMSE at the paper's budgets (each seed's curve interpolated in log frames, never extrapolated), paired per seed with the fixed-rate curve of the same back end at the same frames (Δ < 0: the policy is better than fixed rate at equal frames). MDE: the minimum detectable effect of the nearest A/A pair of the same back end (the floor section); a Δ within it cannot be told from frame choice that does nothing. The verdict: lower or higher when the interval excludes zero, equivalent when it crosses zero within the experiment's `equivalence_margin_m`, otherwise not resolved. Δ at equal compute pairs the policy, at the fixed rate's compute-model cost at the budget, with the fixed rate at the budget. Per-seed pairs: `tables/curves_paired{suffix}.csv`.\n\n{}",
             budget.markdown()
         );
         if !twin.is_empty() {
@@ -188,6 +196,9 @@ fn points_table(curves: &Curves, summaries: &[Vec<PointSummary>]) -> Table {
         "frames",
         "compute [s]",
         "RMSE [m] (95 % CI)",
+        "drift since look, p95 [mm]",
+        "RPE 1 m [mm]",
+        "compute [ms/m]",
     ])
     .align(&[1], Align::Left)
     .with_csv(&[
@@ -199,6 +210,9 @@ fn points_table(curves: &Curves, summaries: &[Vec<PointSummary>]) -> Table {
         "rmse_mean_m",
         "rmse_low_m",
         "rmse_high_m",
+        "drift_since_look_p95_mean_m",
+        "rpe_1m_mean_m",
+        "cpu_ms_per_m_mean",
     ]);
     for (c, summary) in curves.curves.iter().zip(summaries) {
         for p in summary {
@@ -208,6 +222,9 @@ fn points_table(curves: &Curves, summaries: &[Vec<PointSummary>]) -> Table {
                 format!("{:.0}", p.frames),
                 format!("{:.1}", p.compute),
                 interval(&p.rmse, 3),
+                format!("{:.1}", 1e3 * p.drift_since_look_p95_m),
+                format!("{:.1}", 1e3 * p.rpe_1m_m),
+                format!("{:.0}", p.cpu_ms_per_m),
             ]);
             points.push_csv(vec![
                 c.name.clone(),
@@ -218,6 +235,9 @@ fn points_table(curves: &Curves, summaries: &[Vec<PointSummary>]) -> Table {
                 p.rmse.estimate.to_string(),
                 p.rmse.low.to_string(),
                 p.rmse.high.to_string(),
+                p.drift_since_look_p95_m.to_string(),
+                p.rpe_1m_m.to_string(),
+                p.cpu_ms_per_m.to_string(),
             ]);
         }
     }
@@ -290,7 +310,13 @@ fn reach_table(curves: &Curves, seed: u64) -> Table {
 
 /// Table (b): RMSE at the paper's budgets, paired per seed with the fixed
 /// rate of the same back end; each seed's pair goes into `paired`.
-fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
+fn budget_table(
+    curves: &Curves,
+    seed: u64,
+    paired: &mut Table,
+    floors: &[Floor],
+    margin: Option<f64>,
+) -> Table {
     let mut budget = Table::new(&[
         "curve",
         "frames",
@@ -298,9 +324,11 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
         "RMSE [m] (95 % CI)",
         "fixed rate, same back end [m]",
         "Δ RMSE [m] (95 % CI)",
+        "MDE [m]",
         "gating vs fixed rate",
+        "Δ at equal compute [m] (95 % CI)",
     ])
-    .align(&[6], Align::Left)
+    .align(&[6, 7], Align::Left)
     .with_csv(&[
         "curve",
         "budget_frames",
@@ -312,6 +340,10 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
         "difference_mean_m",
         "difference_low_m",
         "difference_high_m",
+        "mde_m",
+        "equal_compute_difference_mean_m",
+        "equal_compute_difference_low_m",
+        "equal_compute_difference_high_m",
     ]);
     for c in &curves.curves {
         let fixed = if c.fixed_rate {
@@ -326,6 +358,8 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
             let r = at_budget(c, fixed, &curves.seeds, b, seed);
             let Some(mean) = r.rmse_mean else { continue };
             let fixed_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
+            let equal_compute =
+                fixed.and_then(|f| at_equal_compute(c, f, &curves.seeds, b, seed).difference);
             budget.push(vec![
                 c.name.clone(),
                 format!("{b:.0}"),
@@ -337,17 +371,23 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
                     .map_or("– (is the fixed rate)".into(), |d| {
                         format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
                     }),
+                mde_cell(floors, &c.back_end, b),
                 r.difference
                     .as_ref()
-                    .map_or("–", |d| verdict(d, r.seeds.len()))
-                    .to_string(),
+                    .map_or("–".into(), |d| verdict(d, r.seeds.len(), margin)),
+                equal_compute.map_or("–".into(), |d| {
+                    format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
+                }),
             ]);
-            let d = r.difference.unwrap_or(Interval {
+            let zero = Interval {
                 estimate: 0.0,
                 low: 0.0,
                 high: 0.0,
                 defined: 1.0,
-            });
+            };
+            let d = r.difference.unwrap_or(zero);
+            let e = equal_compute.unwrap_or(zero);
+            let mde = nearest(floors, &c.back_end, b).map_or(f64::NAN, Floor::mde_m);
             budget.push_csv(vec![
                 c.name.clone(),
                 b.to_string(),
@@ -359,6 +399,10 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
                 d.estimate.to_string(),
                 d.low.to_string(),
                 d.high.to_string(),
+                mde.to_string(),
+                e.estimate.to_string(),
+                e.low.to_string(),
+                e.high.to_string(),
             ]);
             push_pairs(
                 paired,
@@ -374,7 +418,7 @@ fn budget_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
 
 /// Table (c): each curve against its zero-residual twin at equal frames;
 /// each seed's pair goes into `paired`.
-fn twin_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
+fn twin_table(curves: &Curves, seed: u64, paired: &mut Table, margin: Option<f64>) -> Table {
     let mut twin = Table::new(&[
         "curve",
         "zero-residual twin",
@@ -415,7 +459,7 @@ fn twin_table(curves: &Curves, seed: u64, paired: &mut Table) -> Table {
                 format!("{:.3}", m.estimate),
                 format!("{twin_mean:.3}"),
                 format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high),
-                verdict(&d, r.seeds.len()).to_string(),
+                verdict(&d, r.seeds.len(), margin),
             ]);
             twin.push_csv(vec![
                 c.name.clone(),

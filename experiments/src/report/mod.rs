@@ -14,6 +14,7 @@ pub mod curve_plot;
 pub mod curves;
 pub mod curves_section;
 pub mod files;
+pub mod floor;
 pub mod hindsight;
 mod loss_strips;
 pub mod plots;

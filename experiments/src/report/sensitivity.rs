@@ -22,6 +22,7 @@ use crate::execute::records::RunRecord;
 use crate::report::bootstrap::Interval;
 use crate::report::curves::{BUDGETS, Curves, at_budget, by_setting};
 use crate::report::curves_section::MIN_SEEDS_FOR_VERDICT;
+use crate::report::floor::{Floor, floors, nearest};
 use crate::report::table::{Align, Table};
 
 /// Where an interval lies.
@@ -31,6 +32,9 @@ pub enum Side {
     Below,
     /// Entirely above zero: gating worse.
     Above,
+    /// Across zero, within ±ε of the experiment's
+    /// `equivalence_margin_m`.
+    Equivalent,
     /// Across zero.
     Across,
     /// Fewer than [`MIN_SEEDS_FOR_VERDICT`] seeds reach the budget.
@@ -38,12 +42,14 @@ pub enum Side {
 }
 
 impl Side {
-    /// Of an effect's interval over `seeds` seeds in range.
-    pub fn of(d: Option<&Interval>, seeds: usize) -> Self {
+    /// Of an effect's interval over `seeds` seeds in range, with the
+    /// equivalence margin ε (m), if the experiment commits one.
+    pub fn of(d: Option<&Interval>, seeds: usize, margin: Option<f64>) -> Self {
         match d {
             _ if seeds < MIN_SEEDS_FOR_VERDICT => Self::TooFewSeeds,
             Some(d) if d.high < 0.0 => Self::Below,
             Some(d) if d.low > 0.0 => Self::Above,
+            Some(d) if margin.is_some_and(|e| -e < d.low && d.high < e) => Self::Equivalent,
             Some(d) if d.low.is_finite() && d.high.is_finite() => Self::Across,
             _ => Self::TooFewSeeds,
         }
@@ -51,13 +57,14 @@ impl Side {
 
     /// Of `e`.
     pub fn of_effect(e: &Effect) -> Self {
-        Self::of(e.difference.as_ref(), e.seeds.0)
+        Self::of(e.difference.as_ref(), e.seeds.0, e.margin)
     }
 
     fn words(self) -> &'static str {
         match self {
             Self::Below => "below zero (gating better)",
             Self::Above => "above zero (gating worse)",
+            Self::Equivalent => "within ±ε (equivalent)",
             Self::Across => "across zero",
             Self::TooFewSeeds => "too few seeds in range",
         }
@@ -81,6 +88,11 @@ pub struct Effect {
     pub rmse: Option<(f64, f64)>,
     /// Δ with its interval.
     pub difference: Option<Interval>,
+    /// The experiment's equivalence margin ε (m), if any.
+    pub margin: Option<f64>,
+    /// The minimum detectable effect of the setting's nearest A/A pair of
+    /// the same back end (m), if the experiment has one.
+    pub mde_m: Option<f64>,
 }
 
 impl Effect {
@@ -115,6 +127,8 @@ pub fn effects(records: &[RunRecord], seed: u64) -> Option<Vec<Effect>> {
             Some((p, v)) => (p.to_string(), v.to_string()),
             None => ("defaults".to_string(), "–".to_string()),
         };
+        let floors = floors(runs, seed);
+        let margin = runs.first().and_then(|r| r.config.equivalence_margin_m);
         for c in curves.curves.iter().filter(|c| !c.fixed_rate) {
             let Some(fixed) = curves.fixed_rate_of(&c.back_end) else {
                 continue;
@@ -130,6 +144,8 @@ pub fn effects(records: &[RunRecord], seed: u64) -> Option<Vec<Effect>> {
                     seeds: (r.seeds.len(), curves.seeds.len()),
                     rmse: (!r.rmse.is_empty()).then(|| (mean(&r.rmse), mean(&r.fixed))),
                     difference: r.difference,
+                    margin,
+                    mde_m: nearest(&floors, &c.back_end, b).map(Floor::mde_m),
                 });
             }
         }
@@ -184,6 +200,13 @@ pub fn verdict(effects: &[Effect], policy: &str) -> String {
             span(&counted)
         );
     }
+    if counted.iter().all(|(s, _)| *s == Side::Equivalent) {
+        return format!(
+            "gating is equivalent to the fixed rate across the plausible range (every interval across zero within ±{:.3} m): {}{caveat}",
+            mine.first().and_then(|e| e.margin).unwrap_or(f64::NAN),
+            span(&counted)
+        );
+    }
     if counted.iter().all(|(s, _)| *s == Side::Above) {
         return format!(
             "gating loses across the plausible range: {}{caveat}",
@@ -204,8 +227,13 @@ pub fn verdict(effects: &[Effect], policy: &str) -> String {
     } else {
         "the simulation cannot decide: an interval crosses zero"
     };
+    let equivalent = if mine.iter().any(|e| e.margin.is_some()) {
+        format!(". Equivalent (within ±ε): {}", list(Side::Equivalent))
+    } else {
+        String::new()
+    };
     format!(
-        "{head}. Below zero (gating better): {}. Above zero (gating worse): {}. Across zero: {}{caveat}",
+        "{head}. Below zero (gating better): {}. Above zero (gating worse): {}{equivalent}. Across zero: {}{caveat}",
         list(Side::Below),
         list(Side::Above),
         list(Side::Across)
@@ -227,9 +255,10 @@ pub fn sensitivity_section(
         "policy RMSE [m]",
         "fixed rate [m]",
         "Δ RMSE [m] (95 % CI)",
+        "MDE [m]",
         "interval",
     ])
-    .align(&[0, 1, 7], Align::Left)
+    .align(&[0, 1, 8], Align::Left)
     .with_csv(&[
         "parameter",
         "value",
@@ -241,6 +270,7 @@ pub fn sensitivity_section(
         "difference_m",
         "difference_low_m",
         "difference_high_m",
+        "mde_m",
     ]);
     for e in &effects {
         let (p, f) = e.rmse.map_or(("–".into(), "–".into()), |(p, f)| {
@@ -256,6 +286,7 @@ pub fn sensitivity_section(
             e.difference.as_ref().map_or("–".into(), |d| {
                 format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high)
             }),
+            e.mde_m.map_or("–".into(), |m| format!("±{m:.3}")),
             Side::of_effect(e).words().into(),
         ]);
         let d = e.difference;
@@ -270,6 +301,7 @@ pub fn sensitivity_section(
             d.map_or(String::new(), |d| d.estimate.to_string()),
             d.map_or(String::new(), |d| d.low.to_string()),
             d.map_or(String::new(), |d| d.high.to_string()),
+            e.mde_m.map_or(String::new(), |m| m.to_string()),
         ]);
     }
     let mut policies: Vec<&str> = Vec::new();
@@ -281,7 +313,7 @@ pub fn sensitivity_section(
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "## Sensitivity — does gating win at equal frames across the plausible range?\n\nOne parameter at a time around the defaults, every setting on the same seeds. Δ = RMSE(policy) − RMSE(fixed rate of the same back end), both interpolated in log frames at the budget on each seed (never extrapolated), mean over seeds with a 95 % percentile-bootstrap interval. The verdict follows a rule fixed before the runs: a policy wins if at every budget every setting's interval lies below zero, loses if every one lies above, and otherwise the simulation cannot decide; a setting reached on fewer than five seeds counts for neither side. Figure: `plots/sensitivity.svg`; table: `tables/sensitivity.csv`.\n"
+        "## Sensitivity — does gating win at equal frames across the plausible range?\n\nOne parameter at a time around the defaults, every setting on the same seeds. Δ = RMSE(policy) − RMSE(fixed rate of the same back end), both interpolated in log frames at the budget on each seed (never extrapolated), mean over seeds with a 95 % percentile-bootstrap interval. The verdict follows a rule fixed before the runs: a policy wins if at every budget every setting's interval lies below zero, loses if every one lies above, is equivalent if every one crosses zero within ±ε (the experiment's `equivalence_margin_m`, when it commits one), and otherwise the simulation cannot decide; MDE: the minimum detectable effect of the setting's nearest A/A pair of the same back end; a setting reached on fewer than five seeds counts for neither side. Figure: `plots/sensitivity.svg`; table: `tables/sensitivity.csv`.\n"
     );
     let _ = writeln!(s, "Verdict:\n");
     for p in &policies {
@@ -309,7 +341,46 @@ mod tests {
                 high,
                 defined: 1.0,
             }),
+            margin: None,
+            mde_m: None,
         }
+    }
+
+    #[test]
+    fn equivalence_needs_a_committed_margin_and_every_interval_within_it() {
+        let base = ("defaults", "–");
+        let shared = ("map_error_share", "1.0");
+        let with_margin = |mut e: Effect, margin: f64| {
+            e.margin = Some(margin);
+            e
+        };
+        let near_zero = [
+            with_margin(effect(base, 500.0, Some((0.001, -0.004, 0.006))), 0.01),
+            with_margin(effect(shared, 1000.0, Some((-0.002, -0.008, 0.003))), 0.01),
+        ];
+        let v = verdict(&near_zero, "p");
+        assert!(
+            v.starts_with("gating is equivalent to the fixed rate"),
+            "{v}"
+        );
+        assert!(v.contains("±0.010 m"), "{v}");
+        // The same intervals without a margin: not decided.
+        let unmarked = [
+            effect(base, 500.0, Some((0.001, -0.004, 0.006))),
+            effect(shared, 1000.0, Some((-0.002, -0.008, 0.003))),
+        ];
+        assert!(verdict(&unmarked, "p").contains("an interval crosses zero"));
+        // One interval wider than the margin: not decided, and named.
+        let wide = [
+            with_margin(effect(base, 500.0, Some((0.001, -0.004, 0.006))), 0.005),
+            with_margin(effect(shared, 1000.0, Some((-0.002, -0.008, 0.003))), 0.005),
+        ];
+        let v = verdict(&wide, "p");
+        assert!(v.contains("an interval crosses zero"), "{v}");
+        assert!(v.contains("Equivalent (within ±ε): none"), "{v}");
+        // An interval below zero stays "below", margin or not.
+        let below = with_margin(effect(base, 500.0, Some((-0.002, -0.003, -0.001))), 0.01);
+        assert_eq!(Side::of_effect(&below), Side::Below);
     }
 
     #[test]

@@ -14,6 +14,7 @@ use crate::execute::records::{RecordError, RunRecord, read_records, record_files
 use crate::plan::PlanFile;
 use crate::report::aggregate::{ablations, table_one, table_two, tradeoff_svg};
 use crate::report::curves_section::curves_section;
+use crate::report::floor::floor_section;
 use crate::report::sensitivity::sensitivity_section;
 use crate::report::sensitivity_plot::sensitivity_svg;
 use crate::report::table::Table;
@@ -208,6 +209,10 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
         }
     }
     let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
+    if let Some((markdown, table)) = floor_section(records, bootstrap_seed) {
+        s.push_str(&markdown);
+        write_table("floor.csv", &table)?;
+    }
     if let Some((markdown, table, effects)) = sensitivity_section(records, bootstrap_seed) {
         s.push_str(&markdown);
         write_table("sensitivity.csv", &table)?;
