@@ -10,7 +10,8 @@
 //! * **Drift since the last look** at sample `k`: `‖e_k − e_j‖`, where
 //!   `e = p̂ − p` is the position error and `j` the sample of the last
 //!   tracked frame at or before `k` (the start pose, known, before the
-//!   first). Its maximum and 95th percentile over the samples.
+//!   first). Its maximum, 95th percentile and root mean square over the
+//!   samples.
 //! * **Relative pose error** (Sturm et al., IROS 2012, the TUM benchmark's
 //!   RPE): for every sample `i` and the first sample `j` at least 1 m of
 //!   travel (or 10 s) after it, the translation of
@@ -24,8 +25,6 @@
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
-use crate::run::ProcessedFrame;
-
 /// A rover team's measures of one run (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct RoverMeasures {
@@ -33,6 +32,11 @@ pub struct RoverMeasures {
     pub drift_since_look_max_m: f64,
     /// 95th percentile of the drift since the last tracked frame (m).
     pub drift_since_look_p95_m: f64,
+    /// Root mean square of the drift since the last tracked frame (m): what
+    /// the surrogate planner ([`crate::oracle`]) minimises, were every look
+    /// exact.
+    #[serde(default)]
+    pub drift_since_look_rms_m: f64,
     /// RMS translational relative pose error over 1 m of travel (m).
     pub rpe_1m_m: f64,
     /// RMS translational relative pose error over 10 s (m).
@@ -45,6 +49,17 @@ pub struct RoverMeasures {
     pub rmse_processed_m: f64,
     /// Position RMSE at every sample without a processed frame (m).
     pub rmse_between_m: f64,
+}
+
+/// A processed frame, as the measures read it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Look {
+    /// Time (s).
+    pub time_secs: f64,
+    /// Whether it became a keyframe.
+    pub keyframe: bool,
+    /// Whether it was tracked (or relocalised) rather than lost.
+    pub tracked: bool,
 }
 
 /// The sample, distance and time of a trajectory, as the measures read
@@ -72,7 +87,7 @@ impl SampledTruth<'_> {
 pub fn rover_measures(
     estimate: &[Isometry3<f64>],
     truth: &SampledTruth<'_>,
-    processed: &[ProcessedFrame],
+    processed: impl IntoIterator<Item = Look>,
     compute_ms: f64,
 ) -> RoverMeasures {
     let n = estimate
@@ -116,6 +131,7 @@ pub fn rover_measures(
         drift.push((errors[k] - errors[last_look]).norm());
     }
     let drift_since_look_max_m = drift.iter().copied().fold(0.0, f64::max);
+    let drift_since_look_rms_m = (drift.iter().map(|d| d * d).sum::<f64>() / n as f64).sqrt();
     drift.sort_by(f64::total_cmp);
     let drift_since_look_p95_m = percentile_sorted(&drift, 0.95);
 
@@ -135,6 +151,7 @@ pub fn rover_measures(
     RoverMeasures {
         drift_since_look_max_m,
         drift_since_look_p95_m,
+        drift_since_look_rms_m,
         rpe_1m_m: relative_pose_error(estimate, truth, n, |k| truth.distance_m[k], 1.0),
         rpe_10s_m: relative_pose_error(estimate, truth, n, |k| truth.times_secs[k], 10.0),
         cpu_ms_per_m: if distance > 0.0 {
@@ -199,11 +216,9 @@ mod tests {
     use super::*;
     use nalgebra::{UnitQuaternion, Vector3};
 
-    fn frame(time_secs: f64, keyframe: bool, tracked: bool) -> ProcessedFrame {
-        ProcessedFrame {
-            frame: 0,
+    fn frame(time_secs: f64, keyframe: bool, tracked: bool) -> Look {
+        Look {
             time_secs,
-            distance_m: 0.0,
             keyframe,
             tracked,
         }
@@ -252,7 +267,7 @@ mod tests {
             frame(3.5, false, true),
             frame(4.0, false, false),
         ];
-        let m = rover_measures(&estimate, &sampled, &processed, 500.0);
+        let m = rover_measures(&estimate, &sampled, processed, 500.0);
         // Drift since the last look: samples 0–1 from the start (0, 0.1),
         // sample 2 looks (0), sample 3 looks (0), 4 from 3 (0), 5 from 3:
         // ‖(0, 0.2) − (0.3, 0)‖ = √0.13.
@@ -263,6 +278,8 @@ mod tests {
         // q = 0.95 over 6 values: position 4.75 between 0.1 and √0.13.
         let p95 = 0.1 + (0.13f64.sqrt() - 0.1) * 0.75;
         assert!((m.drift_since_look_p95_m - p95).abs() < 1e-12);
+        let rms = ((0.01 + 0.13) / 6.0f64).sqrt();
+        assert!((m.drift_since_look_rms_m - rms).abs() < 1e-12);
         // RPE over 1 m: pairs (0,2), (1,3), (2,4), (3,5); no rotation, so
         // the error is the difference of the offsets' differences.
         let d = |a: Vector3<f64>, b: Vector3<f64>| (b - a).norm_squared();
@@ -304,7 +321,7 @@ mod tests {
             ground_truth: &truth,
             distance_m: &times,
         };
-        let m = rover_measures(&estimate, &sampled, &[], 0.0);
+        let m = rover_measures(&estimate, &sampled, [], 0.0);
         assert!((m.rpe_1m_m - 0.01).abs() < 1e-12);
         // Nothing processed: every sample is between frames, and the drift
         // since the last look is the error itself.

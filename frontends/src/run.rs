@@ -29,7 +29,7 @@ use crate::odometry::{OdometryIntegrator, OdometryInterval};
 use crate::odometry_mode::WindowOdometry;
 use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
-use crate::rover_measures::{RoverMeasures, SampledTruth, rover_measures};
+use crate::rover_measures::{Look, RoverMeasures, SampledTruth, rover_measures};
 use crate::traverse::Traverse;
 use crate::vo::{
     ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
@@ -709,7 +709,11 @@ impl<'a> Session<'a> {
                 ground_truth: self.traverse.ground_truth(),
                 distance_m: self.traverse.distances_m(),
             },
-            &self.run.processed,
+            self.run.processed.iter().map(|p| Look {
+                time_secs: p.time_secs,
+                keyframe: p.keyframe,
+                tracked: p.tracked,
+            }),
             self.run.compute_ms,
         );
         self.run.predictions = self.predictions;

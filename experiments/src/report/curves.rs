@@ -19,7 +19,6 @@ use gpodo_frontends::rover_measures::RoverMeasures;
 
 use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, bootstrap, mean_at};
-use crate::report::controls::interpolate_log_frames;
 
 /// How close to the reference "within" means in table (a).
 pub const WITHIN: f64 = 1.10;
@@ -74,6 +73,20 @@ pub struct Curves {
     /// The experiment's first scheme (the paper's baseline in Table II)
     /// and its RMSE per seed.
     pub baseline: Option<(String, Vec<f64>)>,
+}
+
+impl Curve {
+    /// The same curve with each point's RMSE replaced by another measure
+    /// of the run (per seed), so that every pairing of this module applies
+    /// to it.
+    #[must_use]
+    pub fn with_measure(&self, measure: fn(&RoverMeasures) -> f64) -> Self {
+        let mut out = self.clone();
+        for p in &mut out.points {
+            p.rmse = p.rover.iter().map(measure).collect();
+        }
+        out
+    }
 }
 
 impl Curves {
@@ -318,130 +331,6 @@ pub fn frames_to_reach(curve: &Curve, reference: &[f64], seed: u64) -> FramesToR
     }
 }
 
-/// One curve at one budget, paired with the fixed-rate curve of its back
-/// end (table (b)).
-#[derive(Debug, Clone, PartialEq)]
-pub struct AtBudget {
-    /// Frames.
-    pub budget: f64,
-    /// Seeds on which both curves reach the budget (no extrapolation).
-    pub seeds: Vec<u64>,
-    /// The curve's RMSE at the budget per such seed.
-    pub rmse: Vec<f64>,
-    /// The fixed-rate RMSE at the budget per such seed.
-    pub fixed: Vec<f64>,
-    /// Mean RMSE and interval.
-    pub rmse_mean: Option<Interval>,
-    /// Mean paired difference (curve − fixed rate) and interval.
-    pub difference: Option<Interval>,
-}
-
-/// Table (b) for `curve` against `fixed` (the fixed-rate curve of its back
-/// end, or for table (c) its zero-residual twin; `None` for a fixed-rate
-/// curve itself, whose difference is zero).
-pub fn at_budget(
-    curve: &Curve,
-    fixed: Option<&Curve>,
-    seeds: &[u64],
-    budget: f64,
-    seed: u64,
-) -> AtBudget {
-    let at = |c: &Curve, s: usize| {
-        let points: Vec<(f64, f64)> = c.points.iter().map(|p| (p.frames[s], p.rmse[s])).collect();
-        interpolate_log_frames(&points, budget)
-    };
-    let mut out = AtBudget {
-        budget,
-        seeds: Vec::new(),
-        rmse: Vec::new(),
-        fixed: Vec::new(),
-        rmse_mean: None,
-        difference: None,
-    };
-    for (s, &seed_value) in seeds.iter().enumerate() {
-        let Some(r) = at(curve, s) else { continue };
-        let f = match fixed {
-            Some(fc) => match at(fc, s) {
-                Some(f) => f,
-                None => continue,
-            },
-            None => r,
-        };
-        out.seeds.push(seed_value);
-        out.rmse.push(r);
-        out.fixed.push(f);
-    }
-    let n = out.seeds.len();
-    if n > 0 {
-        out.rmse_mean = bootstrap(n, seed, |ix| Some(mean_at(&out.rmse, ix)));
-        if fixed.is_some() {
-            let diff: Vec<f64> = out
-                .rmse
-                .iter()
-                .zip(&out.fixed)
-                .map(|(a, b)| a - b)
-                .collect();
-            out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
-        }
-    }
-    out
-}
-
-/// Δ at equal compute: on each seed, the compute model's cost of the
-/// fixed-rate curve `fixed` at `budget` frames (interpolated in log
-/// frames), the RMSE of `curve` at that cost (interpolated in log compute)
-/// and of `fixed` at the budget, paired as [`at_budget`] pairs them.
-pub fn at_equal_compute(
-    curve: &Curve,
-    fixed: &Curve,
-    seeds: &[u64],
-    budget: f64,
-    seed: u64,
-) -> AtBudget {
-    let mut out = AtBudget {
-        budget,
-        seeds: Vec::new(),
-        rmse: Vec::new(),
-        fixed: Vec::new(),
-        rmse_mean: None,
-        difference: None,
-    };
-    for (s, &seed_value) in seeds.iter().enumerate() {
-        let along = |c: &Curve, y: fn(&KnobPoint, usize) -> f64| -> Vec<(f64, f64)> {
-            c.points.iter().map(|p| (p.frames[s], y(p, s))).collect()
-        };
-        let Some(cost) = interpolate_log_frames(&along(fixed, |p, s| p.compute[s]), budget) else {
-            continue;
-        };
-        let Some(f) = interpolate_log_frames(&along(fixed, |p, s| p.rmse[s]), budget) else {
-            continue;
-        };
-        let by_cost: Vec<(f64, f64)> = curve
-            .points
-            .iter()
-            .map(|p| (p.compute[s], p.rmse[s]))
-            .collect();
-        let Some(r) = interpolate_log_frames(&by_cost, cost) else {
-            continue;
-        };
-        out.seeds.push(seed_value);
-        out.rmse.push(r);
-        out.fixed.push(f);
-    }
-    let n = out.seeds.len();
-    if n > 0 {
-        out.rmse_mean = bootstrap(n, seed, |ix| Some(mean_at(&out.rmse, ix)));
-        let diff: Vec<f64> = out
-            .rmse
-            .iter()
-            .zip(&out.fixed)
-            .map(|(a, b)| a - b)
-            .collect();
-        out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
-    }
-    out
-}
-
 /// Groups `records` into sets of seeds of the same setting (swept values
 /// other than the seed), in first-seen order.
 pub fn by_setting(records: &[RunRecord]) -> Vec<(String, Vec<&RunRecord>)> {
@@ -466,10 +355,11 @@ pub fn by_setting(records: &[RunRecord]) -> Vec<(String, Vec<&RunRecord>)> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod fixtures {
+    //! Curves for the report's unit tests.
     use super::*;
 
-    fn point(label: &str, frames: &[f64], rmse: &[f64]) -> KnobPoint {
+    pub(crate) fn point(label: &str, frames: &[f64], rmse: &[f64]) -> KnobPoint {
         KnobPoint {
             label: label.into(),
             frames: frames.to_vec(),
@@ -479,7 +369,11 @@ mod tests {
         }
     }
 
-    fn curve(points: Vec<KnobPoint>, fixed_rate: bool, reference: Option<Vec<f64>>) -> Curve {
+    pub(crate) fn curve(
+        points: Vec<KnobPoint>,
+        fixed_rate: bool,
+        reference: Option<Vec<f64>>,
+    ) -> Curve {
         Curve {
             name: "c".into(),
             back_end: "b".into(),
@@ -490,6 +384,12 @@ mod tests {
             selectors: Vec::new(),
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::curves::fixtures::{curve, point};
 
     #[test]
     fn the_crossing_is_interpolated_in_log_frames() {
@@ -528,42 +428,6 @@ mod tests {
         assert_eq!(
             frames_to_reach(&early, &[0.1], 1),
             FramesToReach::AtMost(100.0)
-        );
-    }
-
-    #[test]
-    fn budgets_pair_each_seed_with_the_fixed_rate_curve_and_skip_out_of_range_seeds() {
-        let gated = curve(
-            vec![
-                point("g1", &[200.0, 200.0, 600.0], &[0.3, 0.3, 0.3]),
-                point("g2", &[800.0, 800.0, 900.0], &[0.1, 0.2, 0.1]),
-            ],
-            false,
-            None,
-        );
-        let fixed = curve(
-            vec![
-                point("f1", &[100.0, 100.0, 100.0], &[0.4, 0.4, 0.4]),
-                point("f2", &[1000.0, 1000.0, 1000.0], &[0.2, 0.2, 0.2]),
-            ],
-            true,
-            None,
-        );
-        let b = at_budget(&gated, Some(&fixed), &[1, 2, 3], 400.0, 5);
-        // Seed 3's gated curve starts at 600 frames: no extrapolation.
-        assert_eq!(b.seeds, vec![1, 2]);
-        let t = (400f64.ln() - 200f64.ln()) / (800f64.ln() - 200f64.ln());
-        let g1 = 0.3 + t * (0.1 - 0.3);
-        let t_f = (400f64.ln() - 100f64.ln()) / (1000f64.ln() - 100f64.ln());
-        let f = 0.4 + t_f * (0.2 - 0.4);
-        assert!((b.rmse[0] - g1).abs() < 1e-12 && (b.fixed[0] - f).abs() < 1e-12);
-        let d = b.difference.map_or(f64::NAN, |d| d.estimate);
-        let expected = ((b.rmse[0] - f) + (b.rmse[1] - f)) / 2.0;
-        assert!((d - expected).abs() < 1e-12, "{d} {expected}");
-        // A fixed-rate curve against nothing: no difference.
-        assert_eq!(
-            at_budget(&fixed, None, &[1, 2, 3], 400.0, 5).difference,
-            None
         );
     }
 }

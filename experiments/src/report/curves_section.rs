@@ -10,11 +10,15 @@ use crate::execute::records::RunRecord;
 use crate::report::bootstrap::{Interval, RESAMPLES};
 use crate::report::curve_plot::{Panel, curves_svg};
 use crate::report::curves::{
-    AtBudget, BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, at_budget,
-    at_equal_compute, by_setting, frames_to_reach, summarise,
+    BUDGETS, Curve, Curves, FramesToReach, PointSummary, WITHIN, by_setting, frames_to_reach,
+    summarise,
 };
 use crate::report::floor::{Floor, floors, mde_cell, nearest};
+use crate::report::oracle_table::oracle_table;
+use crate::report::pairing::{at_budget, at_equal_compute, push_pairs};
 use crate::report::table::{Align, Table};
+use crate::report::twin_table::twin_table;
+use crate::report::verdict::verdict;
 
 /// What the section adds to a sweep report.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,26 +39,6 @@ fn interval(i: &Interval, digits: usize) -> String {
         )
     } else {
         format!("{:.*}", digits, i.estimate)
-    }
-}
-
-/// Fewest seeds for a verdict on a paired difference.
-pub const MIN_SEEDS_FOR_VERDICT: usize = 5;
-
-/// The verdict on a paired Δ over `seeds` seeds: lower or higher when its
-/// interval excludes zero; equivalent when it crosses zero within ±ε
-/// (`margin`, the experiment's `equivalence_margin_m`); else not resolved.
-pub fn verdict(d: &Interval, seeds: usize, margin: Option<f64>) -> String {
-    if seeds < MIN_SEEDS_FOR_VERDICT {
-        "too few seeds".into()
-    } else if d.high < 0.0 {
-        "lower, 95 %".into()
-    } else if d.low > 0.0 {
-        "higher, 95 %".into()
-    } else if let Some(e) = margin.filter(|e| -e < d.low && d.high < *e) {
-        format!("equivalent (within ±{e:.3} m)")
-    } else {
-        "not resolved".into()
     }
 }
 
@@ -140,6 +124,7 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
         let margin = runs.first().and_then(|r| r.config.equivalence_margin_m);
         let budget = budget_table(&curves, seed, &mut paired, &floors, margin);
         let twin = twin_table(&curves, seed, &mut paired, margin);
+        let oracles = oracle_table(&curves, seed, margin);
         let s = &mut out.markdown;
         let _ = writeln!(s, "Points of every curve:\n\n{}", points.markdown());
         let _ = writeln!(
@@ -160,6 +145,15 @@ pub fn curves_section(records: &[RunRecord], seed: u64) -> Option<CurvesSection>
                 twin.markdown()
             );
         }
+        if !oracles.is_empty() {
+            let _ = writeln!(
+                s,
+                "(d) Each oracle on the measure it minimises (the drift since the last look, were every look exact; `frontends/src/oracle`), against the fixed rate of its back end at equal frames, paired per seed as in (b) (Δ < 0: the oracle drifts less between looks). The equivalence margin of the verdict is the experiment's, in metres.\n\n{}",
+                oracles.markdown()
+            );
+        }
+        out.tables
+            .push((format!("curves_oracles{suffix}.csv"), oracles));
         out.tables
             .push((format!("curves_points{suffix}.csv"), points));
         out.tables
@@ -416,68 +410,6 @@ fn budget_table(
     budget
 }
 
-/// Table (c): each curve against its zero-residual twin at equal frames;
-/// each seed's pair goes into `paired`.
-fn twin_table(curves: &Curves, seed: u64, paired: &mut Table, margin: Option<f64>) -> Table {
-    let mut twin = Table::new(&[
-        "curve",
-        "zero-residual twin",
-        "frames",
-        "seeds in range",
-        "RMSE [m]",
-        "twin RMSE [m]",
-        "Δ RMSE [m] (95 % CI)",
-        "regressor vs zero residuals",
-    ])
-    .align(&[1, 7], Align::Left)
-    .with_csv(&[
-        "curve",
-        "twin",
-        "budget_frames",
-        "seeds",
-        "rmse_mean_m",
-        "twin_mean_m",
-        "difference_mean_m",
-        "difference_low_m",
-        "difference_high_m",
-    ]);
-    for c in &curves.curves {
-        let Some(z) = curves.zero_twin_of(c) else {
-            continue;
-        };
-        for b in BUDGETS {
-            let r = at_budget(c, Some(z), &curves.seeds, b, seed);
-            let (Some(m), Some(d)) = (r.rmse_mean, r.difference) else {
-                continue;
-            };
-            let twin_mean = r.fixed.iter().sum::<f64>() / r.fixed.len() as f64;
-            twin.push(vec![
-                c.name.clone(),
-                z.name.clone(),
-                format!("{b:.0}"),
-                format!("{}/{}", r.seeds.len(), curves.seeds.len()),
-                format!("{:.3}", m.estimate),
-                format!("{twin_mean:.3}"),
-                format!("{:+.3} [{:+.3}, {:+.3}]", d.estimate, d.low, d.high),
-                verdict(&d, r.seeds.len(), margin),
-            ]);
-            twin.push_csv(vec![
-                c.name.clone(),
-                z.name.clone(),
-                b.to_string(),
-                r.seeds.len().to_string(),
-                m.estimate.to_string(),
-                twin_mean.to_string(),
-                d.estimate.to_string(),
-                d.low.to_string(),
-                d.high.to_string(),
-            ]);
-            push_pairs(paired, &c.name, &z.name, b, &r);
-        }
-    }
-    twin
-}
-
 /// The figure: one panel per policy, its back end's fixed rate in grey.
 fn draw_figure(
     out: &mut CurvesSection,
@@ -501,20 +433,4 @@ fn draw_figure(
     let svg = curves_svg(&panels).map_err(|e| e.to_string())?;
     out.figures.push((format!("curves{suffix}.svg"), svg));
     Ok(())
-}
-
-/// Each seed's pair of `r` (a curve at budget `b` against the curve named
-/// `against`) as a row of `paired`.
-fn push_pairs(paired: &mut Table, curve: &str, against: &str, b: f64, r: &AtBudget) {
-    for ((s, rm), f) in r.seeds.iter().zip(&r.rmse).zip(&r.fixed) {
-        paired.push_csv(vec![
-            curve.to_string(),
-            against.to_string(),
-            b.to_string(),
-            s.to_string(),
-            rm.to_string(),
-            f.to_string(),
-            (rm - f).to_string(),
-        ]);
-    }
 }

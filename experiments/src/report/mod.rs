@@ -17,6 +17,8 @@ pub mod files;
 pub mod floor;
 pub mod hindsight;
 mod loss_strips;
+mod oracle_table;
+mod pairing;
 pub mod plots;
 pub mod prequential_plot;
 pub mod run;
@@ -25,5 +27,7 @@ pub mod sensitivity_plot;
 pub mod sweep;
 pub mod table;
 pub mod tradeoff_plot;
+mod twin_table;
+pub mod verdict;
 
 pub use files::write_report;

@@ -20,10 +20,11 @@ use std::fmt::Write as _;
 
 use crate::execute::records::RunRecord;
 use crate::report::bootstrap::Interval;
-use crate::report::curves::{BUDGETS, Curves, at_budget, by_setting};
-use crate::report::curves_section::MIN_SEEDS_FOR_VERDICT;
+use crate::report::curves::{BUDGETS, Curves, by_setting};
 use crate::report::floor::{Floor, floors, nearest};
+use crate::report::pairing::at_budget;
 use crate::report::table::{Align, Table};
+use crate::report::verdict::MIN_SEEDS_FOR_VERDICT;
 
 /// Where an interval lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -12,12 +12,13 @@ use std::path::{Path, PathBuf};
 
 use crate::execute::records::{RecordError, RunRecord, read_records, record_files};
 use crate::plan::PlanFile;
-use crate::report::aggregate::{ablations, table_one, table_two, tradeoff_svg};
+use crate::report::aggregate::{ablations, table_one, table_two};
 use crate::report::curves_section::curves_section;
 use crate::report::floor::floor_section;
 use crate::report::sensitivity::sensitivity_section;
 use crate::report::sensitivity_plot::sensitivity_svg;
 use crate::report::table::Table;
+use crate::report::tradeoff_plot::records_tradeoff_svg;
 use crate::util::output::write_atomically;
 
 pub use crate::report::aggregate::Stat;
@@ -197,7 +198,7 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
             t.markdown()
         );
         write_table("table2.csv", &t)?;
-        if let Some(svg) = tradeoff_svg(records) {
+        if let Some(svg) = records_tradeoff_svg(records) {
             let plots = dir.join("plots");
             std::fs::create_dir_all(&plots).map_err(|e| io(&plots, e))?;
             let path = plots.join("tradeoff.svg");

@@ -8,6 +8,7 @@
 
 use plotters::prelude::*;
 
+use crate::execute::records::RunRecord;
 use crate::report::controls::interpolate_log_frames;
 use crate::report::curve_plot::colour;
 
@@ -156,4 +157,62 @@ pub fn tradeoff_svg(points: &[TradeoffPoint]) -> std::io::Result<String> {
         root.present().map_err(io)?;
     }
     Ok(svg)
+}
+
+/// A scheme's policy family, as the trade-off figure colours it.
+fn family(selector: &gpodo_frontends::SelectorSpec) -> String {
+    use gpodo_frontends::SelectorSpec as S;
+    match selector {
+        S::FixedRate { .. } => "fixed rate".into(),
+        S::ResidualSchedule(_) => "authors' schedule".into(),
+        S::UncertaintyBudget(_) => "drift budget".into(),
+        S::MaxGap { inner, .. } => family(inner),
+        S::Hysteresis { .. } => "hysteresis".into(),
+        S::Oracle(p) if p.search.is_some() => "hindsight search".into(),
+        S::Oracle(_) => "surrogate planner".into(),
+        S::FrontLoaded(_) => "front-loaded".into(),
+    }
+}
+
+/// The frames-versus-RMSE figure of Table II's rows, for a sweep of one
+/// setting (its seeds pooled); `None` for several settings, whose
+/// figures are the curves per setting.
+pub(crate) fn records_tradeoff_svg(records: &[RunRecord]) -> Option<String> {
+    let groups = crate::report::curves::by_setting(records);
+    let [(_, runs)] = groups.as_slice() else {
+        return None;
+    };
+    let config = &runs.first()?.config;
+    let mut points = Vec::new();
+    for spec in &config.schemes {
+        let values: Vec<(f64, f64)> = runs
+            .iter()
+            .flat_map(|r| {
+                r.metrics
+                    .schemes
+                    .iter()
+                    .filter(|m| m.label == spec.label)
+                    .map(|m| (m.frames as f64, m.rmse_m))
+            })
+            .collect();
+        if values.is_empty() {
+            continue;
+        }
+        let n = values.len() as f64;
+        let frames = values.iter().map(|v| v.0).sum::<f64>() / n;
+        let rmse = values.iter().map(|v| v.1).sum::<f64>() / n;
+        let var = values.iter().map(|v| (v.1 - rmse).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        points.push(TradeoffPoint {
+            family: family(&spec.selector),
+            back_end: spec.back_end(config),
+            fixed_rate: matches!(
+                spec.selector,
+                gpodo_frontends::SelectorSpec::FixedRate { .. }
+            ),
+            frames,
+            rmse,
+            std: var.sqrt(),
+        });
+    }
+    tradeoff_svg(&points).ok()
 }
