@@ -79,8 +79,9 @@ pub fn at_budget(
 
 /// Δ at equal compute: on each seed, the compute model's cost of the
 /// fixed-rate curve `fixed` at `budget` frames (linear in frames, as the
-/// model is), the RMSE of `curve` at that cost (interpolated in log compute)
-/// and of `fixed` at the budget, paired as [`at_budget`] pairs them.
+/// model is), the RMSE of `curve` at that cost (interpolated in log
+/// compute on the first segment of its knob order that spans the cost,
+/// [`interpolate_along_knob`]) and of `fixed` at the budget, paired as [`at_budget`] pairs them.
 pub fn at_equal_compute(
     curve: &Curve,
     fixed: &Curve,
@@ -111,7 +112,7 @@ pub fn at_equal_compute(
             .iter()
             .map(|p| (p.compute[s], p.rmse[s]))
             .collect();
-        let Some(r) = interpolate_log_frames(&by_cost, cost) else {
+        let Some(r) = interpolate_along_knob(&by_cost, cost) else {
             continue;
         };
         out.seeds.push(seed_value);
@@ -130,6 +131,25 @@ pub fn at_equal_compute(
         out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
     }
     out
+}
+
+/// `y` at `x` on the first segment, in knob order, of the points `(x, y)`
+/// that spans `x`, linear in `ln x`; `None` when none does. A knob's
+/// cost need not rise with it: a run that loses track processes frames
+/// cheaply (no keyframes) and lands amid the others, so the points are
+/// walked in order rather than sorted by cost.
+fn interpolate_along_knob(points: &[(f64, f64)], x: f64) -> Option<f64> {
+    if let Some(&(_, y)) = points.iter().find(|(a, _)| *a == x) {
+        return Some(y);
+    }
+    points.windows(2).find_map(|w| {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        let spans = x0.min(x1) < x && x < x0.max(x1) && x0 > 0.0 && x1 > 0.0;
+        (spans && y0.is_finite() && y1.is_finite()).then(|| {
+            let t = (x.ln() - x0.ln()) / (x1.ln() - x0.ln());
+            y0 + t * (y1 - y0)
+        })
+    })
 }
 
 /// `y` at `x` on the polyline through `points` (x, y), linear between the
@@ -242,5 +262,12 @@ mod tests {
                 .seeds
                 .is_empty()
         );
+        // A knob value that lost track (cheap frames, large error) after
+        // the curve's dense end is not paired with: the first segment in
+        // knob order that spans the cost is.
+        let mut lost = policy.clone();
+        lost.points.push(point("lost", &[1000.0], &[1.5]));
+        let e = at_equal_compute(&lost, &fixed, &[7], 400.0, 5);
+        assert!((e.rmse[0] - (0.3 + t * (0.1 - 0.3))).abs() < 1e-12);
     }
 }
