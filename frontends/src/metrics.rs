@@ -1,8 +1,9 @@
 //! Trajectory error metrics of Table II: RMSE, maximum and final position
 //! error against ground truth, and the final error as a percentage of the
 //! distance travelled. Errors are compared at every sensor sample, without
-//! alignment: the run starts from the known first pose. And how alike two
-//! estimates of one route err ([`error_agreement`]).
+//! alignment: the run starts from the known first pose. Also how alike two
+//! estimates of one route err ([`error_agreement`]), which the A/A control
+//! reads.
 
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
