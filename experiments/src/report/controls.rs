@@ -22,19 +22,27 @@ type Point = (f64, f64);
 /// outside the points' range (or with fewer than two points unless one
 /// matches exactly).
 pub fn interpolate_log_frames(points: &[Point], frames: f64) -> Option<f64> {
+    interpolate_sorted(points, frames, f64::ln)
+}
+
+/// `y` at `x` on the points `(x, y)` sorted by `x` (positive, with finite
+/// `y`), linear in `scale(x)` between the two points around it; `None`
+/// outside their range (or with fewer than two points unless one matches
+/// exactly).
+pub fn interpolate_sorted(points: &[Point], x: f64, scale: fn(f64) -> f64) -> Option<f64> {
     let mut sorted: Vec<Point> = points
         .iter()
         .copied()
         .filter(|(f, r)| *f > 0.0 && r.is_finite())
         .collect();
     sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    if let Some(&(_, r)) = sorted.iter().find(|(f, _)| *f == frames) {
+    if let Some(&(_, r)) = sorted.iter().find(|(f, _)| *f == x) {
         return Some(r);
     }
     sorted.windows(2).find_map(|w| {
         let ((f0, r0), (f1, r1)) = (w[0], w[1]);
-        (f0 < frames && frames < f1).then(|| {
-            let t = (frames.ln() - f0.ln()) / (f1.ln() - f0.ln());
+        (f0 < x && x < f1).then(|| {
+            let t = (scale(x) - scale(f0)) / (scale(f1) - scale(f0));
             r0 + t * (r1 - r0)
         })
     })

@@ -17,6 +17,7 @@
 use std::fmt::Write as _;
 
 use crate::execute::records::RunRecord;
+use crate::report::aggregate::Stat;
 use crate::report::bootstrap::{Interval, RESAMPLES, bootstrap, mean_at};
 use crate::report::curves::by_setting;
 use crate::report::table::{Align, Table};
@@ -95,26 +96,20 @@ pub fn floors(records: &[&RunRecord], seed: u64) -> Vec<Floor> {
         let Some(delta) = bootstrap(n, seed, |ix| Some(mean_at(&deltas, ix))) else {
             continue;
         };
-        let mean = |v: &mut dyn Iterator<Item = f64>, n: usize| v.sum::<f64>() / n as f64;
-        let mean_delta = mean(&mut deltas.iter().copied(), n);
-        let sd_m = if n > 1 {
-            (deltas.iter().map(|d| (d - mean_delta).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
-        } else {
-            f64::NAN
-        };
+        let mean_of = |values: Vec<f64>| Stat::of(&values).map_or(f64::NAN, |s| s.mean);
         out.push(Floor {
             back_end: config.schemes[u].back_end(config),
             unshifted: unshifted.clone(),
             shifted: shifted.clone(),
-            frames: mean(&mut pairs.iter().map(|p| p.0), n),
-            rmse_m: mean(&mut pairs.iter().map(|p| p.1), n),
+            frames: mean_of(pairs.iter().map(|p| p.0).collect()),
+            rmse_m: mean_of(pairs.iter().map(|p| p.1).collect()),
             seeds: n,
             delta,
-            sd_m,
+            sd_m: Stat::of(&deltas).map_or(f64::NAN, |s| s.std),
             agreement: (agreement.len() == n).then(|| {
                 (
-                    mean(&mut agreement.iter().map(|a| a.0), n),
-                    mean(&mut agreement.iter().map(|a| a.1), n),
+                    mean_of(agreement.iter().map(|a| a.0).collect()),
+                    mean_of(agreement.iter().map(|a| a.1).collect()),
                 )
             }),
         });

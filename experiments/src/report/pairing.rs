@@ -4,7 +4,7 @@
 //! and the 95 % bootstrap interval of the paired difference.
 
 use crate::report::bootstrap::{Interval, bootstrap, mean_at};
-use crate::report::controls::interpolate_log_frames;
+use crate::report::controls::{interpolate_log_frames, interpolate_sorted};
 use crate::report::curves::{Curve, KnobPoint};
 use crate::report::table::Table;
 
@@ -40,14 +40,7 @@ pub fn at_budget(
         let points: Vec<(f64, f64)> = c.points.iter().map(|p| (p.frames[s], p.rmse[s])).collect();
         interpolate_log_frames(&points, budget)
     };
-    let mut out = AtBudget {
-        budget,
-        seeds: Vec::new(),
-        rmse: Vec::new(),
-        fixed: Vec::new(),
-        rmse_mean: None,
-        difference: None,
-    };
+    let mut pairs = Vec::new();
     for (s, &seed_value) in seeds.iter().enumerate() {
         let Some(r) = at(curve, s) else { continue };
         let f = match fixed {
@@ -57,24 +50,9 @@ pub fn at_budget(
             },
             None => r,
         };
-        out.seeds.push(seed_value);
-        out.rmse.push(r);
-        out.fixed.push(f);
+        pairs.push((seed_value, r, f));
     }
-    let n = out.seeds.len();
-    if n > 0 {
-        out.rmse_mean = bootstrap(n, seed, |ix| Some(mean_at(&out.rmse, ix)));
-        if fixed.is_some() {
-            let diff: Vec<f64> = out
-                .rmse
-                .iter()
-                .zip(&out.fixed)
-                .map(|(a, b)| a - b)
-                .collect();
-            out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
-        }
-    }
-    out
+    paired(budget, pairs, seed, fixed.is_some())
 }
 
 /// Δ at equal compute: on each seed, the compute model's cost of the
@@ -89,19 +67,13 @@ pub fn at_equal_compute(
     budget: f64,
     seed: u64,
 ) -> AtBudget {
-    let mut out = AtBudget {
-        budget,
-        seeds: Vec::new(),
-        rmse: Vec::new(),
-        fixed: Vec::new(),
-        rmse_mean: None,
-        difference: None,
-    };
+    let mut pairs = Vec::new();
     for (s, &seed_value) in seeds.iter().enumerate() {
         let along = |c: &Curve, y: fn(&KnobPoint, usize) -> f64| -> Vec<(f64, f64)> {
             c.points.iter().map(|p| (p.frames[s], y(p, s))).collect()
         };
-        let Some(cost) = interpolate_linear(&along(fixed, |p, s| p.compute[s]), budget) else {
+        let Some(cost) = interpolate_sorted(&along(fixed, |p, s| p.compute[s]), budget, |x| x)
+        else {
             continue;
         };
         let Some(f) = interpolate_log_frames(&along(fixed, |p, s| p.rmse[s]), budget) else {
@@ -115,20 +87,30 @@ pub fn at_equal_compute(
         let Some(r) = interpolate_along_knob(&by_cost, cost) else {
             continue;
         };
-        out.seeds.push(seed_value);
-        out.rmse.push(r);
-        out.fixed.push(f);
+        pairs.push((seed_value, r, f));
     }
-    let n = out.seeds.len();
+    paired(budget, pairs, seed, true)
+}
+
+/// The pairs `(seed, curve, against)` at `budget` with the mean of the
+/// curve and, when `with_difference`, of the paired difference, each with
+/// its bootstrap interval.
+fn paired(budget: f64, pairs: Vec<(u64, f64, f64)>, seed: u64, with_difference: bool) -> AtBudget {
+    let n = pairs.len();
+    let mut out = AtBudget {
+        budget,
+        seeds: pairs.iter().map(|p| p.0).collect(),
+        rmse: pairs.iter().map(|p| p.1).collect(),
+        fixed: pairs.iter().map(|p| p.2).collect(),
+        rmse_mean: None,
+        difference: None,
+    };
     if n > 0 {
         out.rmse_mean = bootstrap(n, seed, |ix| Some(mean_at(&out.rmse, ix)));
-        let diff: Vec<f64> = out
-            .rmse
-            .iter()
-            .zip(&out.fixed)
-            .map(|(a, b)| a - b)
-            .collect();
-        out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
+        if with_difference {
+            let diff: Vec<f64> = pairs.iter().map(|p| p.1 - p.2).collect();
+            out.difference = bootstrap(n, seed, |ix| Some(mean_at(&diff, ix)));
+        }
     }
     out
 }
@@ -149,24 +131,6 @@ fn interpolate_along_knob(points: &[(f64, f64)], x: f64) -> Option<f64> {
             let t = (x.ln() - x0.ln()) / (x1.ln() - x0.ln());
             y0 + t * (y1 - y0)
         })
-    })
-}
-
-/// `y` at `x` on the polyline through `points` (x, y), linear between the
-/// two points around it; `None` outside their range.
-fn interpolate_linear(points: &[(f64, f64)], x: f64) -> Option<f64> {
-    let mut sorted: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|(a, b)| a.is_finite() && b.is_finite())
-        .collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    if let Some(&(_, y)) = sorted.iter().find(|(a, _)| *a == x) {
-        return Some(y);
-    }
-    sorted.windows(2).find_map(|w| {
-        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
-        (x0 < x && x < x1).then(|| y0 + (x - x0) / (x1 - x0) * (y1 - y0))
     })
 }
 
