@@ -14,7 +14,7 @@ use factrs::optimizers::{
 };
 use factrs::residuals::{BetweenResidual, PriorResidual};
 use factrs::variables::{SE3, SO3};
-use nalgebra::{Isometry3, Matrix6, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix6, Quaternion, Translation3, UnitQuaternion, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::FrontendError;
@@ -57,6 +57,9 @@ pub struct PoseGraphEdge {
     pub kind: EdgeKind,
 }
 
+/// The default of [`BackendParams::closure_chi2_max`].
+pub const DEFAULT_CLOSURE_CHI2_MAX: f64 = 100.0;
+
 /// Settings of the optimisation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -68,6 +71,12 @@ pub struct BackendParams {
     /// Standard deviation of the prior on the first node's rotation (rad)
     /// and translation (m) (default 1e-6: the start pose is known).
     pub anchor_sigma: f64,
+    /// The largest χ² (squared Mahalanobis norm of the 6-dof residual at
+    /// the optimum) a loop closure or relocalisation edge may keep. Above
+    /// it, the worst such edge is dropped and the graph optimised again,
+    /// until none is (default 100; `null` keeps every edge). See
+    /// [`PoseGraph::optimize`].
+    pub closure_chi2_max: Option<f64>,
 }
 
 impl Default for BackendParams {
@@ -76,6 +85,7 @@ impl Default for BackendParams {
             max_iterations: 50,
             relative_tolerance: 1e-9,
             anchor_sigma: 1e-6,
+            closure_chi2_max: Some(DEFAULT_CLOSURE_CHI2_MAX),
         }
     }
 }
@@ -103,6 +113,14 @@ impl BackendParams {
                 });
             }
         }
+        if let Some(v) = self.closure_chi2_max
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(FrontendError::InvalidConfig {
+                field: "backend.closure_chi2_max".into(),
+                expected: "a positive number, or null to keep every closure".into(),
+            });
+        }
         Ok(())
     }
 }
@@ -127,6 +145,30 @@ pub struct OptimizedGraph {
     pub final_error: f64,
     /// Whether the iteration limit stopped it.
     pub hit_iteration_limit: bool,
+    /// The loop closure and relocalisation edges dropped as inconsistent,
+    /// by index into [`PoseGraph::edges`], in the order they were dropped.
+    pub rejected: Vec<usize>,
+}
+
+/// Whether an edge of this kind joins frames far apart in time, matched
+/// without the chain's prior, and so may be a false match.
+fn is_closure(kind: EdgeKind) -> bool {
+    matches!(kind, EdgeKind::LoopClosure | EdgeKind::Relocalisation)
+}
+
+/// The χ² of `edge` at `poses`: `δᵀ Σ⁻¹ δ`, `δ` the right perturbation
+/// `measurement⁻¹ · from⁻¹ · to` (rotation vector first, then translation,
+/// as the covariance is), `Σ` the edge's covariance. `None` where the
+/// covariance is not positive definite or a node is missing.
+pub fn edge_chi2(edge: &PoseGraphEdge, poses: &[Isometry3<f64>]) -> Option<f64> {
+    let (from, to) = (poses.get(edge.from)?, poses.get(edge.to)?);
+    let error = edge.measurement.inverse() * (from.inverse() * to);
+    let r = error.rotation.scaled_axis();
+    let t = error.translation.vector;
+    let delta = Vector6::new(r.x, r.y, r.z, t.x, t.y, t.z);
+    let sym = 0.5 * (edge.covariance + edge.covariance.transpose());
+    let whitened = sym.cholesky()?.solve(&delta);
+    Some(delta.dot(&whitened))
 }
 
 /// nalgebra → factrs.
@@ -186,10 +228,59 @@ impl PoseGraph {
 
     /// Optimises the graph, node 0 anchored at its initial pose.
     ///
+    /// A false loop closure (a place matched to another that looks alike)
+    /// pulls the whole graph toward it, since every edge is Gaussian. So
+    /// after each optimisation the loop closure or relocalisation edge of
+    /// largest χ² ([`edge_chi2`]) is dropped if it exceeds
+    /// `closure_chi2_max`, and the rest optimised again from the initial
+    /// poses, until every closure left is within it. Edges of other kinds
+    /// are never dropped, and a graph whose closures all agree is optimised
+    /// once.
+    ///
     /// # Errors
     /// [`FrontendError::Backend`] for an edge with a bad node index or a
     /// covariance that is not positive definite, or a failed solve.
     pub fn optimize(&self, params: &BackendParams) -> Result<OptimizedGraph, FrontendError> {
+        let mut active = vec![true; self.edges.len()];
+        let mut rejected = Vec::new();
+        loop {
+            let mut out = self.optimize_edges(params, &active)?;
+            let Some(limit) = params.closure_chi2_max else {
+                return Ok(out);
+            };
+            let worst = self
+                .edges
+                .iter()
+                .enumerate()
+                .filter(|(i, e)| active[*i] && is_closure(e.kind))
+                .filter_map(|(i, e)| edge_chi2(e, &out.poses).map(|c| (i, c)))
+                .filter(|(_, c)| *c > limit)
+                .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)));
+            match worst {
+                Some((i, chi2)) => {
+                    tracing::debug!(
+                        edge = i,
+                        kind = ?self.edges[i].kind,
+                        chi2,
+                        "pose graph: inconsistent closure dropped"
+                    );
+                    active[i] = false;
+                    rejected.push(i);
+                }
+                None => {
+                    out.rejected = rejected;
+                    return Ok(out);
+                }
+            }
+        }
+    }
+
+    /// One optimisation over the edges flagged in `active`.
+    fn optimize_edges(
+        &self,
+        params: &BackendParams,
+        active: &[bool],
+    ) -> Result<OptimizedGraph, FrontendError> {
         let n = self.initial.len();
         if n == 0 {
             return Ok(OptimizedGraph {
@@ -197,6 +288,7 @@ impl PoseGraph {
                 initial_error: 0.0,
                 final_error: 0.0,
                 hit_iteration_limit: false,
+                rejected: Vec::new(),
             });
         }
         let mut values = Values::new();
@@ -211,6 +303,9 @@ impl PoseGraph {
                 .build(),
         );
         for (i, e) in self.edges.iter().enumerate() {
+            if !active[i] {
+                continue;
+            }
             if e.from >= n || e.to >= n || e.from == e.to {
                 return Err(FrontendError::Backend(format!(
                     "edge {i} joins nodes {} and {} of {n}",
@@ -265,6 +360,7 @@ impl PoseGraph {
             initial_error,
             final_error,
             hit_iteration_limit,
+            rejected: Vec::new(),
         })
     }
 }
@@ -335,6 +431,152 @@ mod tests {
             assert!(a.rotation.angle_to(&b.rotation) < 1e-8);
         }
         assert_eq!(graph.count(EdgeKind::LoopClosure), 1);
+    }
+
+    /// A ring of noisy odometry edges (σ 0.01 rad, 0.01 m) with two exact
+    /// loop closures and, when `false_closure`, a third measuring the pose
+    /// 90° and 2 m off, as a place matched to another that looks alike.
+    fn ring_with_closures(false_closure: bool) -> (PoseGraph, Vec<Isometry3<f64>>) {
+        let truth: Vec<Isometry3<f64>> = (0..24)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 24.0;
+                Isometry3::from_parts(
+                    Translation3::new(3.0 * a.cos(), 3.0 * a.sin(), 0.0),
+                    UnitQuaternion::from_euler_angles(0.0, 0.0, a + 1.5),
+                )
+            })
+            .collect();
+        let mut graph = PoseGraph::default();
+        let odometry = isotropic_covariance(1e-2, 1e-2);
+        let closure = isotropic_covariance(2e-3, 2e-3);
+        let mut pose = truth[0];
+        graph.add_node(pose);
+        for k in 1..truth.len() {
+            // A deterministic error of about a σ per axis.
+            let e = 0.01 * ((k * 7 % 5) as f64 - 2.0) / 2.0;
+            let measured = truth[k - 1].inverse()
+                * truth[k]
+                * Isometry3::from_parts(
+                    Translation3::new(e, -e, 0.0),
+                    UnitQuaternion::from_euler_angles(0.0, 0.0, e),
+                );
+            pose *= measured;
+            graph.add_node(pose);
+            graph.add_edge(PoseGraphEdge {
+                from: k - 1,
+                to: k,
+                measurement: measured,
+                covariance: odometry,
+                kind: EdgeKind::Odometry,
+            });
+        }
+        for (from, to) in [(0, 23), (4, 20)] {
+            graph.add_edge(PoseGraphEdge {
+                from,
+                to,
+                measurement: truth[from].inverse() * truth[to],
+                covariance: closure,
+                kind: EdgeKind::LoopClosure,
+            });
+        }
+        if false_closure {
+            graph.add_edge(PoseGraphEdge {
+                from: 2,
+                to: 14,
+                measurement: truth[2].inverse()
+                    * truth[14]
+                    * Isometry3::from_parts(
+                        Translation3::new(2.0, 0.0, 0.0),
+                        UnitQuaternion::from_euler_angles(0.0, 0.0, 1.57),
+                    ),
+                covariance: closure,
+                kind: EdgeKind::LoopClosure,
+            });
+        }
+        (graph, truth)
+    }
+
+    #[test]
+    fn a_false_closure_is_dropped_and_the_rest_optimised_as_without_it() {
+        let (clean, truth) = ring_with_closures(false);
+        let (with_false, _) = ring_with_closures(true);
+        let params = BackendParams::default();
+        let reference = clean.optimize(&params).unwrap();
+        assert!(reference.rejected.is_empty());
+        let out = with_false.optimize(&params).unwrap();
+        assert_eq!(out.rejected, vec![with_false.edges.len() - 1]);
+        // The same factors from the same start: the same poses.
+        assert_eq!(out.poses, reference.poses);
+        // Kept, the false closure bends the ring far from the truth.
+        let kept = with_false
+            .optimize(&BackendParams {
+                closure_chi2_max: None,
+                ..params
+            })
+            .unwrap();
+        assert!(kept.rejected.is_empty());
+        let worst = |poses: &[Isometry3<f64>]| {
+            poses
+                .iter()
+                .zip(&truth)
+                .map(|(a, b)| (a.translation.vector - b.translation.vector).norm())
+                .fold(0.0, f64::max)
+        };
+        assert!(worst(&out.poses) < 0.1, "{}", worst(&out.poses));
+        assert!(worst(&kept.poses) > 0.5, "{}", worst(&kept.poses));
+        // The kept closures' χ² is what their Gaussian errors allow.
+        for e in with_false
+            .edges
+            .iter()
+            .filter(|e| e.kind == EdgeKind::LoopClosure)
+            .take(2)
+        {
+            let chi2 = edge_chi2(e, &out.poses).unwrap();
+            assert!(chi2 < 30.0, "{chi2}");
+        }
+    }
+
+    #[test]
+    fn edge_chi2_is_the_mahalanobis_norm_of_a_known_perturbation() {
+        let from = Isometry3::translation(1.0, 2.0, 0.5);
+        let measurement = Isometry3::from_parts(
+            Translation3::new(0.3, 0.0, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, 0.2),
+        );
+        // `to` off the measurement by 0.01 rad about z and 0.02 m along y,
+        // a right perturbation.
+        let to = from
+            * measurement
+            * Isometry3::from_parts(
+                Translation3::new(0.0, 0.02, 0.0),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, 0.01),
+            );
+        let edge = PoseGraphEdge {
+            from: 0,
+            to: 1,
+            measurement,
+            covariance: isotropic_covariance(0.005, 0.01),
+            kind: EdgeKind::LoopClosure,
+        };
+        let chi2 = edge_chi2(&edge, &[from, to]).unwrap();
+        assert!(
+            (chi2 - (2.0f64.powi(2) + 2.0f64.powi(2))).abs() < 1e-9,
+            "{chi2}"
+        );
+    }
+
+    #[test]
+    fn a_non_positive_closure_limit_is_refused_by_name() {
+        let err = BackendParams {
+            closure_chi2_max: Some(0.0),
+            ..BackendParams::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("backend.closure_chi2_max"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -64,6 +64,10 @@ pub struct FrontendRun {
     pub relocalisations: usize,
     /// Loop closures.
     pub loop_closures: usize,
+    /// Loop closures and relocalisations the back end dropped as
+    /// inconsistent with the rest of the graph
+    /// ([`BackendParams::closure_chi2_max`](crate::backend::BackendParams)).
+    pub rejected_closures: usize,
     /// Time spent lost (s).
     pub lost_secs: f64,
     /// The compute proxy (ms).
@@ -232,6 +236,7 @@ impl<'a> Session<'a> {
                 tracking_losses: 0,
                 relocalisations: 0,
                 loop_closures: 0,
+                rejected_closures: 0,
                 lost_secs: 0.0,
                 compute_ms: 0.0,
                 online_targets: 0,
@@ -345,14 +350,15 @@ impl<'a> Session<'a> {
 
     /// Adds a visual edge between two processed frames that are graph
     /// nodes (a keyframe always is).
-    fn add_vo_edge(&mut self, from: usize, to: usize, m: &VoMeasurement, kind: EdgeKind) {
-        let (Some(from), Some(to)) = (self.graph_node(from), self.graph_node(to)) else {
+    fn add_vo_edge(&mut self, from_node: usize, to_node: usize, m: &VoMeasurement, kind: EdgeKind) {
+        let (Some(from), Some(to)) = (self.graph_node(from_node), self.graph_node(to_node)) else {
             debug_assert!(
                 false,
                 "a visual edge between frames that are not graph nodes"
             );
             return;
         };
+        self.trace_edge_error(kind, from_node, to_node, &m.relative, &m.covariance);
         self.graph.add_edge(PoseGraphEdge {
             from,
             to,
@@ -370,6 +376,13 @@ impl<'a> Session<'a> {
             return;
         };
         let to = self.graph.add_node(self.nodes[node].initial);
+        self.trace_edge_error(
+            EdgeKind::Odometry,
+            self.last_graph_node,
+            node,
+            &odometry.relative,
+            &odometry.covariance,
+        );
         self.graph.add_edge(PoseGraphEdge {
             from,
             to,
@@ -626,6 +639,42 @@ impl<'a> Session<'a> {
         Ok(())
     }
 
+    /// An edge's error against the ground truth, as a trace event
+    /// (`RUST_LOG=gpodo_frontends::run=trace`): the rotation error's
+    /// axis-angle vector in the later body frame (degrees), the translation
+    /// error (mm) and the edge's yaw standard deviation (degrees), to find
+    /// the edges a trajectory's drift comes from.
+    fn trace_edge_error(
+        &self,
+        kind: EdgeKind,
+        from: usize,
+        to: usize,
+        relative: &Isometry3<f64>,
+        covariance: &nalgebra::Matrix6<f64>,
+    ) {
+        if !tracing::enabled!(tracing::Level::TRACE) {
+            return;
+        }
+        let (Some(a), Some(b)) = (self.frame_of(from), self.frame_of(to)) else {
+            return;
+        };
+        let truth = self.traverse.ground_truth_at(a.time_secs).inverse()
+            * self.traverse.ground_truth_at(b.time_secs);
+        let error = relative.inverse() * truth;
+        let r = error.rotation.scaled_axis().map(f64::to_degrees);
+        tracing::trace!(
+            ?kind,
+            from_secs = a.time_secs,
+            to_secs = b.time_secs,
+            roll_error_deg = r.x,
+            pitch_error_deg = r.y,
+            yaw_error_deg = r.z,
+            translation_error_mm = error.translation.vector.norm() * 1e3,
+            yaw_sigma_deg = covariance[(2, 2)].sqrt().to_degrees(),
+            "edge against the truth"
+        );
+    }
+
     /// Tracking `request` failed: the tracker is lost from here.
     fn lose_track(&mut self, request: &TrackRequest, gap: f64) {
         let (reference, frame) = (request.reference, request.current);
@@ -678,6 +727,20 @@ impl<'a> Session<'a> {
                 "pose graph: iteration limit reached"
             );
         }
+        if tracing::enabled!(tracing::Level::TRACE) {
+            for (i, e) in self.graph.edges.iter().enumerate() {
+                if matches!(e.kind, EdgeKind::LoopClosure | EdgeKind::Relocalisation) {
+                    tracing::trace!(
+                        edge = i,
+                        kind = ?e.kind,
+                        chi2 = crate::backend::edge_chi2(e, &optimized.poses),
+                        rejected = optimized.rejected.contains(&i),
+                        "closure's χ² at the optimum"
+                    );
+                }
+            }
+        }
+        self.run.rejected_closures = optimized.rejected.len();
         self.run.graph_error = (optimized.initial_error, optimized.final_error);
         self.run.graph_nodes = self.graph.initial.len();
         let mut poses: Vec<Isometry3<f64>> = Vec::with_capacity(self.nodes.len());

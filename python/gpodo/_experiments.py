@@ -229,6 +229,7 @@ class Results:
                 row.update(run["metrics"])
                 for k in ("tracking_losses", "lost_secs", "loop_closures", "online_targets"):
                     row[k] = run[k]
+                row["rejected_closures"] = run.get("rejected_closures", 0)
                 row.update(run.get("rover", {}))
                 rows.append(row)
         return pd.DataFrame(rows)

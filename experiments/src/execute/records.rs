@@ -69,6 +69,10 @@ pub struct SchemeMetrics {
     pub lost_secs: f64,
     /// Loop closures.
     pub loop_closures: usize,
+    /// Loop closures and relocalisations the back end dropped as
+    /// inconsistent with the rest of the graph.
+    #[serde(default)]
+    pub rejected_closures: usize,
     /// Targets learned online.
     pub online_targets: usize,
     /// Drift since the last look, relative pose error, compute per metre
@@ -207,6 +211,7 @@ impl RunRecord {
                 tracking_losses: s.run.tracking_losses,
                 lost_secs: s.run.lost_secs,
                 loop_closures: s.run.loop_closures,
+                rejected_closures: s.run.rejected_closures,
                 online_targets: s.run.online_targets,
                 rover: s.run.rover,
             })

@@ -339,7 +339,10 @@ fn table_two(s: &mut String, r: &ExperimentResults) {
                 format!("{:.1}", x.run.compute_ms / 1e3),
                 x.run.tracking_losses.to_string(),
                 format!("{:.0}", x.run.lost_secs),
-                x.run.loop_closures.to_string(),
+                match x.run.rejected_closures {
+                    0 => x.run.loop_closures.to_string(),
+                    n => format!("{} ({n} dropped)", x.run.loop_closures),
+                },
                 x.residuals.clone(),
             ]);
         }
