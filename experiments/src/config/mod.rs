@@ -115,10 +115,15 @@ pub enum DatasetSpec {
         #[serde(default)]
         test_max_secs: Option<f64>,
         /// The test traverse's route: `paper` (the fixed 42.3 m route,
-        /// default) or `random` (drawn per seed with the same length and
-        /// terrain statistics).
+        /// default), `random` (drawn per seed with the same length and
+        /// terrain statistics) or `sandy_slopes` (drawn per seed with the
+        /// same length and a quarter of it or more on sand at 5° or more).
         #[serde(default)]
         route: gpodo_testbed::sim::route::Route,
+        /// Slip bursts on loose ground (`testbed/src/sim/slip/bursts.rs`;
+        /// `{}` takes every default); none when unset.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        slip_bursts: Option<gpodo_testbed::sim::slip::SlipBursts>,
         /// Override of the preset's motion-capture jitter per frame (m), the
         /// white noise of the ground-truth positions: differenced over one
         /// 80-ms step it is most of a per-step residual's noise, over a 1-s

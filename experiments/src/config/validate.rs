@@ -135,6 +135,17 @@ impl ExperimentConfig {
                     "at least one `train` and one `test` log",
                 ))
             }
+            DatasetSpec::Simulated {
+                slip_bursts: Some(bursts),
+                ..
+            } => bursts.validate().map_err(|e| match e {
+                gpodo_testbed::TestbedError::InvalidConfig { field, expected } => Issue::new(
+                    &field.replacen("slip.bursts", "dataset.slip_bursts", 1),
+                    "out of range",
+                    expected,
+                ),
+                other => Issue::new("dataset.slip_bursts", other.to_string(), "valid settings"),
+            }),
             DatasetSpec::Simulated { .. }
             | DatasetSpec::Logs { .. }
             | DatasetSpec::Bags { .. }

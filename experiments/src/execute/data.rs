@@ -362,9 +362,11 @@ pub(crate) fn prepare(config: &ExperimentConfig) -> Result<PreparedData, Pipelin
             route,
             mocap_jitter_m,
             camera_rate_hz,
+            slip_bursts,
         } => {
             let mut sim = SimulatorConfig::preset(*preset, *seed);
             sim.route = *route;
+            sim.slip.bursts.clone_from(slip_bursts);
             if let Some(n) = training_runs {
                 sim.training_runs = *n;
             }

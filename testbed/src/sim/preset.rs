@@ -17,11 +17,11 @@ use serde::{Deserialize, Serialize};
 use crate::TestbedError;
 use crate::sim::driver::Driver;
 use crate::sim::manoeuvre::{DriverParams, PlanarPose};
-use crate::sim::route::{Route, route_start_pose, route_waypoints};
+use crate::sim::route::{Route, SANDY_SLOPE_MIN_DEG, route_start_pose, route_waypoints};
 use crate::sim::rover::World;
 use crate::sim::sensors::SensorNoise;
 use crate::sim::slip::SlipParams;
-use crate::sim::soil::{SoilMap, SoilMapSpec};
+use crate::sim::soil::{Soil, SoilMap, SoilMapSpec};
 use crate::sim::terrain::{Terrain, TerrainSpec};
 use gpodo_datasets::log::RoverLog;
 
@@ -233,7 +233,12 @@ impl SimulatorConfig {
         };
         let size = self.terrain.size_m;
         // The route draws from a stream of its own, apart from the runs'.
-        let route = route_waypoints(self.route, size, &mut self.rng(ROUTE_STREAM))?;
+        let sandy_slope = |x: f64, y: f64| {
+            let g = terrain.gradient(x, y);
+            soils.soil_at(x, y).name == Soil::loose_sand().name
+                && g.norm().atan() >= SANDY_SLOPE_MIN_DEG.to_radians()
+        };
+        let route = route_waypoints(self.route, size, &sandy_slope, &mut self.rng(ROUTE_STREAM))?;
         // Run `i` draws from stream `i + 1` whatever thread runs it, so the
         // runs are simulated in parallel with the same result as in series.
         let run = |i: usize| -> Result<RoverLog, TestbedError> {

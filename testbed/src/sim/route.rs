@@ -9,6 +9,14 @@
 //! and the share of its length in the middle of the area (where the hills
 //! are: the central half of each side) is within 10 percentage points of
 //! the paper route's.
+//!
+//! A sandy-slope route is, of the first [`SANDY_SLOPE_DRAWS`] random
+//! routes of the paper route's length (the middle-share limit dropped: the
+//! hills are where the slopes are), the one with the largest share of its
+//! length on loose sand at a slope of [`SANDY_SLOPE_MIN_DEG`] or more. It
+//! is for experiments about where slip is, such as Table II's positive
+//! control; `testbed/tests/sandy_slopes.rs` prints the shares against
+//! random routes'.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -26,6 +34,37 @@ pub enum Route {
     /// A route drawn per seed with the paper route's length (±10 %) and
     /// share of length in the middle of the area (±10 points).
     Random,
+    /// Of [`SANDY_SLOPE_DRAWS`] routes drawn per seed with the paper
+    /// route's length (±10 %), the one with the most of its length on
+    /// loose sand at a slope of [`SANDY_SLOPE_MIN_DEG`] or more.
+    SandySlopes,
+}
+
+/// The slope from which loose sand counts as a sandy slope (degrees).
+pub const SANDY_SLOPE_MIN_DEG: f64 = 8.0;
+
+/// The routes of the paper route's length a sandy-slope route is chosen
+/// from.
+pub const SANDY_SLOPE_DRAWS: usize = 200;
+
+/// The share of the polyline's length (sampled every 5 cm) on ground that
+/// `sandy_slope` says is a sandy slope.
+pub fn sandy_slope_share(points: &[(f64, f64)], sandy_slope: &dyn Fn(f64, f64) -> bool) -> f64 {
+    let (mut total, mut sandy) = (0.0, 0.0);
+    for w in points.windows(2) {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        let length = (x1 - x0).hypot(y1 - y0);
+        let steps = (length / 0.05).ceil().max(1.0) as usize;
+        let step = length / steps as f64;
+        for k in 0..steps {
+            let t = (k as f64 + 0.5) / steps as f64;
+            if sandy_slope(x0 + t * (x1 - x0), y0 + t * (y1 - y0)) {
+                sandy += step;
+            }
+            total += step;
+        }
+    }
+    if total > 0.0 { sandy / total } else { 0.0 }
 }
 
 /// Waypoints of a random route (the paper's has 9).
@@ -65,7 +104,9 @@ pub fn central_share(points: &[(f64, f64)], area_size_m: f64) -> f64 {
 }
 
 /// The waypoints of `route` in an area of side `area_size_m`; a random
-/// route draws from `rng`.
+/// route draws from `rng`. `sandy_slope(x, y)` says whether the ground at
+/// `(x, y)` is loose sand at [`SANDY_SLOPE_MIN_DEG`] or more; only
+/// [`Route::SandySlopes`] reads it.
 ///
 /// # Errors
 /// [`TestbedError::Simulation`] when no random route meets the limits in
@@ -73,6 +114,7 @@ pub fn central_share(points: &[(f64, f64)], area_size_m: f64) -> f64 {
 pub fn route_waypoints<R: Rng + ?Sized>(
     route: Route,
     area_size_m: f64,
+    sandy_slope: &dyn Fn(f64, f64) -> bool,
     rng: &mut R,
 ) -> Result<Vec<(f64, f64)>, TestbedError> {
     let paper = test_traverse_waypoints(area_size_m);
@@ -81,19 +123,37 @@ pub fn route_waypoints<R: Rng + ?Sized>(
     }
     let (length, share) = (polyline_length(&paper), central_share(&paper, area_size_m));
     let (lo, hi) = (1.4 * area_size_m / 9.0, 7.6 * area_size_m / 9.0);
+    let mut best: Option<(f64, Vec<(f64, f64)>)> = None;
+    let mut of_length = 0;
     for _ in 0..MAX_DRAWS {
         let points: Vec<(f64, f64)> = (0..RANDOM_ROUTE_WAYPOINTS)
             .map(|_| (rng.random_range(lo..hi), rng.random_range(lo..hi)))
             .collect();
-        if (polyline_length(&points) / length - 1.0).abs() <= 0.1
-            && (central_share(&points, area_size_m) - share).abs() <= 0.1
-        {
-            return Ok(points);
+        if (polyline_length(&points) / length - 1.0).abs() > 0.1 {
+            continue;
+        }
+        match route {
+            Route::Paper | Route::Random => {
+                if (central_share(&points, area_size_m) - share).abs() <= 0.1 {
+                    return Ok(points);
+                }
+            }
+            Route::SandySlopes => {
+                let sandy = sandy_slope_share(&points, sandy_slope);
+                if best.as_ref().is_none_or(|(b, _)| sandy > *b) {
+                    best = Some((sandy, points));
+                }
+                of_length += 1;
+                if of_length == SANDY_SLOPE_DRAWS {
+                    break;
+                }
+            }
         }
     }
-    Err(TestbedError::Simulation {
-        detail: format!("no random route of {length:.1} m ± 10 % in {MAX_DRAWS} draws"),
-    })
+    best.map(|(_, points)| points)
+        .ok_or_else(|| TestbedError::Simulation {
+            detail: format!("no random route of {length:.1} m ± 10 % in {MAX_DRAWS} draws"),
+        })
 }
 
 /// Where a route starts: on its first waypoint, facing the second.
@@ -116,7 +176,7 @@ mod tests {
     #[test]
     fn the_paper_route_is_the_fixed_one() {
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let points = route_waypoints(Route::Paper, 9.0, &mut rng).unwrap();
+        let points = route_waypoints(Route::Paper, 9.0, &|_, _| false, &mut rng).unwrap();
         assert_eq!(points, test_traverse_waypoints(9.0));
         assert!((polyline_length(&points) - 42.34).abs() < 0.01);
     }
@@ -128,7 +188,7 @@ mod tests {
         let routes: Vec<Vec<(f64, f64)>> = (0..20)
             .map(|seed| {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                route_waypoints(Route::Random, 9.0, &mut rng).unwrap()
+                route_waypoints(Route::Random, 9.0, &|_, _| false, &mut rng).unwrap()
             })
             .collect();
         for r in &routes {
@@ -149,7 +209,7 @@ mod tests {
         // The same seed, the same route.
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         assert_eq!(
-            route_waypoints(Route::Random, 9.0, &mut rng).unwrap(),
+            route_waypoints(Route::Random, 9.0, &|_, _| false, &mut rng).unwrap(),
             routes[3]
         );
     }

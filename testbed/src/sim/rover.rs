@@ -29,7 +29,7 @@ use crate::sim::driver::Driver;
 use crate::sim::manoeuvre::{DriveCommand, ManoeuvreKind, PlanarPose, PlanarTwist};
 use crate::sim::noise::OrnsteinUhlenbeck;
 use crate::sim::sensors::{SensorErrors, SensorNoise, normal};
-use crate::sim::slip::{SlipInput, SlipModel, SlipNoiseProcess};
+use crate::sim::slip::{BurstProcess, SlipInput, SlipModel, SlipNoiseProcess};
 use crate::sim::soil::SoilMap;
 use crate::sim::terrain::Terrain;
 use gpodo_datasets::log::RoverLog;
@@ -71,6 +71,7 @@ struct RoverState {
     placement: Placement,
     steer: [f64; 6],
     wheel_angle: [f64; 6],
+    burst: BurstProcess,
 }
 
 /// Where the body really is (sinkage included) in state `s`.
@@ -240,6 +241,7 @@ impl World<'_> {
             placement,
             steer: steer0,
             wheel_angle: [0.0; 6],
+            burst: BurstProcess::default(),
         };
         // Position of the (sunk) body one step back, for the accelerometer.
         let mut previous_position = truth_position(&state);
@@ -325,6 +327,15 @@ impl World<'_> {
         let gravity = body_k.rotation.inverse() * -Vector3::z();
         let contacts_k = self.contacts(chains, &state.placement, &state.steer);
         let soil = self.soils.soil_at(state.pose.x_m, state.pose.y_m);
+        // Bursts draw from `rng` only when set, so runs without them keep
+        // their draws.
+        let mut burst = state.burst;
+        let in_burst = self
+            .slip
+            .params()
+            .bursts
+            .as_ref()
+            .is_some_and(|b| burst.step(b, soil, commanded.speed_mps() * dt, dt, rng));
         let outcome = self.slip.apply(&SlipInput {
             commanded,
             gravity_body: gravity,
@@ -332,6 +343,7 @@ impl World<'_> {
             load_imbalance: self.load_imbalance(&contacts_k, &gravity),
             kind,
             noise: slip_noise.step(dt, rng),
+            in_burst,
         });
         let actual = outcome.twist;
 
@@ -439,6 +451,7 @@ impl World<'_> {
                 placement,
                 steer,
                 wheel_angle,
+                burst,
             },
         ))
     }

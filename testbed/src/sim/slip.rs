@@ -26,6 +26,9 @@
 //!   turn_slip_noise_std·n_yaw`, clamped to `[0, max_turn_slip]`; the yaw rate
 //!   becomes `(1 − s_ψ)·ω + yaw_noise_rad_per_m·|v|·n_yaw`.
 //!
+//! With [`SlipParams::bursts`] set, a burst ([`bursts`]) adds its extra slip
+//! to `s` before the clamp while it lasts.
+//!
 //! Every term is proportional to the commanded speed or yaw rate, so a zero
 //! command gives exactly zero motion (no creep). Defaults aim at the real
 //! ExoTeR residuals (median `|res_x|`/wheel speed ≈ 8% on moving seconds,
@@ -40,6 +43,9 @@ use super::noise::OrnsteinUhlenbeck;
 use super::soil::Soil;
 use crate::TestbedError;
 use crate::error::require;
+
+pub mod bursts;
+pub use bursts::{BurstProcess, SlipBursts};
 
 /// Global scale factors of the slip model; the per-soil ones live in [`Soil`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -91,6 +97,9 @@ pub struct SlipParams {
     /// Correlation time the caller should give the noise processes, seconds.
     /// Default 2.0.
     pub noise_correlation_time_secs: f64,
+    /// Slip bursts on loose ground ([`bursts`]); default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bursts: Option<SlipBursts>,
 }
 
 impl Default for SlipParams {
@@ -113,6 +122,7 @@ impl Default for SlipParams {
             yaw_noise_rad_per_m: 0.05,
             scrub_lever_m: 0.3,
             noise_correlation_time_secs: 2.0,
+            bursts: None,
         }
     }
 }
@@ -215,6 +225,9 @@ impl SlipParams {
         for (field, ok, expected) in checks {
             require(ok, field, expected)?;
         }
+        if let Some(bursts) = &self.bursts {
+            bursts.validate()?;
+        }
         Ok(())
     }
 
@@ -256,6 +269,9 @@ pub struct SlipInput<'a> {
     pub kind: ManoeuvreKind,
     /// The correlated noise sample; non-finite components count as 0.
     pub noise: SlipNoise,
+    /// Whether a slip burst acts during this step ([`BurstProcess`]); its
+    /// extra slip comes from [`SlipParams::bursts`] (none when unset).
+    pub in_burst: bool,
 }
 
 /// The actual motion and the slip that produced it.
@@ -323,7 +339,11 @@ impl SlipModel {
         let p = &self.params;
 
         let slip = if speed > 0.0 {
-            self.longitudinal_slip(input.soil, slope, imbalance, noise.longitudinal)
+            let burst = match (&p.bursts, input.in_burst) {
+                (Some(b), true) => b.extra_at(slope.uphill_rad),
+                _ => 0.0,
+            };
+            self.slip_ratio(input.soil, slope, imbalance, noise.longitudinal, burst)
         } else {
             0.0
         };
@@ -366,6 +386,19 @@ impl SlipModel {
         load_imbalance: f64,
         noise: f64,
     ) -> f64 {
+        self.slip_ratio(soil, slope, load_imbalance, noise, 0.0)
+    }
+
+    /// [`SlipModel::longitudinal_slip`] with a burst's `extra` slip added
+    /// before the clamp.
+    fn slip_ratio(
+        &self,
+        soil: &Soil,
+        slope: SlopeAngles,
+        load_imbalance: f64,
+        noise: f64,
+        extra: f64,
+    ) -> f64 {
         let p = &self.params;
         let growth = |angle: f64| (p.slope_rate_per_rad * angle).exp() - 1.0;
         let along = if slope.uphill_rad >= 0.0 {
@@ -375,7 +408,8 @@ impl SlipModel {
             soil.slip_base * fade - p.downhill_skid_factor * soil.slope_slip_gain * (1.0 - fade)
         };
         let across = p.cross_slope_factor * soil.slope_slip_gain * growth(slope.cross_rad.abs());
-        let slip = along + across + p.load_slip_gain * load_imbalance + p.slip_noise_std * noise;
+        let slip =
+            along + across + p.load_slip_gain * load_imbalance + p.slip_noise_std * noise + extra;
         slip.clamp(p.min_slip, p.max_slip)
     }
 

@@ -28,6 +28,7 @@ fn input(
         load_imbalance: 0.0,
         kind,
         noise: SlipNoise::default(),
+        in_burst: false,
     }
 }
 
@@ -287,6 +288,7 @@ fn simulate_rows(seed: u64, duration_secs: f64) -> Vec<Row> {
             load_imbalance: (0.8 * g.xy().norm() / g.z.abs()).min(1.0),
             kind: command.kind,
             noise: noise.step(dt, &mut rng),
+            in_burst: false,
         };
         let actual = model.apply(&inp).twist;
         let wheel = command.twist.speed_mps() + 0.3 * command.twist.wz_radps.abs();
@@ -354,4 +356,33 @@ fn default_parameters_land_near_the_real_rover_residuals() {
     assert!(within(median_ratio, 0.083) && within(res_x, 0.0041) && within(res_y, 0.0023));
     assert!(within(wheel, 0.027) && within(moving_share, 0.71));
     assert!(corr_pitch > 0.15 && corr_roll > 0.0);
+}
+
+#[test]
+fn a_burst_adds_its_extra_slip_on_an_uphill_before_the_clamp() {
+    let sand = Soil::loose_sand();
+    let with_bursts = SlipParams {
+        bursts: Some(SlipBursts::default()),
+        ..SlipParams::default()
+    }
+    .check()
+    .unwrap();
+    let twist = PlanarTwist::new(SPEED, 0.0, 0.0);
+    let slip = |model: &SlipModel, nose_up: f64, in_burst: bool| {
+        let mut inp = input(twist, gravity(nose_up, 0.0), &sand, ManoeuvreKind::Straight);
+        inp.in_burst = in_burst;
+        model.apply(&inp).longitudinal_slip
+    };
+    let five = 5f64.to_radians();
+    let calm = slip(&with_bursts, five, false);
+    assert_eq!(calm, slip(&SlipModel::default(), five, false));
+    let burst = slip(&with_bursts, five, true);
+    assert!(
+        (burst - calm - 0.3 * (3.0 * five).exp()).abs() < 1e-12,
+        "{calm} {burst}"
+    );
+    // Without `bursts`, the flag does nothing.
+    assert_eq!(slip(&SlipModel::default(), five, true), calm);
+    // On a steep slope the clamp holds.
+    assert_eq!(slip(&with_bursts, 20f64.to_radians(), true), 0.9);
 }
