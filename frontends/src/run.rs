@@ -31,6 +31,8 @@ use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::rover_measures::{Look, RoverMeasures, SampledTruth, rover_measures};
 use crate::traverse::Traverse;
+mod trace;
+
 use crate::vo::{
     ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
     VoMeasurement,
@@ -639,42 +641,6 @@ impl<'a> Session<'a> {
         Ok(())
     }
 
-    /// An edge's error against the ground truth, as a trace event
-    /// (`RUST_LOG=gpodo_frontends::run=trace`): the rotation error's
-    /// axis-angle vector in the later body frame (degrees), the translation
-    /// error (mm) and the edge's yaw standard deviation (degrees), to find
-    /// the edges a trajectory's drift comes from.
-    fn trace_edge_error(
-        &self,
-        kind: EdgeKind,
-        from: usize,
-        to: usize,
-        relative: &Isometry3<f64>,
-        covariance: &nalgebra::Matrix6<f64>,
-    ) {
-        if !tracing::enabled!(tracing::Level::TRACE) {
-            return;
-        }
-        let (Some(a), Some(b)) = (self.frame_of(from), self.frame_of(to)) else {
-            return;
-        };
-        let truth = self.traverse.ground_truth_at(a.time_secs).inverse()
-            * self.traverse.ground_truth_at(b.time_secs);
-        let error = relative.inverse() * truth;
-        let r = error.rotation.scaled_axis().map(f64::to_degrees);
-        tracing::trace!(
-            ?kind,
-            from_secs = a.time_secs,
-            to_secs = b.time_secs,
-            roll_error_deg = r.x,
-            pitch_error_deg = r.y,
-            yaw_error_deg = r.z,
-            translation_error_mm = error.translation.vector.norm() * 1e3,
-            yaw_sigma_deg = covariance[(2, 2)].sqrt().to_degrees(),
-            "edge against the truth"
-        );
-    }
-
     /// Tracking `request` failed: the tracker is lost from here.
     fn lose_track(&mut self, request: &TrackRequest, gap: f64) {
         let (reference, frame) = (request.reference, request.current);
@@ -727,19 +693,7 @@ impl<'a> Session<'a> {
                 "pose graph: iteration limit reached"
             );
         }
-        if tracing::enabled!(tracing::Level::TRACE) {
-            for (i, e) in self.graph.edges.iter().enumerate() {
-                if matches!(e.kind, EdgeKind::LoopClosure | EdgeKind::Relocalisation) {
-                    tracing::trace!(
-                        edge = i,
-                        kind = ?e.kind,
-                        chi2 = crate::backend::edge_chi2(e, &optimized.poses),
-                        rejected = optimized.rejected.contains(&i),
-                        "closure's χ² at the optimum"
-                    );
-                }
-            }
-        }
+        self.trace_closures(&optimized);
         self.run.rejected_closures = optimized.rejected.len();
         self.run.graph_error = (optimized.initial_error, optimized.final_error);
         self.run.graph_nodes = self.graph.initial.len();
