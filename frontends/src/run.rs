@@ -31,12 +31,12 @@ use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::rover_measures::{Look, RoverMeasures, SampledTruth, rover_measures};
 use crate::traverse::Traverse;
-mod trace;
-
 use crate::vo::{
     ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
     VoMeasurement,
 };
+
+mod trace;
 
 /// One processed frame, as the learning curve records it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
