@@ -27,8 +27,9 @@ use gpodo_vision::orb::OrbParams;
 use gpodo_vision::stereo::stereo_features;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
-fn stereo_frame(c: &mut Criterion) {
-    let ground = Arc::new(
+/// A flat 6-m patch of gravel, the ground of every bench here.
+fn gravel_ground() -> Arc<GroundMaps> {
+    Arc::new(
         GroundMaps::build(
             &Terrain::flat(6.0).unwrap(),
             &SoilMap::uniform(Soil::gravel(), 6.0).unwrap(),
@@ -36,7 +37,11 @@ fn stereo_frame(c: &mut Criterion) {
             7,
         )
         .unwrap(),
-    );
+    )
+}
+
+fn stereo_frame(c: &mut Criterion) {
+    let ground = gravel_ground();
     let camera = CameraParams::exoter_bumblebee2().scaled(0.5);
     let poses: Vec<FramePose> = (0..2)
         .map(|k| FramePose {
@@ -90,15 +95,7 @@ fn stereo_frame(c: &mut Criterion) {
 /// around a 2-m circle on gravel, each 4.5° and 16 cm on.
 fn keyframe_query(c: &mut Criterion) {
     const KEYFRAMES: usize = 80;
-    let ground = Arc::new(
-        GroundMaps::build(
-            &Terrain::flat(6.0).unwrap(),
-            &SoilMap::uniform(Soil::gravel(), 6.0).unwrap(),
-            &SceneSpec::default(),
-            7,
-        )
-        .unwrap(),
-    );
+    let ground = gravel_ground();
     let camera = CameraParams::exoter_bumblebee2().scaled(0.5);
     let poses: Vec<FramePose> = (0..=KEYFRAMES)
         .map(|k| {

@@ -14,10 +14,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
+use std::path::Path;
+
+use common::{assert_succeeded, gpodo_on};
 
 /// The stereo VO's per-route standard deviation of Δ RMSE (m), GP back
 /// end, 0.5 fps against 0.5 fps + 1 s, 20 routes.
@@ -43,17 +44,8 @@ schemes:
         base.display()
     );
     std::fs::write(d.join("floor.yaml"), sweep).unwrap();
-    let out = Command::new(GPODO)
-        .args(["-q", "run", "floor.yaml", "--out", "r"])
-        .current_dir(d)
-        .env_remove("SLURM_ARRAY_TASK_ID")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = gpodo_on("run", &d.join("floor.yaml"), &d.join("r"), &[]);
+    assert_succeeded(&out, "");
     let (mut deltas, mut correlations) = (Vec::new(), Vec::new());
     for line in std::fs::read_to_string(d.join("r/runs.jsonl"))
         .unwrap()

@@ -8,9 +8,11 @@ use std::process::{Command, Output};
 /// The binary under test.
 pub const GPODO: &str = env!("CARGO_BIN_EXE_gpodo");
 
-/// `gpodo --quiet COMMAND FILE --out DIR EXTRA…`.
+/// `gpodo --quiet COMMAND FILE --out DIR EXTRA…`, outside any Slurm array
+/// (a task id would make a run one shard of its sweep).
 pub fn gpodo_on(command: &str, file: &Path, out: &Path, extra: &[&str]) -> Output {
     Command::new(GPODO)
+        .env_remove("SLURM_ARRAY_TASK_ID")
         .args(["--quiet", command])
         .arg(file)
         .arg("--out")

@@ -47,26 +47,6 @@ pub const SANDY_SLOPE_MIN_DEG: f64 = 8.0;
 /// from.
 pub const SANDY_SLOPE_DRAWS: usize = 200;
 
-/// The share of the polyline's length (sampled every 5 cm) on ground that
-/// `sandy_slope` says is a sandy slope.
-pub fn sandy_slope_share(points: &[(f64, f64)], sandy_slope: &dyn Fn(f64, f64) -> bool) -> f64 {
-    let (mut total, mut sandy) = (0.0, 0.0);
-    for w in points.windows(2) {
-        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
-        let length = (x1 - x0).hypot(y1 - y0);
-        let steps = (length / 0.05).ceil().max(1.0) as usize;
-        let step = length / steps as f64;
-        for k in 0..steps {
-            let t = (k as f64 + 0.5) / steps as f64;
-            if sandy_slope(x0 + t * (x1 - x0), y0 + t * (y1 - y0)) {
-                sandy += step;
-            }
-            total += step;
-        }
-    }
-    if total > 0.0 { sandy / total } else { 0.0 }
-}
-
 /// Waypoints of a random route (the paper's has 9).
 pub const RANDOM_ROUTE_WAYPOINTS: usize = 9;
 
@@ -85,22 +65,35 @@ pub fn polyline_length(points: &[(f64, f64)]) -> f64 {
 /// `area_size_m / 2` (sampled every centimetre).
 pub fn central_share(points: &[(f64, f64)], area_size_m: f64) -> f64 {
     let (lo, hi) = (area_size_m / 4.0, 3.0 * area_size_m / 4.0);
-    let inside = |x: f64, y: f64| (lo..=hi).contains(&x) && (lo..=hi).contains(&y);
-    let (mut total, mut central) = (0.0, 0.0);
+    length_share(points, 0.01, &|x, y| {
+        (lo..=hi).contains(&x) && (lo..=hi).contains(&y)
+    })
+}
+
+/// The share of the polyline's length (sampled every 5 cm) on ground that
+/// `sandy_slope` says is a sandy slope.
+pub fn sandy_slope_share(points: &[(f64, f64)], sandy_slope: &dyn Fn(f64, f64) -> bool) -> f64 {
+    length_share(points, 0.05, sandy_slope)
+}
+
+/// The share of the polyline's length where `inside(x, y)` holds, sampled
+/// at the midpoints of steps of at most `step_m`.
+fn length_share(points: &[(f64, f64)], step_m: f64, inside: &dyn Fn(f64, f64) -> bool) -> f64 {
+    let (mut total, mut within) = (0.0, 0.0);
     for w in points.windows(2) {
         let ((x0, y0), (x1, y1)) = (w[0], w[1]);
         let length = (x1 - x0).hypot(y1 - y0);
-        let steps = (length / 0.01).ceil().max(1.0) as usize;
+        let steps = (length / step_m).ceil().max(1.0) as usize;
         let step = length / steps as f64;
         for k in 0..steps {
             let t = (k as f64 + 0.5) / steps as f64;
             if inside(x0 + t * (x1 - x0), y0 + t * (y1 - y0)) {
-                central += step;
+                within += step;
             }
             total += step;
         }
     }
-    if total > 0.0 { central / total } else { 0.0 }
+    if total > 0.0 { within / total } else { 0.0 }
 }
 
 /// The waypoints of `route` in an area of side `area_size_m`; a random
