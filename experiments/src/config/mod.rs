@@ -19,6 +19,7 @@ pub mod bench;
 pub mod paths;
 pub mod schemes;
 mod validate;
+pub mod verdict;
 
 use std::path::PathBuf;
 
@@ -33,6 +34,7 @@ use serde::{Deserialize, Serialize};
 pub use bench::{BenchSettings, PrequentialSettings, RefitStart};
 pub use schemes::SchemeSpec;
 pub use validate::Issue;
+pub use verdict::{Comparison, Margins, Measure, VerdictRules};
 
 /// A whole experiment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -82,6 +84,11 @@ pub struct ExperimentConfig {
     /// verdict has no "equivalent".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub equivalence_margin_m: Option<f64>,
+    /// The rules of Table II's verdict (policies judged, primary and
+    /// secondary comparisons, margins), committed before the runs they
+    /// judge; the sweep report applies them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<VerdictRules>,
 }
 
 /// A reference residual table.

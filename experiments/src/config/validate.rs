@@ -75,6 +75,25 @@ impl ExperimentConfig {
             })?;
         }
         self.validate_schemes()?;
+        if let Some(rules) = &self.verdict {
+            let curves: Vec<(String, bool, String)> = self
+                .schemes
+                .iter()
+                .filter_map(|s| {
+                    let name = s.curve.clone()?;
+                    let fixed =
+                        matches!(s.selector, gpodo_frontends::SelectorSpec::FixedRate { .. });
+                    Some((name, fixed, s.back_end(self)))
+                })
+                .fold(Vec::new(), |mut acc, (name, fixed, back_end)| {
+                    match acc.iter_mut().find(|(n, ..)| *n == name) {
+                        Some(c) => c.1 &= fixed,
+                        None => acc.push((name, fixed, back_end)),
+                    }
+                    acc
+                });
+            rules.validate(&curves)?;
+        }
         if let Some(margin) = self.equivalence_margin_m
             && !(margin.is_finite() && margin > 0.0)
         {
