@@ -40,6 +40,8 @@ pub struct KnobPoint {
     pub compute: Vec<f64>,
     /// A rover team's measures per seed.
     pub rover: Vec<RoverMeasures>,
+    /// Tracking losses per seed.
+    pub losses: Vec<f64>,
 }
 
 /// One policy's curve.
@@ -87,6 +89,17 @@ impl Curve {
         }
         out
     }
+
+    /// The same curve with each point's RMSE replaced by its tracking
+    /// losses per seed.
+    #[must_use]
+    pub fn with_losses(&self) -> Self {
+        let mut out = self.clone();
+        for p in &mut out.points {
+            p.rmse.clone_from(&p.losses);
+        }
+        out
+    }
 }
 
 impl Curves {
@@ -103,7 +116,15 @@ impl Curves {
                 .schemes
                 .iter()
                 .find(|m| m.label == label && m.traverse == traverse)
-                .map(|m| (m.frames as f64, m.rmse_m, m.compute_s, m.rover))
+                .map(|m| {
+                    (
+                        m.frames as f64,
+                        m.rmse_m,
+                        m.compute_s,
+                        m.rover,
+                        m.tracking_losses as f64,
+                    )
+                })
         };
         let series = |label: &str| -> Option<KnobPoint> {
             let mut point = KnobPoint {
@@ -112,9 +133,11 @@ impl Curves {
                 rmse: Vec::new(),
                 compute: Vec::new(),
                 rover: Vec::new(),
+                losses: Vec::new(),
             };
             for r in records {
-                let (f, e, c, m) = metric(r, label)?;
+                let (f, e, c, m, l) = metric(r, label)?;
+                point.losses.push(l);
                 point.frames.push(f);
                 point.rmse.push(e);
                 point.compute.push(c);
@@ -366,6 +389,7 @@ pub(crate) mod fixtures {
             rmse: rmse.to_vec(),
             compute: frames.to_vec(),
             rover: vec![RoverMeasures::default(); frames.len()],
+            losses: vec![0.0; frames.len()],
         }
     }
 

@@ -13,6 +13,7 @@ pub mod controls;
 pub mod curve_plot;
 pub mod curves;
 pub mod curves_section;
+pub mod exact;
 pub mod files;
 pub mod floor;
 pub mod hindsight;
@@ -29,5 +30,6 @@ pub mod table;
 pub mod tradeoff_plot;
 mod twin_table;
 pub mod verdict;
+pub mod verdict_section;
 
 pub use files::write_report;

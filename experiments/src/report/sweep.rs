@@ -19,6 +19,7 @@ use crate::report::sensitivity::sensitivity_section;
 use crate::report::sensitivity_plot::sensitivity_svg;
 use crate::report::table::Table;
 use crate::report::tradeoff_plot::records_tradeoff_svg;
+use crate::report::verdict_section::verdict_section;
 use crate::util::output::write_atomically;
 
 pub use crate::report::aggregate::Stat;
@@ -210,6 +211,10 @@ pub fn write_sweep_report(dir: &Path, file_name: &str) -> Result<SweepReport, Re
         }
     }
     let bootstrap_seed = merged.plan.as_ref().map_or(0, |p| p.seed);
+    if let Some((markdown, table)) = verdict_section(records, bootstrap_seed) {
+        s.push_str(&markdown);
+        write_table("verdict.csv", &table)?;
+    }
     if let Some((markdown, table)) = floor_section(records, bootstrap_seed) {
         s.push_str(&markdown);
         write_table("floor.csv", &table)?;
