@@ -75,8 +75,17 @@ impl Measure {
         match self {
             Self::Rmse => "RMSE [m]",
             Self::Losses => "losses per route",
-            Self::DriftSinceLook => "drift since look, p95 [m]",
+            Self::DriftSinceLook => "drift since look, p95 [mm]",
             Self::CpuPerMetre => "compute [ms/m]",
+        }
+    }
+
+    /// The factor from the measure's unit (m, count, ms/m) to the unit of
+    /// its name: 1000 for the drift, shown in mm.
+    pub fn display_scale(self) -> f64 {
+        match self {
+            Self::DriftSinceLook => 1000.0,
+            _ => 1.0,
         }
     }
 

@@ -73,6 +73,10 @@ fn write_table_two_files(
             )
             .as_bytes(),
         )?;
+        write_file(
+            &traj_dir.join(format!("{name}.windows.csv")),
+            windows_csv(traverse).as_bytes(),
+        )?;
         for scheme in results
             .schemes
             .iter()
@@ -89,6 +93,10 @@ fn write_table_two_files(
             write_file(
                 &traj_dir.join(format!("{file}.tum")),
                 format_tum(&comment, &stamped(&scheme.run.trajectory)).as_bytes(),
+            )?;
+            write_file(
+                &traj_dir.join(format!("{file}.frames.csv")),
+                frames_csv(traverse, &scheme.run.processed).as_bytes(),
             )?;
             if !plots {
                 continue;
@@ -122,6 +130,41 @@ fn write_table_two_files(
         )?;
     }
     Ok(())
+}
+
+/// The windows of a traverse: where each starts on the ground truth and
+/// its true residual (what the odometry misses over the window, m/s in
+/// the body frame).
+fn windows_csv(traverse: &gpodo_frontends::traverse::Traverse) -> String {
+    let mut out = String::from(
+        "start_s,end_s,x_m,y_m,true_residual_x_mps,true_residual_y_mps,true_residual_z_mps\n",
+    );
+    for w in traverse.windows() {
+        let at = traverse.ground_truth_at(w.start_secs).translation.vector;
+        let r = w.true_residual;
+        out += &format!(
+            "{},{},{},{},{},{},{}\n",
+            w.start_secs, w.end_secs, at.x, at.y, r.x, r.y, r.z
+        );
+    }
+    out
+}
+
+/// The frames a scheme processed, each at its ground-truth position, and
+/// whether it became a keyframe or was lost.
+fn frames_csv(
+    traverse: &gpodo_frontends::traverse::Traverse,
+    processed: &[gpodo_frontends::run::ProcessedFrame],
+) -> String {
+    let mut out = String::from("frame,time_s,distance_m,x_m,y_m,keyframe,tracked\n");
+    for f in processed {
+        let at = traverse.ground_truth_at(f.time_secs).translation.vector;
+        out += &format!(
+            "{},{},{},{},{},{},{}\n",
+            f.frame, f.time_secs, f.distance_m, at.x, at.y, f.keyframe, f.tracked
+        );
+    }
+    out
 }
 
 /// The predictions Fig. 3 shows: those of the first scheme's regressor

@@ -43,10 +43,17 @@ pub enum Outcome {
 }
 
 impl Outcome {
-    fn words(self, margin: f64) -> String {
+    /// The outcome in words; a difference the test finds but whose
+    /// interval lies within ±ε says so.
+    fn words(self, margin: f64, within: bool) -> String {
+        let negligible = if within {
+            format!(" (within ±{})", short(margin))
+        } else {
+            String::new()
+        };
         match self {
-            Self::Better => "better".into(),
-            Self::Worse => "worse".into(),
+            Self::Better => format!("better{negligible}"),
+            Self::Worse => format!("worse{negligible}"),
             Self::Equivalent => format!("equivalent (±{})", short(margin)),
             Self::CannotDecide => "cannot decide".into(),
             Self::TooFewRoutes => "too few routes".into(),
@@ -312,14 +319,18 @@ pub fn verdict_section(records: &[RunRecord], seed: u64) -> Option<(String, Tabl
     ]);
     for j in &judgements {
         let c = &j.comparison;
+        let k = c.measure.display_scale();
         let delta = j.delta.map_or("–".into(), |d| {
             format!(
                 "{} [{}, {}]",
-                short(d.estimate),
-                short(d.low),
-                short(d.high)
+                short(k * d.estimate),
+                short(k * d.low),
+                short(k * d.high)
             )
         });
+        let within = j
+            .delta
+            .is_some_and(|d| -j.margin < d.low && d.high < j.margin);
         let p = if j.p.is_finite() {
             let cell = |p: f64| {
                 if p == 0.0 {
@@ -352,9 +363,10 @@ pub fn verdict_section(records: &[RunRecord], seed: u64) -> Option<(String, Tabl
             j.routes.to_string(),
             delta,
             p,
-            j.mde
-                .map_or("–".into(), |(m, f)| format!("±{} ({f:.0} fr.)", short(m))),
-            j.outcome.words(j.margin),
+            j.mde.map_or("–".into(), |(m, f)| {
+                format!("±{} ({f:.0} fr.)", short(k * m))
+            }),
+            j.outcome.words(k * j.margin, within),
         ]);
         let num = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
         table.push_csv(vec![
@@ -380,11 +392,11 @@ pub fn verdict_section(records: &[RunRecord], seed: u64) -> Option<(String, Tabl
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "## The verdict\n\nThe experiment's rules, committed before its runs (`verdict:`): each policy against the fixed-rate curve of its own back end at equal frames, paired per route (each route's curve interpolated in log frames, never extrapolated); Δ = policy − fixed rate, lower is better on every measure. The primary comparison is tested at α = {} for each policy; the secondary ones of every policy of a regime are one family, their p-values (in brackets) corrected by Holm's step-down rule. RMSE, drift and compute: the mean Δ with its 95 % percentile-bootstrap interval over routes and p-value (twice the share of resamples beyond zero); losses, a count: the median Δ with its exact order-statistic interval and the exact sign test. Better or worse when the test rejects Δ = 0; else equivalent when the interval lies within ±ε (RMSE {} m, losses {} per route, drift since the last look {} m, compute {} ms/m); else cannot decide. MDE: the interval half-width of the nearest A/A pair of the same back end on the same measure. Table: `tables/verdict.csv`.\n\n{}",
+        "## The verdict\n\nThe experiment's rules, committed before its runs (`verdict:`): each policy against the fixed-rate curve of its own back end at equal frames, paired per route (each route's curve interpolated in log frames, never extrapolated); Δ = policy − fixed rate, lower is better on every measure. The primary comparison is tested at α = {} for each policy; the secondary ones of every policy of a regime are one family, their p-values (in brackets) corrected by Holm's step-down rule. RMSE, drift and compute: the mean Δ with its 95 % percentile-bootstrap interval over routes and p-value (twice the share of resamples beyond zero); losses, a count: the median Δ with its exact order-statistic interval and the exact sign test. Better or worse when the test rejects Δ = 0; else equivalent when the interval lies within ±ε (RMSE {} m, losses {} per route, drift since the last look {} mm, compute {} ms/m); else cannot decide. MDE: the interval half-width of the nearest A/A pair of the same back end on the same measure. Table: `tables/verdict.csv`.\n\n{}",
         rules.alpha,
         margins.rmse_m,
         margins.losses,
-        margins.drift_since_look_m,
+        1000.0 * margins.drift_since_look_m,
         margins.cpu_ms_per_m,
         table.markdown()
     );
