@@ -36,12 +36,27 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import pandas as pd  # noqa: E402
 
 
 def slug(label):
     """The file-name form of a scheme label, as `gpodo run` writes it."""
     return re.sub(r"-+", "-", re.sub(r"[^a-z0-9]+", "-", label.lower())).strip("-")
+
+
+def lost_secs(frames):
+    """Seconds from each loss of track to the next tracked frame (or the
+    last processed frame)."""
+    total, since = 0.0, None
+    for t, ok in zip(frames.time_s, frames.tracked.astype(str).str.lower() == "true"):
+        if not ok and since is None:
+            since = t
+        elif ok and since is not None:
+            total, since = total + t - since, None
+    if since is not None:
+        total += frames.time_s.iloc[-1] - since
+    return total
 
 
 def route(args):
@@ -55,7 +70,11 @@ def route(args):
         * 1000.0
     )
     fig, axes = plt.subplots(
-        1, len(args.scheme), figsize=(5.2 * len(args.scheme), 5.4), squeeze=False
+        1,
+        len(args.scheme),
+        figsize=(5.2 * len(args.scheme), 5.0),
+        squeeze=False,
+        layout="constrained",
     )
     for ax, label in zip(axes[0], args.scheme):
         path = run / "trajectories" / f"{args.traverse}.{slug(label)}.frames.csv"
@@ -76,7 +95,14 @@ def route(args):
         tracked = frames.tracked.astype(str).str.lower() == "true"
         keyframe = frames.keyframe.astype(str).str.lower() == "true"
         lost = ~tracked & tracked.shift(fill_value=True)
-        ax.scatter(frames.x_m[tracked], frames.y_m[tracked], s=2, color="tab:blue", zorder=3)
+        ax.scatter(
+            frames.x_m[tracked], frames.y_m[tracked], s=2, color="tab:blue", zorder=3,
+            label="processed, tracked",
+        )
+        ax.scatter(
+            frames.x_m[~tracked], frames.y_m[~tracked], s=4, color="0.3", marker="+",
+            lw=0.5, zorder=3, label="processed while lost",
+        )
         ax.scatter(
             frames.x_m[keyframe],
             frames.y_m[keyframe],
@@ -85,19 +111,24 @@ def route(args):
             edgecolors="tab:green",
             lw=0.6,
             zorder=4,
+            label="keyframe",
         )
         ax.scatter(
-            frames.x_m[lost], frames.y_m[lost], s=70, marker="x", color="red", lw=2, zorder=5
+            frames.x_m[lost], frames.y_m[lost], s=70, marker="x", color="red", lw=2, zorder=5,
+            label="loss of track",
         )
         ax.set_title(
             f"{label}\n{len(frames)} frames, {int(keyframe.sum())} keyframes, "
-            f"{int(lost.sum())} losses",
+            f"{int(lost.sum())} losses, lost {lost_secs(frames):.0f} s",
             fontsize=9,
         )
         ax.set_aspect("equal")
+        ax.legend(fontsize=6, loc="lower right")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    fig.colorbar(spots, ax=axes[0].tolist(), shrink=0.8, label="true residual of the 1 s window [mm/s]")
+    fig.colorbar(
+        spots, ax=axes[0].tolist(), shrink=0.8, label="true residual of the 1 s window [mm/s]"
+    )
     fig.suptitle(args.title or f"{run.name}: processed frames over the route", fontsize=10)
     fig.savefig(args.out, dpi=130, bbox_inches="tight")
     print(f"wrote {args.out}")
@@ -107,10 +138,20 @@ def curves(args):
     results = pathlib.Path(args.results)
     points = pd.read_csv(results / "tables" / "curves_points.csv")
     floor = pd.read_csv(results / "tables" / "floor.csv")
+    columns = min(3, len(args.policy))
+    rows_of_panels = math.ceil(len(args.policy) / columns)
     fig, axes = plt.subplots(
-        1, len(args.policy), figsize=(4.6 * len(args.policy), 4.2), squeeze=False, sharey=True
+        rows_of_panels,
+        columns,
+        figsize=(5.0 * columns, 4.2 * rows_of_panels),
+        squeeze=False,
+        sharey=True,
+        layout="constrained",
     )
-    for ax, policy in zip(axes[0], args.policy):
+    panels = axes.flatten()
+    for ax in panels[len(args.policy) :]:
+        ax.set_visible(False)
+    for ax, policy in zip(panels, args.policy):
         rows = points[points.curve == policy]
         if rows.empty:
             sys.exit(f"{results}: no curve named `{policy}`")
@@ -155,12 +196,15 @@ def curves(args):
             ax.axvline(budget, color="0.6", lw=0.6, ls=":")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.set_xticks([300, 500, 1000, 2000, 4000])
         ax.set_title(policy, fontsize=9)
         ax.set_xlabel("frames processed (mean over routes)")
         ax.legend(fontsize=7)
-    axes[0][0].set_ylabel("trajectory RMSE [m] (mean over routes)")
+    for row in axes:
+        row[0].set_ylabel("trajectory RMSE [m] (mean over routes)")
     fig.suptitle(args.title or results.name, fontsize=10)
-    fig.tight_layout()
     fig.savefig(args.out, dpi=130, bbox_inches="tight")
     print(f"wrote {args.out}")
 
