@@ -675,3 +675,79 @@ fn the_odometry_mode_decides_correction_covariance_and_budget() {
     let err = run(&once, OdometryMode::AUTHORS, predictions(false)).unwrap_err();
     assert!(err.to_string().contains("|residual|"), "{err}");
 }
+
+#[test]
+fn the_keyframe_aware_oracle_plans_only_gaps_bridged_from_the_reference() {
+    use gpodo_frontends::vo::{FrameRef, TrackPurpose, TrackRequest, VisualOdometry};
+    // Biased wheels, so the odometry prior errs more the further back its
+    // start: the request from an earlier keyframe is the harder one.
+    let t = traverse(200.0, s_curve, Vector3::new(0.01, 0.0, 0.0), &[0.0]);
+    let vo = SimulatedVo::new(earlier_tracker(), &t).unwrap();
+    let predictions = vec![Vector3::zeros(); t.windows().len()];
+    let plain = OracleParams {
+        frames: Some(60),
+        max_distance_m: None,
+        max_rotation_rad: None,
+        ..OracleParams::default()
+    };
+    let aware = OracleParams {
+        keyframe_overlap: Some(0.8),
+        ..plain.clone()
+    };
+    let plan = |p: &OracleParams, budget| {
+        plan_frames(&t, &predictions, &vo, MotionPrior::Odometry, p, budget).unwrap()
+    };
+    // At 40 frames the constraint needs more: the fewest it can plan.
+    assert!(plan(&aware, 40).frames.len() > plan(&plain, 40).frames.len());
+    // At 60 both plan 60; a constraint added cannot lower the optimum.
+    let (plain_plan, aware_plan) = (plan(&plain, 60), plan(&aware, 60));
+    // The plan checked below: the one at the fewest frames, whose gaps
+    // press against the constraint.
+    let aware_plan_40 = plan(&aware, 40);
+    assert_eq!(aware_plan.frames.len(), plain_plan.frames.len());
+    assert!(aware_plan.cost >= plain_plan.cost - 1e-12);
+
+    // Recompute the reference of every planned gap here: the candidate
+    // grid, the furthest earlier candidate overlapping the gap's start by
+    // 0.8 or more, the odometry prior integrated over the gap.
+    let camera = t.camera_times_secs();
+    let mut grid = vec![0usize];
+    for (i, &time) in camera.iter().enumerate().skip(1) {
+        if time - camera[grid[grid.len() - 1]] >= 0.4 - 1e-9 {
+            grid.push(i);
+        }
+    }
+    let frame = |i: usize| FrameRef {
+        index: i,
+        time_secs: camera[i],
+    };
+    let times = t.times_secs();
+    let mut checked_further_back = 0;
+    for w in aware_plan_40.frames.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let at = grid.iter().position(|&c| c == a).unwrap();
+        let mut r = at;
+        while r > 0 && vo.predicted_overlap(frame(grid[r - 1]), frame(a)).unwrap() >= 0.8 {
+            r -= 1;
+        }
+        let mut k = t.sample_at_or_before(camera[a]);
+        if times[k] < camera[a] {
+            k += 1;
+        }
+        let mut odometry = nalgebra::Isometry3::identity();
+        while times[k] < camera[b] {
+            odometry *= t.twists()[k].pose_delta(times[k + 1] - times[k]);
+            k += 1;
+        }
+        let r_from_a = t.ground_truth_at(camera[grid[r]]).inverse() * t.ground_truth_at(camera[a]);
+        let p = vo.success_probability(&TrackRequest {
+            reference: frame(grid[r]),
+            current: frame(b),
+            prior: Some(r_from_a * odometry),
+            purpose: TrackPurpose::Tracking,
+        });
+        assert!(p >= 0.99, "gap {a} → {b} from reference {}: {p}", grid[r]);
+        checked_further_back += usize::from(r < at);
+    }
+    assert!(checked_further_back > 0, "no gap had an earlier reference");
+}

@@ -28,6 +28,15 @@
 //! `max_gap_secs`, or with more
 //! true rotation than `max_rotation_rad` or path than `max_distance_m` (the
 //! limits of the gated schemes' turn guard), is not allowed.
+//!
+//! The tracker tracks a frame against its reference keyframe, not against
+//! the previous frame. With `keyframe_overlap` (the front end's keyframe
+//! threshold) a gap `a → b` must also be bridged, with the odometry prior,
+//! from the earliest candidate `r ≤ a` whose predicted overlap with `a`
+//! is at least that threshold: the furthest keyframe the tracker may
+//! still hold as its reference at `a` (a frame overlapping its reference
+//! less becomes a keyframe itself). That keeps the programme exact over
+//! pairs `(a, b)` while bounding the request the tracker will make.
 //! The plan minimises `Σ C` (or, for `max_drift`, `max C` with `C(a, b)`
 //! the largest `‖p̂_k − p_k‖` of the gap) over consecutive chosen frames
 //! plus the tail after the last one, with at most `B` frames.
@@ -80,6 +89,13 @@ pub struct OracleParams {
     /// Least probability that visual odometry bridges a gap (default 0.99:
     /// the oracle knows the truth and takes no risk).
     pub min_track_probability: f64,
+    /// The keyframe rule's overlap threshold (the front end's
+    /// `keyframes.min_overlap`): a gap must also be bridged from the
+    /// furthest frame the tracker may hold as its reference keyframe (see
+    /// the module documentation); null (default): from the previous frame
+    /// only. Needs a visual odometry that predicts overlap (the simulated
+    /// one); others plan as with null.
+    pub keyframe_overlap: Option<f64>,
     /// Largest true rotation between consecutive processed frames (rad;
     /// default 0.15, the turn guard of the gated schemes; null: none).
     pub max_rotation_rad: Option<f64>,
@@ -103,6 +119,7 @@ impl Default for OracleParams {
             candidate_period_secs: 0.4,
             max_gap_secs: 20.0,
             min_track_probability: 0.99,
+            keyframe_overlap: None,
             max_rotation_rad: Some(0.15),
             max_distance_m: Some(0.3),
             objective: OracleObjective::SquaredDrift,
@@ -139,6 +156,11 @@ impl OracleParams {
         }
         if !(0.0..=1.0).contains(&self.min_track_probability) {
             return bad("min_track_probability", "a probability in [0, 1]");
+        }
+        if let Some(o) = self.keyframe_overlap
+            && !(o > 0.0 && o <= 1.0)
+        {
+            return bad("keyframe_overlap", "an overlap in (0, 1], or null");
         }
         for (field, v) in [
             ("max_rotation_rad", self.max_rotation_rad),
@@ -178,6 +200,35 @@ fn correction_at(
     let done = traverse.windows().partition_point(|w| w.end_secs <= t);
     done.checked_sub(1)
         .and_then(|w| corrections.get(w).copied())
+}
+
+/// For each candidate `a`, the earliest candidate `r ≤ a` (at most
+/// `scan` back) whose predicted overlap with `a`, and that of every
+/// candidate between them, is at least `threshold`: the furthest keyframe
+/// the tracker may hold as its reference at `a`. `a` itself without a
+/// threshold or an odometry that predicts overlap.
+fn furthest_references(
+    vo: &dyn VisualOdometry,
+    threshold: Option<f64>,
+    n: usize,
+    scan: usize,
+    frame: impl Fn(usize) -> FrameRef,
+) -> Vec<usize> {
+    (0..n)
+        .map(|a| {
+            let Some(threshold) = threshold else {
+                return a;
+            };
+            let mut r = a;
+            while r > 0 && a - (r - 1) <= scan {
+                match vo.predicted_overlap(frame(r - 1), frame(a)) {
+                    Some(o) if o >= threshold => r -= 1,
+                    _ => break,
+                }
+            }
+            r
+        })
+        .collect()
 }
 
 /// Plans the frames of a budget; `corrections` is the velocity correction
@@ -230,6 +281,11 @@ pub fn plan_frames(
     let g_max = ((max_gap / params.candidate_period_secs).floor() as usize).max(1);
     let mut gap_cost = vec![f64::INFINITY; n * g_max];
     let mut tail_cost = vec![f64::INFINITY; n];
+    let frame = |c: usize| FrameRef {
+        index: candidates[c],
+        time_secs: camera[candidates[c]],
+    };
+    let references = furthest_references(vo, params.keyframe_overlap, n, 2 * g_max, frame);
     for (ci, &fi) in candidates.iter().enumerate() {
         let t_start = camera[fi];
         let mut k = traverse.sample_at_or_before(t_start);
@@ -281,7 +337,20 @@ pub fn plan_frames(
                     prior: None,
                     purpose: TrackPurpose::Tracking,
                 });
-                let p = guided.min(unaided);
+                // The request from the furthest reference keyframe the
+                // tracker may hold at `a`, with `a` placed exactly.
+                let from_reference = (references[ci] < ci).then(|| {
+                    let r = frame(references[ci]);
+                    let r_from_a = traverse.ground_truth_at(r.time_secs).inverse()
+                        * traverse.ground_truth_at(t_start);
+                    vo.success_probability(&TrackRequest {
+                        reference: r,
+                        current: b,
+                        prior: prior.map(|o| r_from_a * o),
+                        purpose: TrackPurpose::Tracking,
+                    })
+                });
+                let p = guided.min(unaided).min(from_reference.unwrap_or(1.0));
                 if p >= params.min_track_probability && within_limits {
                     gap_cost[ci * g_max + (next - ci - 1)] = cost;
                 }

@@ -112,6 +112,15 @@ pub trait VisualOdometry: Send {
     /// `request` (what an offline planner may use; 0 or 1 for a replay).
     fn success_probability(&self, request: &TrackRequest) -> f64;
 
+    /// The overlap between two frames that the keyframe rule would read,
+    /// predicted from the ground truth, for an offline planner that must
+    /// know which keyframe the tracker will hold as its reference; `None`
+    /// (the default) when this odometry cannot predict it.
+    fn predicted_overlap(&self, reference: FrameRef, current: FrameRef) -> Option<f64> {
+        let _ = (reference, current);
+        None
+    }
+
     /// Place recognition: the keyframes among `keyframes` that the current
     /// frame may be matched against, best first (empty when none is
     /// recognised).

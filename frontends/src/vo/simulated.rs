@@ -478,6 +478,11 @@ impl VisualOdometry for SimulatedVo {
         self.success_and_overlap(request).map_or(0.0, |(p, _)| p)
     }
 
+    fn predicted_overlap(&self, reference: FrameRef, current: FrameRef) -> Option<f64> {
+        self.truth(reference, current)
+            .map(|truth| self.params.camera.body_overlap(&truth))
+    }
+
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef> {
         let p = &self.params;
         let mut found: Vec<(f64, FrameRef)> = keyframes
