@@ -37,6 +37,7 @@
 //! still hold as its reference at `a` (a frame overlapping its reference
 //! less becomes a keyframe itself). That keeps the programme exact over
 //! pairs `(a, b)` while bounding the request the tracker will make.
+//!
 //! The plan minimises `Σ C` (or, for `max_drift`, `max C` with `C(a, b)`
 //! the largest `‖p̂_k − p_k‖` of the gap) over consecutive chosen frames
 //! plus the tail after the last one, with at most `B` frames.
