@@ -16,7 +16,7 @@
 
 use std::fmt::Write as _;
 
-use crate::execute::records::RunRecord;
+use crate::execute::records::{RunRecord, SchemeMetrics};
 use crate::report::aggregate::Stat;
 use crate::report::bootstrap::{Interval, RESAMPLES, bootstrap, mean_at};
 use crate::report::curves::by_setting;
@@ -61,6 +61,23 @@ impl Floor {
     }
 }
 
+/// The metrics of the schemes `unshifted` and `shifted` of one run on its
+/// first traverse, when both ran there.
+pub fn pair_on_first_traverse<'a>(
+    r: &'a RunRecord,
+    unshifted: &str,
+    shifted: &str,
+) -> Option<(&'a SchemeMetrics, &'a SchemeMetrics)> {
+    let traverse = r.metrics.schemes.first()?.traverse.as_str();
+    let find = |label: &str| {
+        r.metrics
+            .schemes
+            .iter()
+            .find(|m| m.label == label && m.traverse == traverse)
+    };
+    Some((find(unshifted)?, find(shifted)?))
+}
+
 /// Every A/A pair of `records` (runs of one setting, one per seed).
 pub fn floors(records: &[&RunRecord], seed: u64) -> Vec<Floor> {
     let Some(first) = records.first() else {
@@ -76,13 +93,7 @@ pub fn floors(records: &[&RunRecord], seed: u64) -> Vec<Floor> {
             let Some(traverse) = r.metrics.schemes.first().map(|m| m.traverse.as_str()) else {
                 continue;
             };
-            let find = |label: &str| {
-                r.metrics
-                    .schemes
-                    .iter()
-                    .find(|m| m.label == label && m.traverse == traverse)
-            };
-            if let (Some(a), Some(b)) = (find(unshifted), find(shifted)) {
+            if let Some((a, b)) = pair_on_first_traverse(r, unshifted, shifted) {
                 pairs.push((a.frames as f64, a.rmse_m, b.rmse_m - a.rmse_m));
             }
             if let Some(e) = r.metrics.shared_errors.iter().find(|e| {

@@ -22,6 +22,7 @@ use crate::execute::records::{RunRecord, SchemeMetrics};
 use crate::report::bootstrap::{Interval, bootstrap_with_p, mean_at};
 use crate::report::curves::{Curve, Curves, by_setting};
 use crate::report::exact::{median_interval, sign_test};
+use crate::report::floor::pair_on_first_traverse;
 use crate::report::pairing::at_budget;
 use crate::report::table::{Align, Table};
 use crate::report::verdict::MIN_SEEDS_FOR_VERDICT;
@@ -154,16 +155,7 @@ fn floors_on(runs: &[&RunRecord], measure: Measure, seed: u64) -> Vec<(String, f
         let mut frames = Vec::new();
         let mut differences = Vec::new();
         for r in runs {
-            let Some(traverse) = r.metrics.schemes.first().map(|m| m.traverse.as_str()) else {
-                continue;
-            };
-            let find = |label: &str| {
-                r.metrics
-                    .schemes
-                    .iter()
-                    .find(|m| m.label == label && m.traverse == traverse)
-            };
-            if let (Some(a), Some(b)) = (find(unshifted), find(shifted)) {
+            if let Some((a, b)) = pair_on_first_traverse(r, unshifted, shifted) {
                 frames.push(a.frames as f64);
                 differences.push(value(b, measure) - value(a, measure));
             }
