@@ -10,7 +10,8 @@
 //!   tracking, keyframes, loop closing, relocalisation, online learning,
 //!   the optimised trajectory and Table II's metrics ([`metrics`]), with
 //!   the measures a rover team reads ([`rover_measures`]);
-//! * [`online`]: regressors learning from VO targets (§VI);
+//! * [`online`]: regressors learning from VO targets (§VI), formed by
+//!   [`vo_target`] for the offline schemes and the live node alike;
 //! * [`backend`]: the factrs pose graph;
 //! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
 //!   [`odometry_mode`]: how a scheme's odometry uses the predictions;
@@ -37,6 +38,7 @@ pub mod spec;
 pub mod traverse;
 pub mod tum;
 pub mod vo;
+pub mod vo_target;
 
 pub use error::FrontendError;
 pub use fixed_rate::FixedRate;

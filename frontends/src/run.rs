@@ -19,7 +19,7 @@
 //! odometry since.
 
 use gpodo_traits::{FrameContext, FrameDecision, FrameSelector};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use serde::{Deserialize, Serialize};
 
 use crate::FrontendError;
@@ -35,6 +35,7 @@ use crate::vo::{
     ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
     VoMeasurement,
 };
+use crate::vo_target::TargetInterval;
 
 mod trace;
 
@@ -122,16 +123,6 @@ struct Node {
     placement: Placement,
 }
 
-/// The interval an online target is accumulated over.
-#[derive(Debug, Clone)]
-struct TargetAnchor {
-    node: usize,
-    time_secs: f64,
-    raw_relative: Isometry3<f64>,
-    inputs_sum: Vec<f64>,
-    inputs_secs: f64,
-}
-
 /// Scales a relative motion by `s` (rotation angle and translation).
 fn scale_motion(m: &Isometry3<f64>, s: f64) -> Isometry3<f64> {
     Isometry3::from_parts(
@@ -175,7 +166,7 @@ struct Session<'a> {
     keyframes: Vec<usize>,
     /// The last two tracked nodes with their times (constant velocity).
     tracked_history: [Option<(usize, f64)>; 2],
-    target_anchor: Option<TargetAnchor>,
+    target_anchor: Option<TargetInterval>,
     run: FrontendRun,
 }
 
@@ -473,55 +464,27 @@ impl<'a> Session<'a> {
         let Some(anchor) = self.target_anchor.as_mut() else {
             return Ok(());
         };
-        anchor.raw_relative *= interval.raw_relative;
-        if let Some(x) = &interval.mean_inputs {
-            if anchor.inputs_sum.len() != x.len() {
-                anchor.inputs_sum = vec![0.0; x.len()];
-                anchor.inputs_secs = 0.0;
-            }
-            for (acc, v) in anchor.inputs_sum.iter_mut().zip(x) {
-                *acc += v * interval.duration_secs;
-            }
-            anchor.inputs_secs += interval.duration_secs;
-        }
-        let duration = time_secs - anchor.time_secs;
+        anchor.add(
+            &interval.raw_relative,
+            interval.mean_inputs.as_deref(),
+            interval.duration_secs,
+        );
         let limits = self.params.online;
-        if duration < limits.min_interval_secs {
+        if !anchor.is_ready(time_secs, &limits) {
             return Ok(());
         }
-        let anchor = self.target_anchor.take();
+        let closed = anchor.close(time_secs, self.nodes[node].map_pose.as_ref(), &limits);
         self.start_target(node, time_secs);
-        let Some(anchor) = anchor else {
-            return Ok(());
-        };
-        let (Some(a), Some(b)) = (self.nodes[anchor.node].map_pose, self.nodes[node].map_pose)
-        else {
-            return Ok(());
-        };
-        if duration > limits.max_interval_secs || anchor.inputs_secs <= 0.0 {
-            return Ok(());
+        if let Ok(target) = closed {
+            self.source
+                .on_target(&target.inputs, &target.residual, time_secs)?;
+            self.run.online_targets += 1;
         }
-        let visual = a.inverse() * b;
-        let target: Vector3<f64> =
-            (visual.translation.vector - anchor.raw_relative.translation.vector) / duration;
-        let inputs: Vec<f64> = anchor
-            .inputs_sum
-            .iter()
-            .map(|v| v / anchor.inputs_secs)
-            .collect();
-        self.source.on_target(&inputs, &target, time_secs)?;
-        self.run.online_targets += 1;
         Ok(())
     }
 
     fn start_target(&mut self, node: usize, time_secs: f64) {
-        self.target_anchor = Some(TargetAnchor {
-            node,
-            time_secs,
-            raw_relative: Isometry3::identity(),
-            inputs_sum: Vec::new(),
-            inputs_secs: 0.0,
-        });
+        self.target_anchor = Some(TargetInterval::open(time_secs, self.nodes[node].map_pose));
     }
 
     /// Processes camera frame `frame` with the selector's decision.
