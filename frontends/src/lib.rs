@@ -12,6 +12,7 @@
 //!   the measures a rover team reads ([`rover_measures`]);
 //! * [`online`]: regressors learning from VO targets (§VI), formed by
 //!   [`vo_target`] for the offline schemes and the live node alike;
+//! * [`gate`]: what a selector reads, kept alike offline and live;
 //! * [`backend`]: the factrs pose graph;
 //! * [`traverse`], [`prediction`], [`odometry`]: what a run reads;
 //!   [`odometry_mode`]: how a scheme's odometry uses the predictions;
@@ -22,6 +23,7 @@
 pub mod backend;
 mod error;
 pub mod fixed_rate;
+pub mod gate;
 pub mod gating;
 pub mod hindsight;
 pub mod metrics;

@@ -24,9 +24,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::FrontendError;
 use crate::backend::{EdgeKind, PoseGraph, PoseGraphEdge};
+use crate::gate::GateState;
 use crate::metrics::{TrajectoryMetrics, trajectory_metrics};
 use crate::odometry::{OdometryIntegrator, OdometryInterval};
-use crate::odometry_mode::WindowOdometry;
 use crate::params::{FrontendParams, MotionPrior};
 use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::rover_measures::{Look, RoverMeasures, SampledTruth, rover_measures};
@@ -136,7 +136,9 @@ struct Session<'a> {
     params: &'a FrontendParams,
     source: &'a mut dyn ResidualSource,
     vo: &'a mut dyn VisualOdometry,
-    integrator: OdometryIntegrator,
+    /// The odometry since the last processed frame and the prediction in
+    /// force: what the selector reads.
+    gate: GateState,
     /// Whether only keyframes are pose-graph nodes.
     keyframe_graph: bool,
     /// Odometry since the last pose-graph node (keyframe graph only).
@@ -146,10 +148,6 @@ struct Session<'a> {
     time: f64,
     step: usize,
     next_window: usize,
-    epoch: usize,
-    prediction: ResidualPrediction,
-    /// What the prediction in force does to the odometry.
-    window: WindowOdometry,
     predictions: Vec<(f64, ResidualPrediction)>,
     /// Per sample: the processed frame it hangs from and the odometry
     /// since.
@@ -159,7 +157,6 @@ struct Session<'a> {
     graph: PoseGraph,
     nodes: Vec<Node>,
     last_node: usize,
-    last_processed_secs: Option<f64>,
     tracking: bool,
     lost_since: f64,
     reference_kf: Option<usize>,
@@ -184,7 +181,6 @@ impl<'a> Session<'a> {
                 step_window[s] = Some(w);
             }
         }
-        let prediction = ResidualPrediction::uninformed(params.initial_residual_variance);
         let t0 = traverse.times_secs()[0];
         let mut graph = PoseGraph::default();
         let start = traverse.ground_truth()[0];
@@ -195,17 +191,21 @@ impl<'a> Session<'a> {
             params,
             source,
             vo,
-            integrator: OdometryIntegrator::new(params.odometry),
+            gate: GateState::new(
+                params.odometry,
+                params.odometry_mode,
+                params.initial_residual_variance,
+            ),
             keyframe_graph,
             graph_integrator: OdometryIntegrator::new(params.odometry),
             last_graph_node: 0,
             time: t0,
             step: 0,
             next_window: 0,
-            epoch: 0,
-            prediction,
-            window: WindowOdometry::uninformed(params.initial_residual_variance),
-            predictions: vec![(t0, prediction)],
+            predictions: vec![(
+                t0,
+                ResidualPrediction::uninformed(params.initial_residual_variance),
+            )],
             anchors: vec![(0, Isometry3::identity())],
             step_window,
             graph,
@@ -216,7 +216,6 @@ impl<'a> Session<'a> {
                 placement: Placement::Graph(origin),
             }],
             last_node: 0,
-            last_processed_secs: None,
             tracking: true,
             lost_since: t0,
             reference_kf: None,
@@ -257,54 +256,37 @@ impl<'a> Session<'a> {
                 end = end.min(w.end_secs);
             }
             let inputs = self.step_window[self.step].map(|w| windows[w].inputs.as_slice());
-            self.integrator.advance(
-                &self.traverse.twists()[self.step],
-                end - self.time,
-                self.epoch,
-                &self.window,
-                inputs,
-            );
+            let twist = &self.traverse.twists()[self.step];
             if self.keyframe_graph {
                 self.graph_integrator.advance(
-                    &self.traverse.twists()[self.step],
+                    twist,
                     end - self.time,
-                    self.epoch,
-                    &self.window,
+                    self.gate.epoch(),
+                    self.gate.window(),
                     inputs,
                 );
             }
+            self.gate.drive(twist, end - self.time, inputs);
             self.time = end;
             if self.time >= times[self.step + 1] {
                 self.step += 1;
                 self.anchors
-                    .push((self.last_node, *self.integrator.relative()));
+                    .push((self.last_node, *self.gate.since_processed().relative()));
             }
             while let Some(w) = windows.get(self.next_window)
                 && w.end_secs <= self.time
             {
-                self.prediction = self.source.on_window(self.next_window, w)?;
-                self.window = self.params.odometry_mode.window(&self.prediction)?;
-                self.epoch += 1;
+                let prediction = self.source.on_window(self.next_window, w)?;
+                self.gate.predict(prediction)?;
                 self.next_window += 1;
-                self.predictions.push((self.time, self.prediction));
+                self.predictions.push((self.time, prediction));
             }
         }
         Ok(())
     }
 
     fn context(&self, time_secs: f64) -> FrameContext {
-        let view = self.params.odometry_mode.policy_view(&self.prediction);
-        FrameContext {
-            time_secs,
-            last_processed_secs: self.last_processed_secs,
-            distance_since_processed_m: self.integrator.distance_m(),
-            rotation_since_processed_rad: self.integrator.rotation_rad(),
-            residual_mean: view.mean.iter().copied().collect(),
-            residual_variance: view.variance.iter().copied().collect(),
-            drift_since_processed: self.integrator.drift_m2(),
-            drift_variance_since_processed: self.integrator.drift_variance_m2(),
-            tracking_lost: !self.tracking,
-        }
+        self.gate.context(time_secs, !self.tracking)
     }
 
     fn frame_of(&self, node: usize) -> Option<FrameRef> {
@@ -489,7 +471,8 @@ impl<'a> Session<'a> {
 
     /// Processes camera frame `frame` with the selector's decision.
     fn process(&mut self, frame: FrameRef, keyframe_scale: f64) -> Result<(), FrontendError> {
-        let interval = self.integrator.take();
+        let gap = frame.time_secs - self.gate.last_processed_secs().unwrap_or(frame.time_secs);
+        let interval = self.gate.processed(frame.time_secs);
         let previous = self.last_node;
         let node = self.nodes.len();
         self.nodes.push(Node {
@@ -504,9 +487,7 @@ impl<'a> Session<'a> {
         if !self.keyframe_graph {
             self.add_graph_node(node, &interval);
         }
-        let gap = frame.time_secs - self.last_processed_secs.unwrap_or(frame.time_secs);
         self.last_node = node;
-        self.last_processed_secs = Some(frame.time_secs);
         self.run.frames += 1;
         let mut became_keyframe = false;
         // The visual edge that places the frame: from its keyframe, and of
