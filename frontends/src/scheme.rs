@@ -244,6 +244,43 @@ impl SchemeResiduals {
     }
 }
 
+/// The causal selector `spec` describes, as a scheme runs it offline and
+/// the live gate runs it: a policy that reads the residuals looks every
+/// `lost_frame_period_secs` while tracking is lost ([`WhileLost`]), and
+/// keyframe thresholds are rescaled by `rescale_keyframes` when given.
+///
+/// # Errors
+/// [`FrontendError::InvalidSpec`] for a selector only an offline run can
+/// build ([`SelectorSpec::offline_only`]) or a bad field; what the
+/// wrappers' constructors report.
+pub fn causal_selector(
+    spec: &SelectorSpec,
+    lost_frame_period_secs: Option<f64>,
+    rescale_keyframes: Option<&ResidualScheduleParams>,
+) -> Result<Box<dyn FrameSelector>, FrontendError> {
+    wrap_causal(
+        spec.build()?,
+        spec,
+        lost_frame_period_secs,
+        rescale_keyframes,
+    )
+}
+
+fn wrap_causal(
+    mut selector: Box<dyn FrameSelector>,
+    spec: &SelectorSpec,
+    lost_frame_period_secs: Option<f64>,
+    rescale_keyframes: Option<&ResidualScheduleParams>,
+) -> Result<Box<dyn FrameSelector>, FrontendError> {
+    if let (true, Some(period)) = (spec.reads_residuals(), lost_frame_period_secs) {
+        selector = Box::new(WhileLost::new(selector, period)?);
+    }
+    if let Some(rescale) = rescale_keyframes {
+        selector = Box::new(RescaleKeyframes::new(selector, *rescale)?);
+    }
+    Ok(selector)
+}
+
 /// Runs one scheme over one traverse: builds its selector (planning the
 /// oracle from the trained predictions and ground truth), its VO and its
 /// residual source, and runs the front end.
@@ -289,15 +326,12 @@ pub fn run_scheme(
                 }
                 spec => spec.build()?,
             };
-            if let (true, Some(period)) = (
-                selector_spec.reads_residuals(),
+            selector = wrap_causal(
+                selector,
+                &selector_spec,
                 ctx.params.lost_frame_period_secs,
-            ) {
-                selector = Box::new(WhileLost::new(selector, period)?);
-            }
-            if let Some(rescale) = scheme.rescale_keyframes {
-                selector = Box::new(RescaleKeyframes::new(selector, *rescale)?);
-            }
+                scheme.rescale_keyframes,
+            )?;
             let (mut source, residuals) = residuals.into_source(ctx.params, traverse)?;
             let mut vo = ctx.params.vo.build(traverse, ctx.recorded_vo, ctx.frames)?;
             let run = run_frontend(

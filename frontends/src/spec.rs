@@ -150,6 +150,24 @@ impl SelectorSpec {
         }
     }
 
+    /// Why this selector can run only offline, over a whole recorded
+    /// traverse: the oracle plans with the ground truth, and a
+    /// front-loaded schedule takes its frame count from another scheme's
+    /// run. `None` for a causal selector (one that decides each frame from
+    /// what came before it), which may gate a live camera.
+    pub fn offline_only(&self) -> Option<&'static str> {
+        match self {
+            Self::Oracle(_) => {
+                Some("the oracle plans its frames with the ground truth of the whole traverse")
+            }
+            Self::FrontLoaded(_) => Some(
+                "a front-loaded schedule takes its frame count from another scheme's run of the whole traverse",
+            ),
+            Self::MaxGap { inner, .. } | Self::Hysteresis { inner, .. } => inner.offline_only(),
+            Self::FixedRate { .. } | Self::ResidualSchedule(_) | Self::UncertaintyBudget(_) => None,
+        }
+    }
+
     /// The oracle's settings when this is the oracle.
     pub fn oracle(&self) -> Option<&OracleParams> {
         match self {

@@ -12,6 +12,8 @@
 //! * [`feed`]: joint-state and IMU messages made into samples, each joint
 //!   state with the IMU reading of its time;
 //! * [`diagnostics`]: latency, the last input's age, and warnings;
+//! * [`gate`]: the live frame gate in front of any stereo VO, and the
+//!   residual targets its poses give an online learner;
 //! * `ros2` (with the `ros2` feature): the node on ROS 2 over DDS;
 //! * [`replay`]: a recording fed through it, the odometry written to an
 //!   MCAP and the rows to a CSV that `gpodo predict` reads.
@@ -24,6 +26,7 @@ pub mod covariance;
 pub mod diagnostics;
 pub mod error;
 pub mod feed;
+pub mod gate;
 pub mod pipeline;
 pub mod replay;
 #[cfg(feature = "ros2")]
