@@ -16,6 +16,7 @@
 //! but the error types.
 
 pub mod bench;
+pub mod gate;
 pub mod paths;
 pub mod schemes;
 mod validate;

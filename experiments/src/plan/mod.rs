@@ -45,6 +45,7 @@
 //! validate).
 
 mod expand;
+pub mod gate;
 pub mod locate;
 mod messages;
 pub mod paths;
