@@ -12,6 +12,8 @@
 //! * [`feed`]: joint-state and IMU messages made into samples, each joint
 //!   state with the IMU reading of its time;
 //! * [`diagnostics`]: latency, the last input's age, and warnings;
+//! * [`checkpoint`]: the online learner's model written atomically, with
+//!   what it must match to be resumed;
 //! * [`gate`]: the live frame gate in front of any stereo VO, and the
 //!   residual targets its poses give an online learner;
 //! * `ros2` (with the `ros2` feature): the node on ROS 2 over DDS;
@@ -22,6 +24,7 @@
 //! (model files of version 3 fitted on logs, bags or the simulator) and
 //! this robot gives every column it reads.
 
+pub mod checkpoint;
 pub mod covariance;
 pub mod diagnostics;
 pub mod error;
