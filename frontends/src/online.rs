@@ -52,15 +52,23 @@ fn default_min_targets() -> usize {
     20
 }
 
-/// A regressor learning from VO targets, behind [`ResidualSource`].
-pub struct OnlineLearner {
+/// A regressor learning from VO targets, behind [`ResidualSource`]: any
+/// regressor (`M` unsized: a boxed trait object offline), or a concrete
+/// type whose state the live node saves ([`OnlineLearner::model`]).
+pub struct OnlineLearner<M: ResidualRegressor + ?Sized = dyn ResidualRegressor> {
     name: String,
-    model: Box<dyn ResidualRegressor>,
+    model: Box<M>,
     mode: OnlineMode,
     prior_variance: f64,
     inputs: Vec<f64>,
     targets: Vec<f64>,
     n_inputs: Option<usize>,
+    /// Targets learned so far, and the index of the first whose row is
+    /// kept (a refit keeps every row; a batch learner the open batch's;
+    /// one update per target none, so a learner running for hours does
+    /// not grow).
+    seen: usize,
+    stored_from: usize,
     since_refit: usize,
     fitted: bool,
     /// `(time, targets so far)` after each target.
@@ -74,7 +82,7 @@ pub struct OnlineLearner {
     correct_mean: bool,
 }
 
-impl OnlineLearner {
+impl<M: ResidualRegressor + ?Sized> OnlineLearner<M> {
     /// Learns with `model` (fresh; it sees only VO targets) in `mode`;
     /// before it can predict, the prediction is zero mean with variance
     /// `prior_variance` per axis.
@@ -84,7 +92,7 @@ impl OnlineLearner {
     /// cannot learn online, or a refit count is zero.
     pub fn new(
         name: impl Into<String>,
-        model: Box<dyn ResidualRegressor>,
+        model: Box<M>,
         mode: OnlineMode,
         prior_variance: f64,
     ) -> Result<Self, FrontendError> {
@@ -125,6 +133,8 @@ impl OnlineLearner {
             inputs: Vec::new(),
             targets: Vec::new(),
             n_inputs: None,
+            seen: 0,
+            stored_from: 0,
             since_refit: 0,
             fitted: false,
             history: Vec::new(),
@@ -152,9 +162,14 @@ impl OnlineLearner {
         self
     }
 
+    /// The model as learned so far.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
     /// Targets learned so far.
     pub fn targets_seen(&self) -> usize {
-        self.targets.len() / 3
+        self.seen
     }
 
     /// `(time, targets so far)` after each target.
@@ -164,10 +179,11 @@ impl OnlineLearner {
 
     /// The targets from row `first` on, as a dataset.
     fn rows_from(&self, first: usize) -> Result<ResidualDataset, FrontendError> {
-        let (n, d) = (self.targets_seen() - first, self.n_inputs.unwrap_or(0));
+        let (n, d) = (self.seen - first, self.n_inputs.unwrap_or(0));
+        let kept = first - self.stored_from;
         Ok(ResidualDataset::new(
-            SampleMatrix::from_row_major(n, d, self.inputs[first * d..].to_vec())?,
-            SampleMatrix::from_row_major(n, 3, self.targets[first * 3..].to_vec())?,
+            SampleMatrix::from_row_major(n, d, self.inputs[kept * d..].to_vec())?,
+            SampleMatrix::from_row_major(n, 3, self.targets[kept * 3..].to_vec())?,
             (0..d).map(|i| format!("x{i}")).collect(),
             ["res_vx", "res_vy", "res_vz"].map(String::from).to_vec(),
         )?
@@ -183,7 +199,7 @@ impl OnlineLearner {
     }
 }
 
-impl ResidualSource for OnlineLearner {
+impl<M: ResidualRegressor + ?Sized> ResidualSource for OnlineLearner<M> {
     fn name(&self) -> &str {
         &self.name
     }
@@ -232,8 +248,13 @@ impl ResidualSource for OnlineLearner {
             }
             .into());
         }
-        self.inputs.extend_from_slice(inputs);
-        self.targets.extend(target.iter());
+        self.seen += 1;
+        if matches!(self.mode, OnlineMode::Update) {
+            self.stored_from = self.seen;
+        } else {
+            self.inputs.extend_from_slice(inputs);
+            self.targets.extend(target.iter());
+        }
         match self.mode {
             OnlineMode::Update => {
                 self.model.update(inputs, target.as_slice())?;
@@ -255,6 +276,9 @@ impl ResidualSource for OnlineLearner {
                     self.model.update_batch(&batch)?;
                     self.fitted = true;
                     self.open_batch = None;
+                    self.inputs.clear();
+                    self.targets.clear();
+                    self.stored_from = self.seen;
                 }
             }
         }

@@ -21,6 +21,8 @@
 //!   (argmin L-BFGS or nonlinear CG, bounds, seeded restarts);
 //! * [`model_file`]: trained models saved and loaded (versioned JSON with
 //!   the input columns and z-scoring), for `gpodo predict` and on-board use;
+//! * [`online_model`]: the kinds that go on learning after loading, as one
+//!   type a live learner is checkpointed and resumed with;
 //! * [`metrics`]: RMSE and MAE per output (Table I), negative log predictive
 //!   density and 95 % interval coverage;
 //! * [`spec::RegressorSpec`]: the closed set of regressor kinds a YAML
@@ -36,6 +38,7 @@ pub mod kernels;
 pub mod knn;
 pub mod metrics;
 pub mod model_file;
+pub mod online_model;
 pub mod problem;
 pub mod scaling;
 pub mod sparse_gp;
