@@ -167,6 +167,15 @@ impl<M: ResidualRegressor + ?Sized> OnlineLearner<M> {
         &self.model
     }
 
+    /// Whether the model has learned before it is given here (a saved
+    /// or checkpointed model going on learning): it predicts from the
+    /// start rather than the prior.
+    #[must_use]
+    pub fn with_learned(mut self, learned: bool) -> Self {
+        self.fitted = learned;
+        self
+    }
+
     /// Targets learned so far.
     pub fn targets_seen(&self) -> usize {
         self.seen

@@ -102,10 +102,11 @@ pub fn state_kind(state: &SavedState) -> &'static str {
 
 impl Checkpoint {
     /// A checkpoint of `model` after `targets_learned` targets, for the
-    /// rover whose description file holds `rover_description`.
-    pub fn new(model: ModelFile, rover_description: &[u8], targets_learned: u64) -> Self {
+    /// rover whose description's SHA-256 is `rover_sha256`
+    /// ([`sha256_hex`] of its file).
+    pub fn new(model: ModelFile, rover_sha256: String, targets_learned: u64) -> Self {
         let key = CheckpointKey {
-            rover_sha256: sha256_hex(rover_description),
+            rover_sha256,
             input_columns: model.input_names.clone(),
             kind: state_kind(&model.state).to_string(),
         };

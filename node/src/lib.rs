@@ -14,6 +14,8 @@
 //! * [`diagnostics`]: latency, the last input's age, and warnings;
 //! * [`checkpoint`]: the online learner's model written atomically, with
 //!   what it must match to be resumed;
+//! * [`learner`]: frontends' online learner run live on the gate's VO
+//!   targets, resumed from and written to checkpoints;
 //! * [`gate`]: the live frame gate in front of any stereo VO, and the
 //!   residual targets its poses give an online learner;
 //! * `ros2` (with the `ros2` feature): the node on ROS 2 over DDS;
@@ -30,6 +32,7 @@ pub mod diagnostics;
 pub mod error;
 pub mod feed;
 pub mod gate;
+pub mod learner;
 pub mod pipeline;
 pub mod replay;
 #[cfg(feature = "ros2")]

@@ -50,13 +50,13 @@ fn the_hash_is_sha256() {
 fn a_checkpoint_reads_back_equal_and_is_refused_for_another_robot() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("learner.json");
-    let written = Checkpoint::new(ilgr(40), b"rover: exoter", 40);
+    let written = Checkpoint::new(ilgr(40), sha256_hex(b"rover: exoter"), 40);
     assert_eq!(written.key.kind, "ilgr");
     written.write(&path).unwrap();
     let read = Checkpoint::read(&path).unwrap();
     assert_eq!(json(&read), json(&written));
     read.check(&path, &written.key).unwrap();
-    let other_rover = Checkpoint::new(ilgr(40), b"rover: husky", 40).key;
+    let other_rover = Checkpoint::new(ilgr(40), sha256_hex(b"rover: husky"), 40).key;
     let Err(CheckpointError::Mismatch { field, .. }) = read.check(&path, &other_rover) else {
         panic!("another rover accepted");
     };
@@ -75,9 +75,9 @@ fn a_checkpoint_reads_back_equal_and_is_refused_for_another_robot() {
 fn a_write_that_fails_midway_leaves_the_previous_checkpoint_whole() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("learner.json");
-    let first = Checkpoint::new(ilgr(30), b"rover", 30);
+    let first = Checkpoint::new(ilgr(30), sha256_hex(b"rover"), 30);
     first.write(&path).unwrap();
-    let second = Checkpoint::new(ilgr(60), b"rover", 60);
+    let second = Checkpoint::new(ilgr(60), sha256_hex(b"rover"), 60);
     // Half the bytes written, then the disk fails.
     let e = second
         .write_with(&path, |file, bytes| {

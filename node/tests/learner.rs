@@ -1,0 +1,116 @@
+//! The live learner: the prior until it learns, a checkpoint resumed to
+//! the same predictions as a learner that never stopped, and checkpoints
+//! of another rover refused.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use gpodo_frontends::online::OnlineMode;
+use gpodo_frontends::vo_target::VoTarget;
+use gpodo_node::checkpoint::{CheckpointError, sha256_hex};
+use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
+use gpodo_regressors::RegressorSpec;
+use gpodo_regressors::online_model::OnlineModel;
+use nalgebra::Vector3;
+
+fn identity(rover: &[u8]) -> LearnerIdentity {
+    LearnerIdentity {
+        label: "ILGR online".into(),
+        input_names: vec!["cmd_v".into(), "pitch".into()],
+        input_standardizer: None,
+        rows: None,
+        rover_sha256: sha256_hex(rover),
+    }
+}
+
+fn fresh() -> LiveLearner {
+    let spec: RegressorSpec = serde_json::from_str(r#"{"kind": "ilgr"}"#).unwrap();
+    LiveLearner::new(
+        OnlineModel::from_spec(&spec).unwrap(),
+        OnlineMode::Update,
+        1e-4,
+        identity(b"rover"),
+        LearnerStart::Empty,
+    )
+    .unwrap()
+}
+
+/// Target `i`: a residual smooth in two inputs, one every 4 s.
+fn target(i: usize) -> VoTarget {
+    let x = [(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()];
+    VoTarget {
+        inputs: x.to_vec(),
+        residual: Vector3::new(0.01 * x[0], -0.004 * x[1], 0.001),
+        time_secs: 4.0 * (i + 1) as f64,
+        duration_secs: 4.0,
+    }
+}
+
+#[test]
+fn it_predicts_the_prior_until_it_has_learned() {
+    let mut learner = fresh();
+    let before = learner.predict(&[0.2, 0.5]).unwrap();
+    assert_eq!(before.mean, Vector3::zeros());
+    assert_eq!(before.variance, Vector3::repeat(1e-4));
+    for i in 0..30 {
+        learner.learn(&target(i)).unwrap();
+    }
+    let after = learner.predict(&[0.2, 0.5]).unwrap();
+    assert!((after.mean.x - 0.002).abs() < 1e-3, "{after:?}");
+    assert!(after.variance.x < 1e-4, "{after:?}");
+    assert_eq!(learner.targets_learned(), 30);
+}
+
+#[test]
+fn a_resumed_checkpoint_predicts_as_a_learner_that_never_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("learner.json");
+    let mut uninterrupted = fresh();
+    let mut stopped = fresh();
+    // Nothing is written before anything is learned.
+    assert!(!stopped.checkpoint(&path).unwrap());
+    for i in 0..35 {
+        uninterrupted.learn(&target(i)).unwrap();
+        stopped.learn(&target(i)).unwrap();
+    }
+    assert!(stopped.checkpoint(&path).unwrap());
+    drop(stopped);
+    let mut resumed =
+        LiveLearner::resume(&path, OnlineMode::Update, 1e-4, identity(b"rover"), "ilgr").unwrap();
+    assert_eq!(resumed.start(), LearnerStart::Checkpoint(35));
+    for i in 35..60 {
+        uninterrupted.learn(&target(i)).unwrap();
+        resumed.learn(&target(i)).unwrap();
+    }
+    assert_eq!(resumed.targets_learned(), 60);
+    for row in [[0.3, -0.2], [-0.9, 0.4], [0.0, 1.0]] {
+        let (a, b) = (
+            uninterrupted.predict(&row).unwrap(),
+            resumed.predict(&row).unwrap(),
+        );
+        assert_eq!(a, b, "at {row:?}");
+    }
+}
+
+#[test]
+fn a_checkpoint_of_another_rover_or_kind_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("learner.json");
+    let mut learner = fresh();
+    for i in 0..5 {
+        learner.learn(&target(i)).unwrap();
+    }
+    learner.checkpoint(&path).unwrap();
+    let refused = |rover: &[u8], kind: &str| match LiveLearner::resume(
+        &path,
+        OnlineMode::Update,
+        1e-4,
+        identity(rover),
+        kind,
+    ) {
+        Err(CheckpointError::Mismatch { field, .. }) => field,
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("resumed for {kind}"),
+    };
+    assert_eq!(refused(b"another rover", "ilgr"), "rover_sha256");
+    assert_eq!(refused(b"rover", "sparse_spectrum"), "kind");
+}
