@@ -52,6 +52,11 @@ pub struct ProcessedFrame {
     pub keyframe: bool,
     /// Whether it was tracked (or relocalised) rather than lost.
     pub tracked: bool,
+    /// The VO's pose of the frame (the visual map's, `world_from_body`)
+    /// when it was tracked: what a VO behind the live gate would publish
+    /// for it (not written to records).
+    #[serde(skip)]
+    pub vo_pose: Option<Isometry3<f64>>,
 }
 
 /// What a run produced.
@@ -581,6 +586,7 @@ impl<'a> Session<'a> {
                 .distance_at(self.traverse.sample_at_or_before(frame.time_secs)),
             keyframe: became_keyframe,
             tracked,
+            vo_pose: self.nodes[node].map_pose.filter(|_| tracked),
         });
         Ok(())
     }

@@ -263,6 +263,7 @@ mod tests {
             distance_m: 0.0,
             keyframe,
             tracked,
+            vo_pose: None,
         }
     }
 

@@ -254,9 +254,19 @@ impl LiveGate {
             return PoseOutcome::Lost(reason);
         }
         let [x, y, z, w] = quaternion_xyzw;
+        let q = Quaternion::new(w, x, y, z);
+        // A quaternion received unit to 1e-6 is used as it is, so the
+        // targets are formed from the pose the VO computed (a VO composing
+        // rotations drifts off unit: the statistical tracker's chain by
+        // 1e-9 over a minute); any other is normalised.
+        let rotation = if (q.norm_squared() - 1.0).abs() < 1e-6 {
+            UnitQuaternion::new_unchecked(q)
+        } else {
+            UnitQuaternion::from_quaternion(q)
+        };
         let child = Isometry3::from_parts(
             Translation3::new(position[0], position[1], position[2]),
-            UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
+            rotation,
         );
         let pose = child * self.settings.body_from_child.inverse();
         let time_secs = stamp_ns as f64 / 1e9;
