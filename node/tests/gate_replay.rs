@@ -84,14 +84,34 @@ fn ilgr_params() -> IlgrParams {
 
 #[test]
 fn the_live_gate_forwards_the_offline_schemes_frames_and_learns_the_same_model() {
-    let t = s_curve(600.0);
-    let vo_params = SimulatedVoParams {
+    let vo = SimulatedVoParams {
         seed: 9,
         camera: CameraParams::default(),
         min_overlap: 0.3,
         features_per_frame: 300.0,
         ..SimulatedVoParams::default()
     };
+    assert_eq!(gate_against_offline(vo), 0, "a wide window keeps track");
+}
+
+#[test]
+fn the_live_gate_follows_the_offline_scheme_through_losses_and_relocalisations() {
+    // A window of 2 px: the wheels' prior misses it after some gaps, and
+    // the gate looks every 0.4 s until the tracker relocalises.
+    let vo = SimulatedVoParams {
+        seed: 4,
+        search_radius_px: 2.0,
+        search_softness_px: 0.5,
+        ..SimulatedVoParams::default()
+    };
+    let lost = gate_against_offline(vo);
+    assert!(lost > 5, "{lost} frames lost");
+}
+
+/// Runs the offline scheme and the live gate and learner against it;
+/// returns the frames the VO lost.
+fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
+    let t = s_curve(600.0);
     let params = FrontendParams {
         vo: VoSpec::Simulated(vo_params),
         ..FrontendParams::default()
@@ -236,4 +256,5 @@ fn the_live_gate_forwards_the_offline_schemes_frames_and_learns_the_same_model()
         lost,
         run.online_targets
     );
+    lost
 }
