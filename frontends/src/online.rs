@@ -55,6 +55,7 @@ fn default_min_targets() -> usize {
 /// A regressor learning from VO targets, behind [`ResidualSource`]: any
 /// regressor (`M` unsized: a boxed trait object offline), or a concrete
 /// type whose state the live node saves ([`OnlineLearner::model`]).
+#[derive(Clone)]
 pub struct OnlineLearner<M: ResidualRegressor + ?Sized = dyn ResidualRegressor> {
     name: String,
     model: Box<M>,
@@ -176,6 +177,36 @@ impl<M: ResidualRegressor + ?Sized> OnlineLearner<M> {
         self
     }
 
+    /// The prediction on `window`'s inputs: the model's once it has
+    /// learned, zero mean with the prior variance before.
+    ///
+    /// # Errors
+    /// What the model reports.
+    pub fn predict_window(
+        &self,
+        window: &TraverseWindow,
+    ) -> Result<ResidualPrediction, FrontendError> {
+        let uninformed = ResidualPrediction::uninformed(self.prior_variance);
+        if !self.fitted {
+            return Ok(uninformed);
+        }
+        let x = SampleMatrix::from_row_major(1, window.inputs.len(), window.inputs.clone())?;
+        match self.model.predict(&x) {
+            Ok(p) if !self.correct_mean => Ok(ResidualPrediction {
+                mean: Vector3::zeros(),
+                variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
+                absolute: None,
+            }),
+            Ok(p) => Ok(ResidualPrediction {
+                mean: Vector3::from_iterator(p.mean.row(0).iter().copied()),
+                variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
+                absolute: None,
+            }),
+            Err(Error::NotFitted { .. }) => Ok(uninformed),
+            Err(e) => Err(e.into()),
+        }
+    }
+
     /// Targets learned so far.
     pub fn targets_seen(&self) -> usize {
         self.seen
@@ -218,25 +249,7 @@ impl<M: ResidualRegressor + ?Sized> ResidualSource for OnlineLearner<M> {
         _index: usize,
         window: &TraverseWindow,
     ) -> Result<ResidualPrediction, FrontendError> {
-        let uninformed = ResidualPrediction::uninformed(self.prior_variance);
-        if !self.fitted {
-            return Ok(uninformed);
-        }
-        let x = SampleMatrix::from_row_major(1, window.inputs.len(), window.inputs.clone())?;
-        match self.model.predict(&x) {
-            Ok(p) if !self.correct_mean => Ok(ResidualPrediction {
-                mean: Vector3::zeros(),
-                variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
-                absolute: None,
-            }),
-            Ok(p) => Ok(ResidualPrediction {
-                mean: Vector3::from_iterator(p.mean.row(0).iter().copied()),
-                variance: Vector3::from_iterator(p.variance.row(0).iter().copied()),
-                absolute: None,
-            }),
-            Err(Error::NotFitted { .. }) => Ok(uninformed),
-            Err(e) => Err(e.into()),
-        }
+        self.predict_window(window)
     }
 
     fn learns_online(&self) -> bool {

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use gpodo_frontends::FrontendError;
 use gpodo_frontends::online::{OnlineLearner, OnlineMode};
-use gpodo_frontends::prediction::{ResidualPrediction, ResidualSource};
+use gpodo_frontends::prediction::{ResidualPrediction, ResidualSource as _};
 use gpodo_frontends::traverse::TraverseWindow;
 use gpodo_frontends::vo_target::VoTarget;
 use gpodo_regressors::model_file::{MODEL_FORMAT, MODEL_VERSION, ModelFile, Provenance, RowRecipe};
@@ -48,6 +48,7 @@ pub enum LearnerStart {
 }
 
 /// The learner.
+#[derive(Clone)]
 pub struct LiveLearner {
     learner: OnlineLearner<OnlineModel>,
     identity: LearnerIdentity,
@@ -155,7 +156,7 @@ impl LiveLearner {
     ///
     /// # Errors
     /// What the model reports.
-    pub fn predict(&mut self, row: &[f64]) -> Result<ResidualPrediction, FrontendError> {
+    pub fn predict(&self, row: &[f64]) -> Result<ResidualPrediction, FrontendError> {
         let window = TraverseWindow {
             start_secs: 0.0,
             end_secs: 0.0,
@@ -163,7 +164,7 @@ impl LiveLearner {
             inputs: self.standardize(row),
             true_residual: Vector3::zeros(),
         };
-        self.learner.on_window(0, &window)
+        self.learner.predict_window(&window)
     }
 
     fn standardize(&self, row: &[f64]) -> Vec<f64> {

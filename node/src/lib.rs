@@ -15,7 +15,8 @@
 //! * [`checkpoint`]: the online learner's model written atomically, with
 //!   what it must match to be resumed;
 //! * [`learner`]: frontends' online learner run live on the gate's VO
-//!   targets, resumed from and written to checkpoints;
+//!   targets, resumed from and written to checkpoints; live, on a worker
+//!   thread ([`learner_worker`]) the odometry path never waits for;
 //! * [`gate`]: the live frame gate in front of any stereo VO, and the
 //!   residual targets its poses give an online learner;
 //! * `ros2` (with the `ros2` feature): the node on ROS 2 over DDS;
@@ -33,6 +34,7 @@ pub mod error;
 pub mod feed;
 pub mod gate;
 pub mod learner;
+pub mod learner_worker;
 pub mod pipeline;
 pub mod replay;
 #[cfg(feature = "ros2")]

@@ -114,3 +114,44 @@ fn a_checkpoint_of_another_rover_or_kind_is_refused() {
     assert_eq!(refused(b"another rover", "ilgr"), "rover_sha256");
     assert_eq!(refused(b"rover", "sparse_spectrum"), "kind");
 }
+
+#[test]
+fn on_its_worker_thread_it_ends_as_in_lock_step_and_checkpoints_when_stopped() {
+    use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("learner.json");
+    let mut lock_step = fresh();
+    let worker = LearnerWorker::spawn(
+        fresh(),
+        Some(CheckpointPolicy {
+            path: path.clone(),
+            every_secs: 30.0,
+        }),
+    );
+    // Before it has learned: the prior.
+    assert_eq!(
+        worker.predict(&[0.2, 0.5]).unwrap().variance,
+        Vector3::repeat(1e-4)
+    );
+    for i in 0..60 {
+        lock_step.learn(&target(i)).unwrap();
+        worker.learn(target(i));
+    }
+    let summary = worker.stop().unwrap();
+    assert_eq!(summary.last_error, None);
+    assert_eq!(summary.checkpoints, 1, "the one written on stopping");
+    assert_eq!(summary.learner.targets_learned(), 60);
+    for row in [[0.3, -0.2], [-0.9, 0.4]] {
+        assert_eq!(
+            summary.learner.predict(&row).unwrap(),
+            lock_step.predict(&row).unwrap()
+        );
+    }
+    let resumed =
+        LiveLearner::resume(&path, OnlineMode::Update, 1e-4, identity(b"rover"), "ilgr").unwrap();
+    assert_eq!(resumed.targets_learned(), 60);
+    assert_eq!(
+        resumed.predict(&[0.3, -0.2]).unwrap(),
+        lock_step.predict(&[0.3, -0.2]).unwrap()
+    );
+}

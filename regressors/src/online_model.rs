@@ -11,6 +11,7 @@ use crate::model_file::SavedState;
 use crate::{Ilgr, RegressorError, RegressorSpec, SparseSpectrumGp, StreamingSparseGp};
 
 /// A regressor that learns online and can be saved at any point.
+#[derive(Debug, Clone)]
 pub enum OnlineModel {
     /// Incremental local Gaussian regression.
     Ilgr(Box<Ilgr>),

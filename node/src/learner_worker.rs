@@ -1,0 +1,156 @@
+//! The live learner on a worker thread: the odometry path hands it
+//! targets and never waits for it; predictions come from the state it
+//! published last. It writes a checkpoint every `every_secs` of learning
+//! and when it stops (its sender dropped, as on SIGINT or SIGTERM).
+//!
+//! In replay the learner runs in lock-step instead ([`LiveLearner`]
+//! itself), so that its state is the offline scheme's.
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::sync::{Arc, RwLock};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use gpodo_frontends::FrontendError;
+use gpodo_frontends::prediction::ResidualPrediction;
+use gpodo_frontends::vo_target::VoTarget;
+
+use crate::learner::LiveLearner;
+
+/// Where and how often the worker writes its checkpoint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckpointPolicy {
+    /// The checkpoint file.
+    pub path: PathBuf,
+    /// Seconds between checkpoints while learning (default 30).
+    pub every_secs: f64,
+}
+
+/// What the worker did, when it stopped.
+pub struct WorkerSummary {
+    /// The learner as it ended.
+    pub learner: LiveLearner,
+    /// Checkpoints written.
+    pub checkpoints: u64,
+    /// The last error learning or checkpointing (the worker goes on after
+    /// one: a target the model refuses, or a full disk).
+    pub last_error: Option<String>,
+}
+
+/// The learner on its thread.
+pub struct LearnerWorker {
+    targets: Option<Sender<VoTarget>>,
+    latest: Arc<RwLock<Arc<LiveLearner>>>,
+    handle: Option<JoinHandle<WorkerSummary>>,
+}
+
+impl LearnerWorker {
+    /// Starts `learner` on a thread, checkpointing as `checkpoint` says.
+    pub fn spawn(learner: LiveLearner, checkpoint: Option<CheckpointPolicy>) -> Self {
+        let latest = Arc::new(RwLock::new(Arc::new(learner.clone())));
+        let (tx, rx) = channel();
+        let published = Arc::clone(&latest);
+        let handle = std::thread::spawn(move || run(learner, &rx, &published, checkpoint.as_ref()));
+        Self {
+            targets: Some(tx),
+            latest,
+            handle: Some(handle),
+        }
+    }
+
+    /// Hands a target to the learner; never waits.
+    pub fn learn(&self, target: VoTarget) {
+        if let Some(tx) = &self.targets {
+            // A worker that has stopped takes no more targets.
+            let _ = tx.send(target);
+        }
+    }
+
+    /// The prediction on a raw row from the state published last.
+    ///
+    /// # Errors
+    /// What the model reports.
+    pub fn predict(&self, row: &[f64]) -> Result<ResidualPrediction, FrontendError> {
+        let learner = match self.latest.read() {
+            Ok(guard) => Arc::clone(&guard),
+            Err(poisoned) => Arc::clone(&poisoned.into_inner()),
+        };
+        learner.predict(row)
+    }
+
+    /// Targets learned by the state published last.
+    pub fn targets_learned(&self) -> u64 {
+        match self.latest.read() {
+            Ok(guard) => guard.targets_learned(),
+            Err(poisoned) => poisoned.into_inner().targets_learned(),
+        }
+    }
+
+    /// Stops the worker after the targets already handed over, writing a
+    /// last checkpoint; returns what it did (`None` if its thread
+    /// panicked).
+    pub fn stop(mut self) -> Option<WorkerSummary> {
+        self.targets = None;
+        self.handle.take().and_then(|h| h.join().ok())
+    }
+}
+
+impl Drop for LearnerWorker {
+    fn drop(&mut self) {
+        self.targets = None;
+        if let Some(handle) = self.handle.take() {
+            let _ = handle.join();
+        }
+    }
+}
+
+fn run(
+    mut learner: LiveLearner,
+    rx: &Receiver<VoTarget>,
+    latest: &RwLock<Arc<LiveLearner>>,
+    checkpoint: Option<&CheckpointPolicy>,
+) -> WorkerSummary {
+    let mut summary_error = None;
+    let mut checkpoints = 0;
+    let mut last_written = Instant::now();
+    let mut write = |learner: &LiveLearner, error: &mut Option<String>| {
+        if let Some(policy) = checkpoint {
+            match learner.checkpoint(&policy.path) {
+                Ok(true) => checkpoints += 1,
+                Ok(false) => {}
+                Err(e) => *error = Some(e.to_string()),
+            }
+        }
+    };
+    let period = checkpoint.map(|p| Duration::from_secs_f64(p.every_secs.max(0.0)));
+    loop {
+        let wait = period.map_or(Duration::from_secs(3600), |p| {
+            p.saturating_sub(last_written.elapsed())
+        });
+        match rx.recv_timeout(wait) {
+            Ok(target) => {
+                if let Err(e) = learner.learn(&target) {
+                    summary_error = Some(e.to_string());
+                }
+                let snapshot = Arc::new(learner.clone());
+                match latest.write() {
+                    Ok(mut guard) => *guard = snapshot,
+                    Err(poisoned) => *poisoned.into_inner() = snapshot,
+                }
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => break,
+        }
+        if period.is_some_and(|p| last_written.elapsed() >= p) {
+            write(&learner, &mut summary_error);
+            last_written = Instant::now();
+        }
+    }
+    write(&learner, &mut summary_error);
+    WorkerSummary {
+        learner,
+        checkpoints,
+        last_error: summary_error,
+    }
+}
