@@ -6,7 +6,9 @@
 //!
 //! * [`pairing`]: the left and right images and their camera infos paired
 //!   by stamp, never by pixels;
-//! * [`lost`]: whether the VO is lost, from its odometry or a Bool topic.
+//! * [`lost`]: whether the VO is lost, from its odometry or a Bool topic;
+//! * [`report`]: each decision and the gate's counts as
+//!   `diagnostic_msgs/DiagnosticStatus`.
 //!
 //! [`LiveGate`] keeps what the selector reads with the offline front
 //! end's own [`GateState`], and forms targets with its
@@ -19,6 +21,7 @@
 
 pub mod lost;
 pub mod pairing;
+pub mod report;
 
 use std::collections::VecDeque;
 
