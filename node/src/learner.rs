@@ -94,6 +94,45 @@ impl LiveLearner {
         })
     }
 
+    /// A learner that goes on from a saved model of an online kind (the
+    /// `--model` given to the node), with its columns, z-scoring and row
+    /// recipe, on the rover whose description's SHA-256 is
+    /// `rover_sha256`.
+    ///
+    /// # Errors
+    /// [`FrontendError::InvalidConfig`] naming the model's kind when it
+    /// does not learn online, or its state when it cannot be rebuilt;
+    /// what [`OnlineLearner::new`] reports.
+    pub fn from_saved_model(
+        file: &ModelFile,
+        mode: OnlineMode,
+        prior_variance: f64,
+        rover_sha256: String,
+    ) -> Result<Self, FrontendError> {
+        let model = OnlineModel::from_state(&file.state).map_err(|e| {
+            FrontendError::InvalidConfig {
+                field: "model".into(),
+                expected: format!(
+                    "a saved model of an online kind to go on learning from ({e}); otherwise the learner starts empty"
+                ),
+            }
+        })?;
+        let identity = LearnerIdentity {
+            label: file.label.clone(),
+            input_names: file.input_names.clone(),
+            input_standardizer: file.input_standardizer.clone(),
+            rows: file.rows.clone(),
+            rover_sha256,
+        };
+        Self::new(
+            model,
+            mode,
+            prior_variance,
+            identity,
+            LearnerStart::SavedModel,
+        )
+    }
+
     /// Resumes the checkpoint at `path`, refused unless it was written for
     /// this rover, these columns and this kind.
     ///

@@ -155,3 +155,55 @@ fn on_its_worker_thread_it_ends_as_in_lock_step_and_checkpoints_when_stopped() {
         lock_step.predict(&[0.3, -0.2]).unwrap()
     );
 }
+
+#[test]
+fn a_saved_online_model_goes_on_learning_and_other_kinds_are_refused() {
+    use gpodo_regressors::model_file::{ModelFile, Provenance};
+    use gpodo_traits::{ResidualDataset, SampleMatrix};
+    let n = 40;
+    let rows: Vec<VoTarget> = (0..n).map(target).collect();
+    let data = ResidualDataset::new(
+        SampleMatrix::from_row_major(n, 2, rows.iter().flat_map(|t| t.inputs.clone()).collect())
+            .unwrap(),
+        SampleMatrix::from_row_major(
+            n,
+            3,
+            rows.iter()
+                .flat_map(|t| t.residual.iter().copied())
+                .collect(),
+        )
+        .unwrap(),
+        vec!["cmd_v".into(), "pitch".into()],
+        ["res_vx", "res_vy", "res_vz"].map(String::from).to_vec(),
+    )
+    .unwrap();
+    let fit = |kind: &str| {
+        let spec: RegressorSpec = serde_json::from_str(kind).unwrap();
+        ModelFile::fit(&spec, &data, None, Provenance::default())
+            .unwrap()
+            .0
+    };
+    let saved = fit(r#"{"kind": "ilgr"}"#);
+    let mut learner =
+        LiveLearner::from_saved_model(&saved, OnlineMode::Update, 1e-4, sha256_hex(b"rover"))
+            .unwrap();
+    assert_eq!(learner.start(), LearnerStart::SavedModel);
+    // It predicts as the saved model from the start, not the prior.
+    let x = SampleMatrix::from_row_major(1, 2, vec![0.3, -0.2]).unwrap();
+    let file_prediction = saved
+        .predictor()
+        .unwrap()
+        .predict(&saved.input_names, &x)
+        .unwrap();
+    let live = learner.predict(&[0.3, -0.2]).unwrap();
+    assert_eq!(live.mean.x, file_prediction.mean.row(0)[0]);
+    learner.learn(&target(41)).unwrap();
+    assert_eq!(learner.targets_learned(), 1);
+    let exact = fit(r#"{"kind": "exact_gp", "kernel": "rbf", "hyperopt": {"max_iters": 5}}"#);
+    let Err(e) =
+        LiveLearner::from_saved_model(&exact, OnlineMode::Update, 1e-4, sha256_hex(b"rover"))
+    else {
+        panic!("an exact GP accepted to learn online");
+    };
+    assert!(e.to_string().contains("ilgr"), "{e}");
+}
