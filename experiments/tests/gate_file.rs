@@ -96,3 +96,50 @@ fn bad_values_and_unknown_fields_are_located() {
         assert!(message.contains(want_words), "{message}");
     }
 }
+
+#[test]
+fn the_tutorials_gate_file_builds_the_gate_and_a_learner_that_resumes_its_checkpoint() {
+    use gpodo_experiments::commands::gate::build_gate;
+    use gpodo_frontends::vo_target::VoTarget;
+    use gpodo_node::learner::LearnerStart;
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/tutorials/gate.yaml");
+    let gate = load_gate(&file).unwrap();
+    let rover = b"a rover description";
+    let columns = ["cmd_v".to_string(), "pitch".to_string()];
+    let built = build_gate(&gate, rover, None, None, &columns).unwrap();
+    assert_eq!(built.pairing.tolerance_ns, 0);
+    assert_eq!(built.pairing.history_depth, 10);
+    assert!(
+        built.gate.policy().contains("while_lost"),
+        "{}",
+        built.gate.policy()
+    );
+    let mut learner = built.learner.unwrap();
+    assert_eq!(learner.start(), LearnerStart::Empty);
+    for i in 0..8 {
+        learner
+            .learn(&VoTarget {
+                inputs: vec![0.1 * f64::from(i), 0.0],
+                residual: nalgebra::Vector3::new(0.004, 0.0, 0.0),
+                time_secs: 4.0 * f64::from(i + 1),
+                duration_secs: 4.0,
+            })
+            .unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let checkpoint = dir.path().join("gate-model.json");
+    assert!(learner.checkpoint(&checkpoint).unwrap());
+    let resumed = build_gate(&gate, rover, None, Some(&checkpoint), &columns)
+        .unwrap()
+        .learner
+        .unwrap();
+    assert_eq!(resumed.start(), LearnerStart::Checkpoint(8));
+    assert_eq!(
+        resumed.predict(&[0.3, 0.0]).unwrap(),
+        learner.predict(&[0.3, 0.0]).unwrap()
+    );
+    let Err(e) = build_gate(&gate, b"another rover", None, Some(&checkpoint), &columns) else {
+        panic!("a checkpoint of another rover resumed");
+    };
+    assert!(format!("{e:#}").contains("rover_sha256"), "{e:#}");
+}

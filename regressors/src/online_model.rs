@@ -62,6 +62,15 @@ impl OnlineModel {
         })
     }
 
+    /// Its kind, as specs and checkpoints name it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Ilgr(_) => ONLINE_KINDS[0],
+            Self::SparseSpectrum(_) => ONLINE_KINDS[1],
+            Self::StreamingSparseGp(_) => ONLINE_KINDS[2],
+        }
+    }
+
     /// Its learned state, to save; `None` before it has learned anything.
     pub fn saved_state(&self) -> Option<SavedState> {
         match self {

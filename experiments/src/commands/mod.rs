@@ -1,9 +1,11 @@
 //! The commands beside `gpodo run`, as library functions the binary, the
 //! Python package and the tests call: a preset's testbed written out
 //! ([`simulate`]), recordings imported through a topic map ([`import`]),
-//! gpodo on the robot ([`live`]), and the statistical tracker set beside
+//! gpodo on the robot ([`live`]) with its frame gate built from a gate
+//! file ([`gate`]), and the statistical tracker set beside
 //! the stereo VO on rendered drives ([`tracker_calibration`]).
 
+pub mod gate;
 pub mod import;
 pub mod live;
 pub mod simulate;
