@@ -14,8 +14,8 @@ use crate::pipeline::{LiveSettings, ModelSummary};
 pub const LATENCY_WINDOW: usize = 1000;
 
 /// `diagnostic_msgs/DiagnosticStatus` levels.
-const OK: u8 = 0;
-const WARN: u8 = 1;
+pub(crate) const OK: u8 = 0;
+pub(crate) const WARN: u8 = 1;
 
 /// What the node saw since it started, and since the last report.
 #[derive(Debug, Clone, Default)]

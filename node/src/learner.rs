@@ -16,7 +16,7 @@ use gpodo_frontends::traverse::TraverseWindow;
 use gpodo_frontends::vo_target::VoTarget;
 use gpodo_regressors::model_file::{MODEL_FORMAT, MODEL_VERSION, ModelFile, Provenance, RowRecipe};
 use gpodo_regressors::online_model::OnlineModel;
-use gpodo_traits::Standardizer;
+use gpodo_traits::{SampleMatrix, Standardizer};
 use nalgebra::Vector3;
 
 use crate::checkpoint::{Checkpoint, CheckpointError, CheckpointKey};
@@ -34,6 +34,20 @@ pub struct LearnerIdentity {
     pub rows: Option<RowRecipe>,
     /// The rover description's SHA-256.
     pub rover_sha256: String,
+}
+
+impl LearnerIdentity {
+    /// The identity of a learner going on from the saved model `file`: its
+    /// label, columns, z-scoring and row recipe.
+    pub fn of_saved_model(file: &ModelFile, rover_sha256: String) -> Self {
+        Self {
+            label: file.label.clone(),
+            input_names: file.input_names.clone(),
+            input_standardizer: file.input_standardizer.clone(),
+            rows: file.rows.clone(),
+            rover_sha256,
+        }
+    }
 }
 
 /// Where the learner started from.
@@ -117,13 +131,7 @@ impl LiveLearner {
                 ),
             }
         })?;
-        let identity = LearnerIdentity {
-            label: file.label.clone(),
-            input_names: file.input_names.clone(),
-            input_standardizer: file.input_standardizer.clone(),
-            rows: file.rows.clone(),
-            rover_sha256,
-        };
+        let identity = LearnerIdentity::of_saved_model(file, rover_sha256);
         Self::new(
             model,
             mode,
@@ -185,7 +193,7 @@ impl LiveLearner {
     /// # Errors
     /// What the model reports.
     pub fn learn(&mut self, target: &VoTarget) -> Result<(), FrontendError> {
-        let inputs = self.standardize(&target.inputs);
+        let inputs = self.standardize(&target.inputs)?;
         self.learner
             .on_target(&inputs, &target.residual, target.time_secs)
     }
@@ -200,20 +208,21 @@ impl LiveLearner {
             start_secs: 0.0,
             end_secs: 0.0,
             steps: 0..0,
-            inputs: self.standardize(row),
+            inputs: self.standardize(row)?,
             true_residual: Vector3::zeros(),
         };
         self.learner.predict_window(&window)
     }
 
-    fn standardize(&self, row: &[f64]) -> Vec<f64> {
+    /// The row z-scored as the model's inputs are (the saved model's
+    /// standardizer), or as it is.
+    fn standardize(&self, row: &[f64]) -> Result<Vec<f64>, FrontendError> {
         match &self.identity.input_standardizer {
-            Some(s) => row
-                .iter()
-                .zip(s.mean.iter().zip(&s.std))
-                .map(|(x, (m, sd))| (x - m) / sd)
-                .collect(),
-            None => row.to_vec(),
+            Some(s) => {
+                let x = SampleMatrix::from_row_major(1, row.len(), row.to_vec())?;
+                Ok(s.transform(&x)?.row(0).to_vec())
+            }
+            None => Ok(row.to_vec()),
         }
     }
 

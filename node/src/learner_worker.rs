@@ -72,18 +72,20 @@ impl LearnerWorker {
     /// # Errors
     /// What the model reports.
     pub fn predict(&self, row: &[f64]) -> Result<ResidualPrediction, FrontendError> {
-        let learner = match self.latest.read() {
-            Ok(guard) => Arc::clone(&guard),
-            Err(poisoned) => Arc::clone(&poisoned.into_inner()),
-        };
-        learner.predict(row)
+        self.latest().predict(row)
     }
 
     /// Targets learned by the state published last.
     pub fn targets_learned(&self) -> u64 {
+        self.latest().targets_learned()
+    }
+
+    /// The state published last (a worker that panicked while publishing
+    /// left a whole one: the swap is one pointer).
+    fn latest(&self) -> Arc<LiveLearner> {
         match self.latest.read() {
-            Ok(guard) => guard.targets_learned(),
-            Err(poisoned) => poisoned.into_inner().targets_learned(),
+            Ok(guard) => Arc::clone(&guard),
+            Err(poisoned) => Arc::clone(&poisoned.into_inner()),
         }
     }
 

@@ -62,6 +62,17 @@ impl OnlineModel {
         })
     }
 
+    /// The kind of a saved state, if it is one of the online kinds (without
+    /// rebuilding it).
+    pub fn kind_of(state: &SavedState) -> Option<&'static str> {
+        match state {
+            SavedState::Ilgr(_) => Some(ONLINE_KINDS[0]),
+            SavedState::SparseSpectrum(_) => Some(ONLINE_KINDS[1]),
+            SavedState::StreamingSparseGp(_) => Some(ONLINE_KINDS[2]),
+            SavedState::ExactGp(_) | SavedState::SparseGp(_) => None,
+        }
+    }
+
     /// Its kind, as specs and checkpoints name it.
     pub fn kind(&self) -> &'static str {
         match self {

@@ -13,8 +13,9 @@ use gpodo_frontends::scheme::causal_selector;
 use gpodo_node::checkpoint::sha256_hex;
 use gpodo_node::gate::lost::LostSettings;
 use gpodo_node::gate::pairing::PairingSettings;
-use gpodo_node::gate::{JumpSettings, LiveGate, LiveGateSettings};
+use gpodo_node::gate::{LiveGate, LiveGateSettings};
 use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
+use gpodo_regressors::RegressorSpec;
 use gpodo_regressors::model_file::ModelFile;
 use gpodo_regressors::online_model::OnlineModel;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
@@ -70,10 +71,7 @@ pub fn build_gate(
             covariance_at_least: gate.lost.covariance_at_least,
         },
         targets: gate.targets,
-        jump: JumpSettings {
-            max_sigmas: gate.jump.max_sigmas,
-            min_jump_m: gate.jump.min_jump_m,
-        },
+        jump: gate.jump,
         body_from_child,
     };
     let pairing = PairingSettings {
@@ -87,41 +85,30 @@ pub fn build_gate(
                 .mode()
                 .map_err(|(field, expected)| anyhow::anyhow!("`{field}`: expected {expected}"))?;
             let rover_sha256 = sha256_hex(rover_description);
-            let saved = model.filter(|m| OnlineModel::from_state(&m.state).is_ok());
-            let (identity, kind) = match saved {
-                Some(m) => (
-                    LearnerIdentity {
-                        label: m.label.clone(),
-                        input_names: m.input_names.clone(),
-                        input_standardizer: m.input_standardizer.clone(),
-                        rows: m.rows.clone(),
-                        rover_sha256: rover_sha256.clone(),
-                    },
-                    OnlineModel::from_state(&m.state)?.kind(),
-                ),
-                None => (
-                    LearnerIdentity {
-                        label: format!("online: {}", online.regressor.label()),
-                        input_names: columns.to_vec(),
-                        input_standardizer: None,
-                        rows: model.and_then(|m| m.rows.clone()),
-                        rover_sha256: rover_sha256.clone(),
-                    },
-                    OnlineModel::from_spec(&online.regressor)?.kind(),
-                ),
-            };
+            // A saved model of an online kind is what the learner goes on
+            // from; otherwise it starts from the file's spec.
+            let saved = model.and_then(|m| OnlineModel::kind_of(&m.state).map(|kind| (m, kind)));
             let variance = gate.initial_residual_variance;
             Some(match (checkpoint.filter(|p| p.exists()), saved) {
-                (Some(path), _) => LiveLearner::resume(path, online_mode, variance, identity, kind)
-                    .context("the learner's checkpoint")?,
-                (None, Some(file)) => {
-                    LiveLearner::from_saved_model(file, online_mode, variance, rover_sha256)?
+                (Some(path), Some((m, kind))) => {
+                    let identity = LearnerIdentity::of_saved_model(m, rover_sha256);
+                    LiveLearner::resume(path, online_mode, variance, identity, kind)
+                        .context("the learner's checkpoint")?
+                }
+                (Some(path), None) => {
+                    let kind = OnlineModel::from_spec(&online.regressor)?.kind();
+                    let identity = empty_identity(&online.regressor, columns, model, rover_sha256);
+                    LiveLearner::resume(path, online_mode, variance, identity, kind)
+                        .context("the learner's checkpoint")?
+                }
+                (None, Some((m, _))) => {
+                    LiveLearner::from_saved_model(m, online_mode, variance, rover_sha256)?
                 }
                 (None, None) => LiveLearner::new(
                     OnlineModel::from_spec(&online.regressor)?,
                     online_mode,
                     variance,
-                    identity,
+                    empty_identity(&online.regressor, columns, model, rover_sha256),
                     LearnerStart::Empty,
                 )?,
             })
@@ -132,4 +119,21 @@ pub fn build_gate(
         pairing,
         learner,
     })
+}
+
+/// The identity of a learner of `spec` starting empty on `columns`, with
+/// the row recipe of `model` if one was given.
+fn empty_identity(
+    spec: &RegressorSpec,
+    columns: &[String],
+    model: Option<&ModelFile>,
+    rover_sha256: String,
+) -> LearnerIdentity {
+    LearnerIdentity {
+        label: format!("online: {}", spec.label()),
+        input_names: columns.to_vec(),
+        input_standardizer: None,
+        rows: model.and_then(|m| m.rows.clone()),
+        rover_sha256,
+    }
 }

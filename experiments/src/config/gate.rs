@@ -22,6 +22,7 @@
 
 use gpodo_frontends::SelectorSpec;
 use gpodo_frontends::params::OnlineTargetParams;
+use gpodo_node::gate::JumpSettings;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Issue;
@@ -58,7 +59,7 @@ pub struct GateFile {
     pub targets: OnlineTargetParams,
     /// When a VO pose is a jump, not learned from.
     #[serde(default)]
-    pub jump: JumpSpec,
+    pub jump: JumpSettings,
     /// The VO's child frame (`child_frame_id`) in the body frame, when it
     /// is not the body's (the camera's mount, from the rover
     /// description's URDF or measured).
@@ -121,26 +122,6 @@ impl Default for LostSpec {
             silent_secs: Some(1.0),
             covariance_at_least: Some(9999.0),
             status_topic: None,
-        }
-    }
-}
-
-/// When a VO pose is a jump.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct JumpSpec {
-    /// Off the motion model's displacement by more than this many
-    /// standard deviations (default 5).
-    pub max_sigmas: f64,
-    /// And by more than this (m; default 0.25).
-    pub min_jump_m: f64,
-}
-
-impl Default for JumpSpec {
-    fn default() -> Self {
-        Self {
-            max_sigmas: 5.0,
-            min_jump_m: 0.25,
         }
     }
 }

@@ -29,17 +29,7 @@ pub fn load_gate(file: &Path) -> Result<GateFile, ConfigError> {
     })?;
     let locator = Locator::new(&text);
     let located = |path: &str, problem: String, expected: String, key: bool| {
-        let pos = if key { locator.key(path) } else { None }
-            .or_else(|| locator.find(path))
-            .unwrap_or_default();
-        ConfigError::Located {
-            file: file.to_path_buf(),
-            line: pos.line,
-            column: pos.column,
-            path: path.to_string(),
-            problem,
-            expected,
-        }
+        locator.error(file, path, problem, expected, key)
     };
     let gate: GateFile = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();

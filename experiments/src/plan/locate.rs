@@ -7,6 +7,8 @@ use std::collections::HashMap;
 
 use serde_saphyr::granit_parser::{Event, Parser};
 
+use crate::error::ConfigError;
+
 /// A position in a file (1-based line and column).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Position {
@@ -120,6 +122,30 @@ impl Locator {
     /// The position of the key naming `path` (for unknown-field errors).
     pub fn key(&self, path: &str) -> Option<Position> {
         self.keys.get(path).copied()
+    }
+
+    /// A [`ConfigError::Located`] in `file` at the value at `path` (at its
+    /// key first when `at_key`, as for an unknown field), or the nearest
+    /// enclosing value.
+    pub fn error(
+        &self,
+        file: &std::path::Path,
+        path: &str,
+        problem: String,
+        expected: String,
+        at_key: bool,
+    ) -> ConfigError {
+        let pos = if at_key { self.key(path) } else { None }
+            .or_else(|| self.find(path))
+            .unwrap_or_default();
+        ConfigError::Located {
+            file: file.to_path_buf(),
+            line: pos.line,
+            column: pos.column,
+            path: path.to_string(),
+            problem,
+            expected,
+        }
     }
 
     /// Every indexed value path with its position.

@@ -100,15 +100,7 @@ pub(crate) fn tree_of_text(
     })?;
     let locator = Locator::new(text);
     let located = |path: &str, problem: String, expected: String| {
-        let pos = locator.find(path).unwrap_or_default();
-        ConfigError::Located {
-            file: file.to_path_buf(),
-            line: pos.line,
-            column: pos.column,
-            path: path.to_string(),
-            problem,
-            expected,
-        }
+        locator.error(file, path, problem, expected, false)
     };
     let Value::Object(map) = &mut value else {
         return Err(located(

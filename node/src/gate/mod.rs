@@ -36,8 +36,9 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use lost::{LostDetector, LostReason, LostSettings, PoseVerdict};
 
-/// When a VO pose is a jump, not learned from.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// When a VO pose is a jump, not learned from (a gate file's `jump:`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct JumpSettings {
     /// A displacement off the motion model's by more than this many
     /// standard deviations (of the odometry's and the VO's position

@@ -7,11 +7,8 @@ use gpodo_datasets::bags::write::DiagnosticStatus;
 
 use super::pairing::PairingFaults;
 use super::{GateCounts, GateDecision};
+use crate::diagnostics::{OK, WARN};
 use crate::learner::LearnerStart;
-
-/// `diagnostic_msgs/DiagnosticStatus` levels.
-const OK: u8 = 0;
-const WARN: u8 = 1;
 
 /// A stamp as ROS writes it: seconds and nanoseconds.
 fn stamp(ns: i64) -> String {
