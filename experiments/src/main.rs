@@ -150,6 +150,16 @@ enum Command {
         /// machine.
         #[arg(long = "dds-interface", conflicts_with = "replay")]
         dds_interfaces: Vec<std::net::IpAddr>,
+        /// On ROS 2, a gate file: the frame gate in front of a stereo VO,
+        /// and the online learner of that VO's poses (see
+        /// experiments/README.md, "The gate file").
+        #[arg(long, conflicts_with = "replay")]
+        gate: Option<PathBuf>,
+        /// The online learner's checkpoint: resumed if it is there, and
+        /// written atomically on the gate file's period and on stop
+        /// (overrides the file's `checkpoint.path`).
+        #[arg(long, requires = "gate")]
+        checkpoint: Option<PathBuf>,
     },
     /// Turn ROS bags into the rover-log CSV that `dataset: {kind: logs}`
     /// reads, through a topic map (which topic is the IMU, the ground
@@ -606,6 +616,8 @@ fn main() -> anyhow::Result<()> {
             max_outputs,
             idle_exit_secs,
             dds_interfaces,
+            gate,
+            checkpoint,
         } => gpodo_experiments::commands::live::live(
             &gpodo_experiments::commands::live::LiveOptions {
                 model,
@@ -619,6 +631,8 @@ fn main() -> anyhow::Result<()> {
                 max_outputs,
                 idle_exit_secs,
                 dds_interfaces,
+                gate,
+                checkpoint,
             },
         ),
         Command::Simulate {

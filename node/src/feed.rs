@@ -17,7 +17,7 @@ use gpodo_kinematics::RoverDescription;
 use gpodo_traits::{ImuSample, ProprioceptiveSample};
 
 use crate::NodeError;
-use crate::pipeline::{LiveModel, LiveOutput};
+use crate::pipeline::{LiveModel, LiveOutput, RowResidual};
 
 /// One joint-state message's output.
 #[derive(Debug, Clone, PartialEq)]
@@ -125,6 +125,20 @@ impl<'m> LiveFeed<'m> {
     /// reading yet, or the pipeline's refusal); the feed is unchanged but
     /// for its clock's origin.
     pub fn joints(&mut self, m: &JointState, receive_ns: i64) -> Result<Fed, String> {
+        self.joints_with(m, receive_ns, None)
+    }
+
+    /// [`LiveFeed::joints`] with the residual predicted by `residual`
+    /// instead of the saved model (see [`LiveModel::process_with`]).
+    ///
+    /// # Errors
+    /// As [`LiveFeed::joints`].
+    pub fn joints_with(
+        &mut self,
+        m: &JointState,
+        receive_ns: i64,
+        residual: Option<&dyn RowResidual>,
+    ) -> Result<Fed, String> {
         let ns = self.stamp(m.header.stamp_ns, receive_ns);
         let time_secs = self.secs(ns);
         if self.last_joint_ns.is_some_and(|last| ns <= last) {
@@ -152,7 +166,10 @@ impl<'m> LiveFeed<'m> {
             imu: imu.map(|(_, s)| s),
             ..ProprioceptiveSample::default()
         };
-        let output = self.model.process(&sample).map_err(|e| e.to_string())?;
+        let output = self
+            .model
+            .process_with(&sample, residual)
+            .map_err(|e| e.to_string())?;
         // Readings before the one used are no longer needed.
         self.imu.drain(..held.saturating_sub(1));
         self.last_joint_ns = Some(ns);

@@ -178,6 +178,11 @@ impl LiveLearner {
         .map_err(|e| invalid(e.to_string()))
     }
 
+    /// The input columns, in the model's order.
+    pub fn input_names(&self) -> &[String] {
+        &self.identity.input_names
+    }
+
     /// Where it started from.
     pub fn start(&self) -> LearnerStart {
         self.start

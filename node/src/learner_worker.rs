@@ -7,6 +7,7 @@
 //! itself), so that its state is the offline scheme's.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::sync::{Arc, RwLock};
 use std::thread::JoinHandle;
@@ -42,6 +43,7 @@ pub struct WorkerSummary {
 pub struct LearnerWorker {
     targets: Option<Sender<VoTarget>>,
     latest: Arc<RwLock<Arc<LiveLearner>>>,
+    checkpoints: Arc<AtomicU64>,
     handle: Option<JoinHandle<WorkerSummary>>,
 }
 
@@ -51,10 +53,15 @@ impl LearnerWorker {
         let latest = Arc::new(RwLock::new(Arc::new(learner.clone())));
         let (tx, rx) = channel();
         let published = Arc::clone(&latest);
-        let handle = std::thread::spawn(move || run(learner, &rx, &published, checkpoint.as_ref()));
+        let checkpoints = Arc::new(AtomicU64::new(0));
+        let written = Arc::clone(&checkpoints);
+        let handle = std::thread::spawn(move || {
+            run(learner, &rx, &published, &written, checkpoint.as_ref())
+        });
         Self {
             targets: Some(tx),
             latest,
+            checkpoints,
             handle: Some(handle),
         }
     }
@@ -78,6 +85,21 @@ impl LearnerWorker {
     /// Targets learned by the state published last.
     pub fn targets_learned(&self) -> u64 {
         self.latest().targets_learned()
+    }
+
+    /// Checkpoints written so far.
+    pub fn checkpoints(&self) -> u64 {
+        self.checkpoints.load(Ordering::Relaxed)
+    }
+
+    /// The learner's input columns, in the model's order.
+    pub fn input_names(&self) -> Vec<String> {
+        self.latest().input_names().to_vec()
+    }
+
+    /// Where the learner started from.
+    pub fn start(&self) -> crate::learner::LearnerStart {
+        self.latest().start()
     }
 
     /// The state published last (a worker that panicked while publishing
@@ -111,15 +133,17 @@ fn run(
     mut learner: LiveLearner,
     rx: &Receiver<VoTarget>,
     latest: &RwLock<Arc<LiveLearner>>,
+    written: &AtomicU64,
     checkpoint: Option<&CheckpointPolicy>,
 ) -> WorkerSummary {
     let mut summary_error = None;
-    let mut checkpoints = 0;
     let mut last_written = Instant::now();
-    let mut write = |learner: &LiveLearner, error: &mut Option<String>| {
+    let write = |learner: &LiveLearner, error: &mut Option<String>| {
         if let Some(policy) = checkpoint {
             match learner.checkpoint(&policy.path) {
-                Ok(true) => checkpoints += 1,
+                Ok(true) => {
+                    written.fetch_add(1, Ordering::Relaxed);
+                }
                 Ok(false) => {}
                 Err(e) => *error = Some(e.to_string()),
             }
@@ -152,7 +176,7 @@ fn run(
     write(&learner, &mut summary_error);
     WorkerSummary {
         learner,
-        checkpoints,
+        checkpoints: written.load(Ordering::Relaxed),
         last_error: summary_error,
     }
 }

@@ -89,6 +89,21 @@ pub struct LiveOutput {
     /// The model's inputs whose value in the row is outside the training
     /// range (see [`LiveSettings::out_of_range_z`]).
     pub out_of_range: Vec<String>,
+    /// The residual's predicted mean and variance on the row, before the
+    /// variance floor (none without a row).
+    pub residual: Option<([f64; 3], [f64; 3])>,
+}
+
+/// A residual predicted on the node's rows by something other than the
+/// saved model: the online learner, whose predictions replace the saved
+/// model's once it runs.
+pub trait RowResidual {
+    /// The residual's mean and variance on `row` (in
+    /// [`LiveModel::columns`]' order).
+    ///
+    /// # Errors
+    /// Why there is no prediction.
+    fn residual(&self, row: &[f64]) -> Result<([f64; 3], [f64; 3]), String>;
 }
 
 /// What a model is, for the node's diagnostics.
@@ -274,6 +289,20 @@ impl LiveModel {
     /// time that does not move forward, a non-finite input, or a model
     /// that fails on it; the pipeline is left as it was.
     pub fn process(&mut self, sample: &ProprioceptiveSample) -> Result<LiveOutput, NodeError> {
+        self.process_with(sample, None)
+    }
+
+    /// [`LiveModel::process`] with the residual predicted by `residual`
+    /// instead of the saved model, when given (gpodo's mode only: the
+    /// authors' odometry reads a model of |residual|).
+    ///
+    /// # Errors
+    /// As [`LiveModel::process`]; a `residual` in the authors' mode.
+    pub fn process_with(
+        &mut self,
+        sample: &ProprioceptiveSample,
+        residual: Option<&dyn RowResidual>,
+    ) -> Result<LiveOutput, NodeError> {
         let time_secs = sample.time_secs;
         let bad = |detail: String| NodeError::Sample { time_secs, detail };
         let inputs = sample_features(sample, self.wheel_radius_m);
@@ -301,9 +330,18 @@ impl LiveModel {
         let floor = self.settings.min_variance;
         let angular = self.settings.angular_variance.max(floor);
         let uncorrected = estimate.twist;
-        let (twist, linear) = match &row {
-            None => (uncorrected, [angular; 3]),
-            Some(row) => {
+        if residual.is_some() && self.mode == OdometryMode::Authors {
+            return Err(bad(
+                "a residual from elsewhere than the saved model, which predicts |residual| (the authors' mode)".into(),
+            ));
+        }
+        let predicted = match (&row, residual) {
+            (None, _) => None,
+            (Some(row), Some(r)) => Some(
+                r.residual(&row.inputs)
+                    .map_err(|e| bad(format!("the residual: {e}")))?,
+            ),
+            (Some(row), None) => {
                 let x = SampleMatrix::from_rows(row.inputs.len(), &[&row.inputs])
                     .map_err(|e| bad(e.to_string()))?;
                 let p = self
@@ -311,26 +349,40 @@ impl LiveModel {
                     .predict(&self.columns, &x)
                     .map_err(|e| bad(format!("the model: {e}")))?;
                 let (mean, variance) = (p.mean.row(0), p.variance.row(0));
-                if mean.len() < 3 || mean.iter().chain(variance).any(|v| !v.is_finite()) {
+                if mean.len() < 3 || variance.len() < 3 {
                     return Err(bad(format!(
-                        "the model predicted {mean:?} ± {variance:?}; expected three finite residuals"
+                        "the model predicted {mean:?} ± {variance:?}; expected three residuals"
                     )));
                 }
-                match self.mode {
-                    OdometryMode::Corrected => (
-                        BodyTwist {
-                            linear_mps: uncorrected.linear_mps
-                                + Vector3::new(mean[0], mean[1], mean[2]),
-                            angular_radps: uncorrected.angular_radps,
-                        },
-                        [variance[0], variance[1], variance[2]],
-                    ),
-                    OdometryMode::Authors => (
-                        uncorrected,
-                        [mean[0] * mean[0], mean[1] * mean[1], mean[2] * mean[2]],
-                    ),
-                }
+                Some((
+                    [mean[0], mean[1], mean[2]],
+                    [variance[0], variance[1], variance[2]],
+                ))
             }
+        };
+        if let Some((mean, variance)) = &predicted
+            && mean.iter().chain(variance).any(|v| !v.is_finite())
+        {
+            return Err(bad(format!(
+                "the residual predicted is {mean:?} ± {variance:?}; expected finite values"
+            )));
+        }
+        let (twist, linear) = match &predicted {
+            None => (uncorrected, [angular; 3]),
+            Some((mean, variance)) => match self.mode {
+                OdometryMode::Corrected => (
+                    BodyTwist {
+                        linear_mps: uncorrected.linear_mps
+                            + Vector3::new(mean[0], mean[1], mean[2]),
+                        angular_radps: uncorrected.angular_radps,
+                    },
+                    [variance[0], variance[1], variance[2]],
+                ),
+                OdometryMode::Authors => (
+                    uncorrected,
+                    [mean[0] * mean[0], mean[1] * mean[1], mean[2] * mean[2]],
+                ),
+            },
         };
         self.rows.commit(time_secs, inputs);
         if let (Some(dt), Some((_, previous, wheels, previous_variance))) = (dt, self.last) {
@@ -372,6 +424,7 @@ impl LiveModel {
             pose: self.pose,
             pose_covariance: row_major(&self.pose_covariance, floor),
             uncorrected_pose: self.uncorrected_pose,
+            residual: predicted,
         })
     }
 }

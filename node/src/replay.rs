@@ -10,7 +10,7 @@ use std::path::Path;
 
 use gpodo_datasets::bags::OnDamage;
 use gpodo_datasets::bags::import::{TimeSource, TopicMap};
-use gpodo_datasets::bags::messages::RosMessage;
+use gpodo_datasets::bags::messages::{Odometry, RosMessage};
 use gpodo_datasets::bags::topic::{TopicRequest, read_topics};
 use gpodo_datasets::bags::write::{OdometryMcap, odometry_message};
 use gpodo_kinematics::RoverDescription;
@@ -18,6 +18,10 @@ use gpodo_kinematics::RoverDescription;
 use crate::NodeError;
 use crate::diagnostics::percentile;
 use crate::feed::LiveFeed;
+use crate::gate::GateDecision;
+use crate::gate::pairing::{Part, PartHeader, StereoPair};
+use crate::gate::session::GateSession;
+use crate::gate::topics::GateTopics;
 use crate::pipeline::{LiveModel, LiveOutput};
 
 /// The topics a replay writes, in [`OdometryMcap`] order.
@@ -48,6 +52,29 @@ pub struct ReplaySummary {
     /// Whether `stop` ended the replay before the recording's end (what was
     /// written up to then is kept, finished as a readable MCAP).
     pub stopped: bool,
+    /// With a gate: its decision on every pair, in order.
+    pub decisions: Vec<GateDecision>,
+}
+
+/// A stereo pair of a recording, as the gate forwards it to a VO in the
+/// loop: the four messages, decoded.
+pub type RecordedPair<'a> = StereoPair<&'a RosMessage>;
+
+/// The VO behind the gate in a replay: the odometry it publishes for a
+/// forwarded pair, or none (it gave nothing: lost, or not yet started).
+pub type ReplayVo<'a> = dyn FnMut(&RecordedPair<'_>) -> Option<Odometry> + 'a;
+
+/// The gate in a replay: its topics, its session (the learner in
+/// lock-step), and the VO it forwards pairs to, in the loop: the VO's
+/// answer to a pair is taken before the next message.
+pub struct GatedReplay<'g, 'a> {
+    /// The camera's and the VO's topics.
+    pub topics: &'g GateTopics,
+    /// The gate, pairing and learner; its pairs name messages by their
+    /// topic and index.
+    pub session: &'g mut GateSession<(usize, usize)>,
+    /// The VO.
+    pub vo: &'g mut ReplayVo<'a>,
 }
 
 fn io_error(path: &Path, e: impl std::fmt::Display) -> NodeError {
@@ -105,6 +132,29 @@ pub fn replay(
     rows: Option<&Path>,
     playback: Playback<'_>,
 ) -> Result<ReplaySummary, NodeError> {
+    replay_gated(bag, map, rover, model, out, rows, playback, None)
+}
+
+/// [`replay`] with the frame gate in front of a VO in the loop, when
+/// `gate` is given: each stereo pair is decided once the odometry has
+/// reached its stamp (a joint state stamped as it is sorts before it),
+/// on the recording's clock; a forwarded pair goes to the VO, whose
+/// odometry is learned from before the next message; with a learner, its
+/// residual is the one published.
+///
+/// # Errors
+/// As [`replay`]; a bag without the gate's camera topics.
+#[allow(clippy::too_many_arguments)]
+pub fn replay_gated(
+    bag: &Path,
+    map: &TopicMap,
+    rover: &RoverDescription,
+    model: &mut LiveModel,
+    out: &Path,
+    rows: Option<&Path>,
+    playback: Playback<'_>,
+    mut gate: Option<GatedReplay<'_, '_>>,
+) -> Result<ReplaySummary, NodeError> {
     let Playback { pace, stop } = playback;
     let joints = map
         .joints
@@ -124,6 +174,22 @@ pub fn replay(
             optional: false,
         });
     }
+    // The camera's four topics follow, in `Part::ALL`'s order.
+    let first_camera = requests.len();
+    if let Some(g) = &gate {
+        for part in Part::ALL {
+            requests.push(TopicRequest {
+                topic: g.topics.input(part),
+                role: "the gate's camera",
+                expected: if part.is_image() {
+                    &["sensor_msgs/Image"]
+                } else {
+                    &["sensor_msgs/CameraInfo"]
+                },
+                optional: false,
+            });
+        }
+    }
     let (messages, _) =
         read_topics(bag, &requests, OnDamage::Stop).map_err(|e| io_error(bag, e))?;
     // Every message by its time (the IMU first at a tie, so a joint state
@@ -132,16 +198,24 @@ pub fn replay(
         TimeSource::Header => header_ns,
         TimeSource::Receive => s.log_time_ns as i64,
     };
-    let mut order: Vec<(i64, usize, usize)> = Vec::new();
+    // Per topic, its rank at a tie: the IMU 0, joint states 1, the
+    // camera's 2 (a pair is decided after the joint state of its instant).
+    let rank = |topic: usize| match topic {
+        0 => 1,
+        t if t >= first_camera => 2,
+        _ => 0,
+    };
+    let mut order: Vec<(i64, usize, usize, usize)> = Vec::new();
     for (topic, list) in messages.iter().enumerate() {
         for (k, s) in list.iter().enumerate() {
             let header_ns = match &s.message {
                 RosMessage::JointState(m) => m.header.stamp_ns,
                 RosMessage::Imu(m) => m.header.stamp_ns,
+                RosMessage::Image(m) => m.header.stamp_ns,
+                RosMessage::CameraInfo(m) => m.header.stamp_ns,
                 _ => continue,
             };
-            order.push((stamp(s, header_ns), usize::from(topic == 0), k));
-            // (IMU messages sort with 0, joint states with 1.)
+            order.push((stamp(s, header_ns), rank(topic), topic, k));
         }
     }
     order.sort_unstable();
@@ -165,6 +239,7 @@ pub fn replay(
         latency_secs: None,
         processing_secs: 0.0,
         stopped: false,
+        decisions: Vec::new(),
     };
     let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
@@ -172,7 +247,7 @@ pub fn replay(
     let first_ns = order.first().map_or(0, |o| o.0);
     // The longest sleep between two looks at `stop` at recorded speed.
     const STOP_POLL: std::time::Duration = std::time::Duration::from_millis(20);
-    for (ns, is_joint, k) in order {
+    for (ns, _, topic, k) in order {
         if pace == Pace::Recorded {
             let due = std::time::Duration::from_nanos(u64::try_from(ns - first_ns).unwrap_or(0));
             while let Some(wait) = due.checked_sub(started.elapsed()) {
@@ -186,19 +261,33 @@ pub fn replay(
             summary.stopped = true;
             break;
         }
-        let stamped = &messages[1 - is_joint][k];
+        let stamped = &messages[topic][k];
         let receive_ns = stamped.log_time_ns as i64;
+        if topic >= first_camera {
+            if let Some(g) = gate.as_mut() {
+                let part = Part::ALL[topic - first_camera];
+                let decision = gated_part(g, &messages, part, (topic, k), ns);
+                summary.decisions.extend(decision);
+            }
+            continue;
+        }
         match &stamped.message {
-            RosMessage::Imu(m) if is_joint == 0 => feed.imu(m, receive_ns),
-            RosMessage::JointState(m) if is_joint == 1 => {
+            RosMessage::Imu(m) if topic != 0 => feed.imu(m, receive_ns),
+            RosMessage::JointState(m) if topic == 0 => {
                 let taken = std::time::Instant::now();
-                let fed = match feed.joints(m, receive_ns) {
+                let residual = gate.as_ref().and_then(|g| g.session.residual());
+                let fed = match feed.joints_with(m, receive_ns, residual) {
                     Ok(f) => f,
                     Err(reason) => {
                         summary.skipped.push(reason);
                         continue;
                     }
                 };
+                if let Some(g) = gate.as_mut()
+                    && let Err(e) = g.session.output(&fed.output)
+                {
+                    summary.skipped.push(format!("the gate: {e}"));
+                }
                 let output = &fed.output;
                 let stamp = u64::try_from(fed.stamp_ns).unwrap_or(0);
                 let [gp, wheel] = output_messages(stamp, output);
@@ -232,6 +321,49 @@ pub fn replay(
             .map_err(|e| io_error(path, e))?;
     }
     Ok(summary)
+}
+
+/// One camera message of a gated replay, at `ns` on the recording's
+/// clock: paired, and when it completes a pair, decided then; a forwarded pair goes to the VO, whose
+/// answer the session takes at once.
+fn gated_part(
+    g: &mut GatedReplay<'_, '_>,
+    messages: &[Vec<gpodo_datasets::bags::topic::Stamped>],
+    part: Part,
+    at: (usize, usize),
+    ns: i64,
+) -> Option<GateDecision> {
+    let now_secs = ns as f64 * 1e-9;
+    // Pairs are matched by header stamps, as on DDS, whatever the clock.
+    let header = match &messages[at.0][at.1].message {
+        RosMessage::Image(m) => PartHeader {
+            stamp_ns: m.header.stamp_ns,
+            width: m.width,
+            height: m.height,
+        },
+        RosMessage::CameraInfo(m) => PartHeader {
+            stamp_ns: m.header.stamp_ns,
+            width: m.width,
+            height: m.height,
+        },
+        _ => return None,
+    };
+    let pair = g.session.part(part, header, at, now_secs)?;
+    let (decision, forwarded) = g.session.decide(pair, now_secs);
+    if let Some(pair) = forwarded {
+        let message = |(topic, k): (usize, usize)| &messages[topic][k].message;
+        let recorded = StereoPair {
+            stamp_ns: pair.stamp_ns,
+            left: message(pair.left),
+            right: message(pair.right),
+            left_info: message(pair.left_info),
+            right_info: message(pair.right_info),
+        };
+        if let Some(odometry) = (g.vo)(&recorded) {
+            g.session.vo_odometry(&odometry);
+        }
+    }
+    Some(decision)
 }
 
 /// The CDR of the two odometry messages of one output, stamped

@@ -40,6 +40,7 @@ fn fed(imu_age_secs: Option<f64>, out_of_range: &[&str]) -> Fed {
             pose_covariance: [0.0; 36],
             uncorrected_pose: Isometry3::identity(),
             out_of_range: out_of_range.iter().map(|s| s.to_string()).collect(),
+            residual: None,
         },
     }
 }

@@ -117,7 +117,7 @@ fn a_cyclone_dds_peer_gets_what_the_replay_writes() {
         ..Ros2Settings::default()
     };
     let mut model = load();
-    let summary = run(&map, &rover, &mut model, &settings, &|| false).unwrap();
+    let summary = run(&map, &rover, &mut model, &settings, None, &|| false).unwrap();
     let peer = peer.wait_with_output().unwrap();
     assert!(
         peer.status.success(),

@@ -182,15 +182,27 @@ pub fn diagnostic_array_message(stamp_ns: u64, status: &[DiagnosticStatus]) -> V
     d.header(stamp_ns, "");
     d.u32(status.len() as u32);
     for s in status {
-        d.0.push(s.level);
-        d.string(&s.name);
-        d.string(&s.message);
-        d.string(&s.hardware_id);
-        d.u32(s.values.len() as u32);
-        for (key, value) in &s.values {
-            d.string(key);
-            d.string(value);
-        }
+        diagnostic_status(&mut d, s);
     }
     d.0
+}
+
+/// One `diagnostic_msgs/msg/DiagnosticStatus` in CDR (a message of its
+/// own, as a topic of decisions carries it).
+pub fn diagnostic_status_message(status: &DiagnosticStatus) -> Vec<u8> {
+    let mut d = Cdr::new();
+    diagnostic_status(&mut d, status);
+    d.0
+}
+
+fn diagnostic_status(d: &mut Cdr, s: &DiagnosticStatus) {
+    d.0.push(s.level);
+    d.string(&s.name);
+    d.string(&s.message);
+    d.string(&s.hardware_id);
+    d.u32(s.values.len() as u32);
+    for (key, value) in &s.values {
+        d.string(key);
+        d.string(value);
+    }
 }

@@ -260,6 +260,31 @@ fn covariance36(r: &mut WireReader<'_>) -> Result<Vec<f64>, WireError> {
     Ok(r.f64s::<36>()?.to_vec())
 }
 
+/// The header and image size of a `sensor_msgs/Image` or
+/// `sensor_msgs/CameraInfo` (both begin with header, height, width),
+/// read without the pixels or the calibration after them.
+///
+/// # Errors
+/// Bytes too short to hold them.
+pub fn decode_image_header(encoding: &str, data: &[u8]) -> Result<(Header, u32, u32), WireError> {
+    let mut r = WireReader::new(data, encoding)?;
+    let h = header(&mut r)?;
+    let height = r.u32()?;
+    let width = r.u32()?;
+    Ok((h, width, height))
+}
+
+/// A `std_msgs/Bool`'s value.
+///
+/// # Errors
+/// Bytes that do not hold one.
+pub fn decode_bool(encoding: &str, data: &[u8]) -> Result<bool, WireError> {
+    let mut r = WireReader::new(data, encoding)?;
+    let value = r.bool()?;
+    r.finish()?;
+    Ok(value)
+}
+
 /// Decodes one message of type `message_type` (ROS 1 or ROS 2 spelling)
 /// serialised as `encoding` (`ros1` or `cdr`).
 ///

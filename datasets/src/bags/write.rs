@@ -23,7 +23,9 @@ use std::path::{Path, PathBuf};
 pub use super::cdr_write::EPOCH_NS;
 use super::cdr_write::{Cdr, stamp_ns};
 use super::import::{GroundTruthSource, JointMap, JointRef, TopicMap};
-pub use super::log_messages::{DiagnosticStatus, diagnostic_array_message, odometry_message};
+pub use super::log_messages::{
+    DiagnosticStatus, diagnostic_array_message, diagnostic_status_message, odometry_message,
+};
 use super::log_messages::{
     imu_message, imu_schema, joint_state_schema, odometry_schema, pose_stamped,
     pose_stamped_schema, tf_message, tf_schema,

@@ -30,6 +30,11 @@ pub struct LiveOptions {
     pub idle_exit_secs: Option<f64>,
     /// On ROS 2, the network interfaces DDS uses (empty: all).
     pub dds_interfaces: Vec<std::net::IpAddr>,
+    /// On ROS 2, the gate file: the frame gate and its online learner.
+    pub gate: Option<PathBuf>,
+    /// The learner's checkpoint (overrides the gate file's
+    /// `checkpoint.path`).
+    pub checkpoint: Option<PathBuf>,
 }
 
 /// Runs `gpodo live`.
@@ -162,13 +167,28 @@ fn on_ros2(
             .map_or(String::new(), |t| format!(" and {t}")),
         gpodo_node::replay::OUTPUT_TOPICS.join(", "),
     );
+    let mut gate = match &options.gate {
+        Some(path) => Some(GateOnRos2::build(path, options, model)?),
+        None => None,
+    };
+    let ros2_gate = gate.as_mut().map(|g| gpodo_node::ros2::Ros2Gate {
+        topics: &g.file.topics,
+        status_topic: g.file.lost.status_topic.as_deref(),
+        session: &mut g.session,
+    });
     let summary = run(
         map,
         description,
         model,
         &settings,
+        ros2_gate,
         &crate::util::stop::requested,
-    )?;
+    );
+    // The learner's last checkpoint is written whatever ended the run.
+    if let Some(g) = gate {
+        g.finish(summary.as_ref().ok().and_then(|s| s.gate));
+    }
+    let summary = summary?;
     if let Some(reason) = &summary.last_skip {
         tracing::warn!(
             "{} joint states not used; the last: {reason}",
@@ -203,3 +223,135 @@ fn on_ros2(
         "this gpodo was built without ROS 2: give `--replay BAG --out OUT.mcap`, or build it with `cargo build --release --features ros2`"
     )
 }
+
+/// The gate on ROS 2: its file, and the session it made.
+#[cfg(feature = "ros2")]
+struct GateOnRos2 {
+    file: crate::config::gate::GateFile,
+    session: gpodo_node::gate::session::GateSession<gpodo_node::ros2::RawCdr>,
+    checkpoint: Option<PathBuf>,
+}
+
+#[cfg(feature = "ros2")]
+impl GateOnRos2 {
+    /// Builds the gate file at `path` for the model and rover of
+    /// `options`: the learner on its worker thread, checkpointed to the
+    /// `--checkpoint` flag's path, else the file's.
+    fn build(
+        path: &Path,
+        options: &LiveOptions,
+        model: &gpodo_node::LiveModel,
+    ) -> anyhow::Result<Self> {
+        use gpodo_node::gate::session::{GateSession, Learning};
+        use gpodo_node::learner::LearnerStart;
+        use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
+
+        let file = crate::plan::gate::load_gate(path)?;
+        let rover = std::fs::read(&options.rover)
+            .with_context(|| format!("{}", options.rover.display()))?;
+        let saved = gpodo_regressors::model_file::ModelFile::load(&options.model)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", options.model.display()))?;
+        let checkpoint = options.checkpoint.clone().or_else(|| {
+            file.checkpoint
+                .path
+                .as_ref()
+                .map(|p| path.parent().map_or_else(|| p.clone(), |dir| dir.join(p)))
+        });
+        let built = crate::commands::gate::build_gate(
+            &file,
+            &rover,
+            Some(&saved),
+            checkpoint.as_deref(),
+            model.columns(),
+        )
+        .with_context(|| format!("the gate file {}", path.display()))?;
+        if built.learner.is_some() && model.mode() == gpodo_node::OdometryMode::Authors {
+            anyhow::bail!(
+                "{}: the model predicts |residual| (the authors' mode), which an online learner of the residual cannot replace; give a model of the residual",
+                options.model.display()
+            );
+        }
+        let learning = built.learner.map(|learner| {
+            match learner.start() {
+                LearnerStart::Checkpoint(n) => tracing::info!(
+                    "the learner resumes its checkpoint {} ({n} targets learned)",
+                    checkpoint
+                        .as_deref()
+                        .map_or(String::new(), |p| p.display().to_string())
+                ),
+                LearnerStart::SavedModel => {
+                    tracing::info!("the learner goes on from {}", options.model.display())
+                }
+                LearnerStart::Empty => tracing::info!(
+                    "the learner starts empty: /odom/gp carries its prior variance until it learns"
+                ),
+            }
+            let policy = checkpoint.clone().map(|p| CheckpointPolicy {
+                path: p,
+                every_secs: file.checkpoint.every_secs,
+            });
+            Learning::Worker(LearnerWorker::spawn(learner, policy))
+        });
+        let session = GateSession::new(
+            built.gate,
+            built.pairing,
+            learning,
+            model.columns(),
+            IMAGE_SILENT_SECS,
+        )?;
+        tracing::info!(
+            "gating {} and {} onto {} and {}; decisions on {}",
+            file.topics.left_image,
+            file.topics.right_image,
+            file.topics
+                .gated(gpodo_node::gate::pairing::Part::LeftImage),
+            file.topics
+                .gated(gpodo_node::gate::pairing::Part::RightImage),
+            file.topics.decisions,
+        );
+        Ok(Self {
+            file,
+            session,
+            checkpoint,
+        })
+    }
+
+    /// Stops the learner (its last checkpoint written) and says what the
+    /// gate did.
+    fn finish(self, traffic: Option<gpodo_node::ros2::GateTraffic>) {
+        use gpodo_node::gate::session::LearnerEnd;
+        let counts = self.session.counts();
+        if let Some(t) = traffic {
+            println!(
+                "gate: {} pairs decided, {} forwarded ({} before the odometry reached them), {} VO poses, {} targets formed",
+                t.decided, t.forwarded, t.decided_before_odometry, t.vo_messages, counts.targets
+            );
+        }
+        match self.session.finish() {
+            LearnerEnd::Worker(Some(summary)) => {
+                println!(
+                    "learner: {} targets learned, {} checkpoints written{}",
+                    summary.learner.targets_learned(),
+                    summary.checkpoints,
+                    self.checkpoint
+                        .as_deref()
+                        .map_or(String::new(), |p| format!(" to {}", p.display()))
+                );
+                if let Some(e) = summary.last_error {
+                    tracing::warn!("the learner's last error: {e}");
+                }
+            }
+            LearnerEnd::Worker(None) => {
+                tracing::error!(
+                    "the learner's thread failed; its last checkpoint is what was saved"
+                );
+            }
+            LearnerEnd::LockStep(_) | LearnerEnd::None => {}
+        }
+    }
+}
+
+/// An image topic silent this long while the other goes on is a fault
+/// (s): six frames of a 2.5 fps camera.
+#[cfg(feature = "ros2")]
+const IMAGE_SILENT_SECS: f64 = 2.4;

@@ -23,6 +23,7 @@
 use gpodo_frontends::SelectorSpec;
 use gpodo_frontends::params::OnlineTargetParams;
 use gpodo_node::gate::JumpSettings;
+pub use gpodo_node::gate::topics::GateTopics;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Issue;
@@ -136,46 +137,12 @@ pub struct PoseSpec {
     pub rotation_xyzw: [f64; 4],
 }
 
-/// The gate's topics.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct GateTopics {
-    /// The left camera's images.
-    pub left_image: String,
-    /// The right camera's images.
-    pub right_image: String,
-    /// The left camera's info.
-    pub left_info: String,
-    /// The right camera's info.
-    pub right_info: String,
-    /// The VO's `nav_msgs/Odometry`.
-    pub vo_odometry: String,
-    /// Forwarded pairs go to the same topics under this prefix
-    /// (`/gated/left/image_raw`, …), reliable.
-    pub gated_prefix: String,
-    /// Every decision, as `diagnostic_msgs/DiagnosticStatus` key-values.
-    pub decisions: String,
-}
-
-impl Default for GateTopics {
-    fn default() -> Self {
-        Self {
-            left_image: "/left/image_raw".into(),
-            right_image: "/right/image_raw".into(),
-            left_info: "/left/camera_info".into(),
-            right_info: "/right/camera_info".into(),
-            vo_odometry: "/vo/odometry".into(),
-            gated_prefix: "/gated".into(),
-            decisions: "/gpodo/gate/decisions".into(),
-        }
-    }
-}
-
 /// Where and how often the learner's model is written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CheckpointSpec {
-    /// The model file (omitted: the `--checkpoint` flag's, else none).
+    /// The model file, relative to the gate file's folder (the
+    /// `--checkpoint` flag overrides it; neither: no checkpoints).
     pub path: Option<std::path::PathBuf>,
     /// Seconds between checkpoints (default 30).
     pub every_secs: f64,

@@ -8,7 +8,10 @@
 //!   by stamp, never by pixels;
 //! * [`lost`]: whether the VO is lost, from its odometry or a Bool topic;
 //! * [`report`]: each decision and the gate's counts as
-//!   `diagnostic_msgs/DiagnosticStatus`.
+//!   `diagnostic_msgs/DiagnosticStatus`;
+//! * [`session`]: the gate, its pairing and its learner in the node, fed
+//!   each message and each odometry output;
+//! * [`topics`]: the topics it reads and publishes.
 //!
 //! [`LiveGate`] keeps what the selector reads with the offline front
 //! end's own [`GateState`], and forms targets with its
@@ -22,6 +25,8 @@
 pub mod lost;
 pub mod pairing;
 pub mod report;
+pub mod session;
+pub mod topics;
 
 use std::collections::VecDeque;
 

@@ -32,6 +32,19 @@ pub enum Part {
 }
 
 impl Part {
+    /// The four, in the order a pair lists them.
+    pub const ALL: [Self; 4] = [
+        Self::LeftImage,
+        Self::RightImage,
+        Self::LeftInfo,
+        Self::RightInfo,
+    ];
+
+    /// Whether it is an image (not a camera info).
+    pub fn is_image(self) -> bool {
+        matches!(self, Self::LeftImage | Self::RightImage)
+    }
+
     fn index(self) -> usize {
         match self {
             Self::LeftImage => 0,
@@ -123,6 +136,11 @@ impl<T> StereoPairer<T> {
             last_pair_ns: None,
             faults: PairingFaults::default(),
         }
+    }
+
+    /// How it pairs (the tolerance and depth as clamped).
+    pub fn settings(&self) -> PairingSettings {
+        self.settings
     }
 
     /// What made no pair so far.

@@ -44,6 +44,10 @@ use crate::feed::LiveFeed;
 use crate::pipeline::LiveModel;
 use crate::replay::{OUTPUT_TOPICS, output_messages};
 
+mod gate_io;
+
+pub use gate_io::{GateTraffic, Ros2Gate};
+
 /// The diagnostics topic.
 pub const DIAGNOSTICS_TOPIC: &str = "/diagnostics";
 
@@ -71,6 +75,10 @@ pub struct Ros2Settings {
     /// The network interfaces DDS uses, by address (empty: all). With
     /// `127.0.0.1` alone, nothing leaves the machine.
     pub interfaces: Vec<std::net::IpAddr>,
+    /// With a gate: how long a stereo pair may wait for the odometry to
+    /// reach its stamp before it is decided on the odometry so far
+    /// (default 100 ms).
+    pub pair_wait: Duration,
 }
 
 impl Default for Ros2Settings {
@@ -83,6 +91,7 @@ impl Default for Ros2Settings {
             max_outputs: None,
             idle_exit_secs: None,
             interfaces: Vec::new(),
+            pair_wait: Duration::from_millis(100),
         }
     }
 }
@@ -105,6 +114,8 @@ pub struct Ros2Summary {
     pub latency_secs: Option<(f64, f64)>,
     /// Messages that could not be decoded.
     pub undecodable: usize,
+    /// What the gate did, when there was one.
+    pub gate: Option<GateTraffic>,
 }
 
 /// A message's CDR bytes without the encapsulation header, as DDS carries
@@ -232,11 +243,11 @@ fn topic(
         .map_err(|e| dds_error(&format!("topic {ros_topic}"), e))
 }
 
-/// QoS of sensor inputs: best effort, keep last 100, volatile.
-fn sensor_qos() -> QosPolicies {
+/// QoS of sensor inputs: best effort, keep last `depth`, volatile.
+fn sensor_qos(depth: i32) -> QosPolicies {
     QosPolicyBuilder::new()
         .reliability(Reliability::BestEffort)
-        .history(History::KeepLast { depth: 100 })
+        .history(History::KeepLast { depth })
         .durability(Durability::Volatile)
         .build()
 }
@@ -259,7 +270,9 @@ fn now_ns() -> i64 {
 }
 
 /// Runs `model` on the rover `rover` from the DDS topics of `map` until
-/// `stop` says so (or a limit of `settings` is reached).
+/// `stop` says so (or a limit of `settings` is reached); with `gate`, the
+/// frame gate and its learner too (whose residual is then the one
+/// published, and whose status joins `/diagnostics`).
 ///
 /// # Errors
 /// [`NodeError::Topics`] for a map that cannot drive the node,
@@ -269,6 +282,7 @@ pub fn run(
     rover: &RoverDescription,
     model: &mut LiveModel,
     settings: &Ros2Settings,
+    mut gate: Option<Ros2Gate<'_>>,
     stop: &dyn Fn() -> bool,
 ) -> Result<Ros2Summary, NodeError> {
     let joints_topic = map
@@ -284,7 +298,7 @@ pub fn run(
         builder = builder.with_only_networks(settings.interfaces.iter().copied());
     }
     let participant = builder.build().map_err(|e| dds_error("participant", e))?;
-    let (sensors, outputs) = (sensor_qos(), output_qos());
+    let (sensors, outputs) = (sensor_qos(100), output_qos());
     let subscriber = participant
         .create_subscriber(&sensors)
         .map_err(|e| dds_error("subscriber", e))?;
@@ -315,6 +329,18 @@ pub fn run(
         writer(OUTPUT_TOPICS[1], "nav_msgs/msg/Odometry")?,
     ];
     let diagnostics = writer(DIAGNOSTICS_TOPIC, "diagnostic_msgs/msg/DiagnosticArray")?;
+    let mut gate_io = match &gate {
+        Some(g) => Some(gate_io::GateIo::new(
+            &participant,
+            &subscriber,
+            &publisher,
+            g,
+            g.session.history_depth(),
+        )?),
+        None => None,
+    };
+    let started = Instant::now();
+    let mut last_odometry_ns: Option<i64> = None;
 
     let mut health = Health::default();
     let mut summary = Ros2Summary {
@@ -325,6 +351,7 @@ pub fn run(
         last_skip: None,
         latency_secs: None,
         undecodable: 0,
+        gate: None,
     };
     let mut last_input: Option<Instant> = None;
     let mut last_report = Instant::now();
@@ -365,6 +392,11 @@ pub fn run(
                 _ => summary.undecodable += 1,
             }
         }
+        // Then the gate's: a VO pose that came before a joint state taken
+        // above is learned from before that joint state is run.
+        if let (Some(g), Some(io)) = (gate.as_mut(), gate_io.as_mut()) {
+            took |= io.take(g.session, started.elapsed().as_secs_f64())?;
+        }
         waiting.sort_by_key(|(m, _, _)| m.header.stamp_ns);
         let ready = waiting
             .iter()
@@ -375,8 +407,15 @@ pub fn run(
         let joints: Vec<_> = waiting.drain(..ready).collect();
         for (m, receive_ns, taken) in joints {
             summary.joint_messages += 1;
-            match feed.joints(&m, receive_ns) {
+            let residual = gate.as_ref().and_then(|g| g.session.residual());
+            match feed.joints_with(&m, receive_ns, residual) {
                 Ok(fed) => {
+                    if let Some(g) = gate.as_mut()
+                        && let Err(e) = g.session.output(&fed.output)
+                    {
+                        health.skipped(format!("the gate: {e}"));
+                    }
+                    last_odometry_ns = Some(fed.stamp_ns);
                     let stamp = u64::try_from(fed.stamp_ns).unwrap_or(0);
                     for (w, bytes) in odometry.iter().zip(output_messages(stamp, &fed.output)) {
                         w.write(RawCdr::from_encoded(bytes), None)
@@ -395,6 +434,10 @@ pub fn run(
                 }
             }
         }
+        if let (Some(g), Some(io)) = (gate.as_mut(), gate_io.as_mut()) {
+            let now = started.elapsed().as_secs_f64();
+            io.decide(g.session, last_odometry_ns, settings.pair_wait, now)?;
+        }
         if last_report.elapsed() >= period {
             last_report = Instant::now();
             let status = health.report(
@@ -403,10 +446,12 @@ pub fn run(
                 &live_settings,
                 last_input.map(|t| t.elapsed().as_secs_f64()),
             );
+            let mut statuses = vec![status];
+            statuses.extend(gate.as_ref().map(|g| g.session.status()));
             let stamp = u64::try_from(now_ns()).unwrap_or(0);
             diagnostics
                 .write(
-                    RawCdr::from_encoded(diagnostic_array_message(stamp, &[status])),
+                    RawCdr::from_encoded(diagnostic_array_message(stamp, &statuses)),
                     None,
                 )
                 .map_err(|e| dds_error("diagnostics", e))?;
@@ -427,5 +472,6 @@ pub fn run(
     summary.skipped = health.skipped_count();
     summary.latency_secs = health.latency_secs();
     summary.last_skip = health.last_skip().map(str::to_string);
+    summary.gate = gate_io.map(|io| io.traffic());
     Ok(summary)
 }
