@@ -150,16 +150,22 @@ enum Command {
         /// machine.
         #[arg(long = "dds-interface", conflicts_with = "replay")]
         dds_interfaces: Vec<std::net::IpAddr>,
-        /// On ROS 2, a gate file: the frame gate in front of a stereo VO,
-        /// and the online learner of that VO's poses (see
-        /// experiments/README.md, "The gate file").
-        #[arg(long, conflicts_with = "replay")]
+        /// A gate file: the frame gate in front of a stereo VO, and the
+        /// online learner of that VO's poses (see experiments/README.md,
+        /// "The gate file"). In a replay, each pair the gate forwards is
+        /// answered with the recording's own VO odometry at its stamp.
+        #[arg(long)]
         gate: Option<PathBuf>,
         /// The online learner's checkpoint: resumed if it is there, and
         /// written atomically on the gate file's period and on stop
         /// (overrides the file's `checkpoint.path`).
         #[arg(long, requires = "gate")]
         checkpoint: Option<PathBuf>,
+        /// In a gated replay, where every decision is written (CSV: the
+        /// pair's stamp, processed or skipped, the reason, the
+        /// keyframe-threshold scale asked for, the tracking state).
+        #[arg(long, requires_all = ["gate", "replay"])]
+        decisions: Option<PathBuf>,
     },
     /// Turn ROS bags into the rover-log CSV that `dataset: {kind: logs}`
     /// reads, through a topic map (which topic is the IMU, the ground
@@ -618,6 +624,7 @@ fn main() -> anyhow::Result<()> {
             dds_interfaces,
             gate,
             checkpoint,
+            decisions,
         } => gpodo_experiments::commands::live::live(
             &gpodo_experiments::commands::live::LiveOptions {
                 model,
@@ -633,6 +640,7 @@ fn main() -> anyhow::Result<()> {
                 dds_interfaces,
                 gate,
                 checkpoint,
+                decisions,
             },
         ),
         Command::Simulate {

@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
+use crate::commands::live_gate::{Learner, LiveGateRun};
+
 /// What `gpodo live` was asked.
 #[derive(Debug, Clone, Default)]
 pub struct LiveOptions {
@@ -35,6 +37,8 @@ pub struct LiveOptions {
     /// The learner's checkpoint (overrides the gate file's
     /// `checkpoint.path`).
     pub checkpoint: Option<PathBuf>,
+    /// In a gated replay, where every decision is written (CSV).
+    pub decisions: Option<PathBuf>,
 }
 
 /// Runs `gpodo live`.
@@ -60,15 +64,7 @@ pub fn live(options: &LiveOptions) -> anyhow::Result<()> {
             } else {
                 gpodo_node::replay::Pace::Fast
             };
-            replay(
-                bag,
-                out,
-                options.rows.as_deref(),
-                pace,
-                &map,
-                &description,
-                &mut model,
-            )
+            replay(options, bag, out, pace, &map, &description, &mut model)
         }
         (Some(_), None) => anyhow::bail!("`--replay` needs `--out`, the MCAP to write"),
         _ => on_ros2(options, &map, &description, &mut model),
@@ -76,26 +72,55 @@ pub fn live(options: &LiveOptions) -> anyhow::Result<()> {
 }
 
 fn replay(
+    options: &LiveOptions,
     bag: &Path,
     out: &Path,
-    rows: Option<&Path>,
     pace: gpodo_node::replay::Pace,
     map: &gpodo_datasets::bags::import::TopicMap,
     description: &gpodo_kinematics::RoverDescription,
     model: &mut gpodo_node::LiveModel,
 ) -> anyhow::Result<()> {
-    let summary = gpodo_node::replay::replay(
-        bag,
-        map,
-        description,
-        model,
-        out,
-        rows,
-        gpodo_node::replay::Playback {
-            pace,
-            stop: &crate::util::stop::requested,
-        },
-    )?;
+    let rows = options.rows.as_deref();
+    let playback = gpodo_node::replay::Playback {
+        pace,
+        stop: &crate::util::stop::requested,
+    };
+    let mut gate = match &options.gate {
+        Some(path) => Some(LiveGateRun::<(usize, usize)>::build(
+            path,
+            options,
+            model,
+            Learner::LockStep,
+        )?),
+        None => None,
+    };
+    let recorded = match &gate {
+        Some(g) => crate::commands::live_gate::recorded_vo(bag, &g.file.topics.vo_odometry)?,
+        None => Default::default(),
+    };
+    let mut vo =
+        |pair: &gpodo_node::replay::RecordedPair<'_>| recorded.get(&pair.stamp_ns).cloned();
+    let gated = gate.as_mut().map(|g| gpodo_node::replay::GatedReplay {
+        topics: &g.file.topics,
+        session: &mut g.session,
+        vo: &mut vo,
+    });
+    let summary =
+        gpodo_node::replay::replay_gated(bag, map, description, model, out, rows, playback, gated);
+    if let Some(g) = gate {
+        g.finish();
+    }
+    let summary = summary?;
+    if let Some(path) = &options.decisions {
+        let csv = crate::commands::live_gate::decisions_csv(&summary.decisions);
+        std::fs::write(path, csv).with_context(|| format!("{}", path.display()))?;
+        let forwarded = summary.decisions.iter().filter(|d| d.processed).count();
+        println!(
+            "wrote {} ({} pairs decided, {forwarded} forwarded)",
+            path.display(),
+            summary.decisions.len()
+        );
+    }
     if summary.stopped {
         println!("stopped before the recording's end; what was replayed is kept");
     }
@@ -168,7 +193,7 @@ fn on_ros2(
         gpodo_node::replay::OUTPUT_TOPICS.join(", "),
     );
     let mut gate = match &options.gate {
-        Some(path) => Some(GateOnRos2::build(path, options, model)?),
+        Some(path) => Some(LiveGateRun::build(path, options, model, Learner::Worker)?),
         None => None,
     };
     let ros2_gate = gate.as_mut().map(|g| gpodo_node::ros2::Ros2Gate {
@@ -186,7 +211,13 @@ fn on_ros2(
     );
     // The learner's last checkpoint is written whatever ended the run.
     if let Some(g) = gate {
-        g.finish(summary.as_ref().ok().and_then(|s| s.gate));
+        if let Some(t) = summary.as_ref().ok().and_then(|s| s.gate) {
+            println!(
+                "gate: {} pairs decided, {} forwarded ({} before the odometry reached them), {} VO poses",
+                t.decided, t.forwarded, t.decided_before_odometry, t.vo_messages
+            );
+        }
+        g.finish();
     }
     let summary = summary?;
     if let Some(reason) = &summary.last_skip {
@@ -223,135 +254,3 @@ fn on_ros2(
         "this gpodo was built without ROS 2: give `--replay BAG --out OUT.mcap`, or build it with `cargo build --release --features ros2`"
     )
 }
-
-/// The gate on ROS 2: its file, and the session it made.
-#[cfg(feature = "ros2")]
-struct GateOnRos2 {
-    file: crate::config::gate::GateFile,
-    session: gpodo_node::gate::session::GateSession<gpodo_node::ros2::RawCdr>,
-    checkpoint: Option<PathBuf>,
-}
-
-#[cfg(feature = "ros2")]
-impl GateOnRos2 {
-    /// Builds the gate file at `path` for the model and rover of
-    /// `options`: the learner on its worker thread, checkpointed to the
-    /// `--checkpoint` flag's path, else the file's.
-    fn build(
-        path: &Path,
-        options: &LiveOptions,
-        model: &gpodo_node::LiveModel,
-    ) -> anyhow::Result<Self> {
-        use gpodo_node::gate::session::{GateSession, Learning};
-        use gpodo_node::learner::LearnerStart;
-        use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
-
-        let file = crate::plan::gate::load_gate(path)?;
-        let rover = std::fs::read(&options.rover)
-            .with_context(|| format!("{}", options.rover.display()))?;
-        let saved = gpodo_regressors::model_file::ModelFile::load(&options.model)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", options.model.display()))?;
-        let checkpoint = options.checkpoint.clone().or_else(|| {
-            file.checkpoint
-                .path
-                .as_ref()
-                .map(|p| path.parent().map_or_else(|| p.clone(), |dir| dir.join(p)))
-        });
-        let built = crate::commands::gate::build_gate(
-            &file,
-            &rover,
-            Some(&saved),
-            checkpoint.as_deref(),
-            model.columns(),
-        )
-        .with_context(|| format!("the gate file {}", path.display()))?;
-        if built.learner.is_some() && model.mode() == gpodo_node::OdometryMode::Authors {
-            anyhow::bail!(
-                "{}: the model predicts |residual| (the authors' mode), which an online learner of the residual cannot replace; give a model of the residual",
-                options.model.display()
-            );
-        }
-        let learning = built.learner.map(|learner| {
-            match learner.start() {
-                LearnerStart::Checkpoint(n) => tracing::info!(
-                    "the learner resumes its checkpoint {} ({n} targets learned)",
-                    checkpoint
-                        .as_deref()
-                        .map_or(String::new(), |p| p.display().to_string())
-                ),
-                LearnerStart::SavedModel => {
-                    tracing::info!("the learner goes on from {}", options.model.display())
-                }
-                LearnerStart::Empty => tracing::info!(
-                    "the learner starts empty: /odom/gp carries its prior variance until it learns"
-                ),
-            }
-            let policy = checkpoint.clone().map(|p| CheckpointPolicy {
-                path: p,
-                every_secs: file.checkpoint.every_secs,
-            });
-            Learning::Worker(LearnerWorker::spawn(learner, policy))
-        });
-        let session = GateSession::new(
-            built.gate,
-            built.pairing,
-            learning,
-            model.columns(),
-            IMAGE_SILENT_SECS,
-        )?;
-        tracing::info!(
-            "gating {} and {} onto {} and {}; decisions on {}",
-            file.topics.left_image,
-            file.topics.right_image,
-            file.topics
-                .gated(gpodo_node::gate::pairing::Part::LeftImage),
-            file.topics
-                .gated(gpodo_node::gate::pairing::Part::RightImage),
-            file.topics.decisions,
-        );
-        Ok(Self {
-            file,
-            session,
-            checkpoint,
-        })
-    }
-
-    /// Stops the learner (its last checkpoint written) and says what the
-    /// gate did.
-    fn finish(self, traffic: Option<gpodo_node::ros2::GateTraffic>) {
-        use gpodo_node::gate::session::LearnerEnd;
-        let counts = self.session.counts();
-        if let Some(t) = traffic {
-            println!(
-                "gate: {} pairs decided, {} forwarded ({} before the odometry reached them), {} VO poses, {} targets formed",
-                t.decided, t.forwarded, t.decided_before_odometry, t.vo_messages, counts.targets
-            );
-        }
-        match self.session.finish() {
-            LearnerEnd::Worker(Some(summary)) => {
-                println!(
-                    "learner: {} targets learned, {} checkpoints written{}",
-                    summary.learner.targets_learned(),
-                    summary.checkpoints,
-                    self.checkpoint
-                        .as_deref()
-                        .map_or(String::new(), |p| format!(" to {}", p.display()))
-                );
-                if let Some(e) = summary.last_error {
-                    tracing::warn!("the learner's last error: {e}");
-                }
-            }
-            LearnerEnd::Worker(None) => {
-                tracing::error!(
-                    "the learner's thread failed; its last checkpoint is what was saved"
-                );
-            }
-            LearnerEnd::LockStep(_) | LearnerEnd::None => {}
-        }
-    }
-}
-
-/// An image topic silent this long while the other goes on is a fault
-/// (s): six frames of a 2.5 fps camera.
-#[cfg(feature = "ros2")]
-const IMAGE_SILENT_SECS: f64 = 2.4;

@@ -8,5 +8,6 @@
 pub mod gate;
 pub mod import;
 pub mod live;
+pub mod live_gate;
 pub mod simulate;
 pub mod tracker_calibration;
