@@ -88,7 +88,9 @@ fn replay(
     let mut gate = match &options.gate {
         Some(path) => Some(LiveGateRun::<(usize, usize)>::build(
             path,
-            options,
+            &options.rover,
+            &options.model,
+            options.checkpoint.as_deref(),
             model,
             Learner::LockStep,
         )?),
@@ -193,7 +195,14 @@ fn on_ros2(
         gpodo_node::replay::OUTPUT_TOPICS.join(", "),
     );
     let mut gate = match &options.gate {
-        Some(path) => Some(LiveGateRun::build(path, options, model, Learner::Worker)?),
+        Some(path) => Some(LiveGateRun::build(
+            path,
+            &options.rover,
+            &options.model,
+            options.checkpoint.as_deref(),
+            model,
+            Learner::Worker,
+        )?),
         None => None,
     };
     let ros2_gate = gate.as_mut().map(|g| gpodo_node::ros2::Ros2Gate {

@@ -16,7 +16,6 @@ use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning};
 use gpodo_node::learner::LearnerStart;
 use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
 
-use crate::commands::live::LiveOptions;
 use crate::config::gate::GateFile;
 
 /// Where the learner runs.
@@ -43,8 +42,10 @@ pub struct LiveGateRun<T> {
 }
 
 impl<T> LiveGateRun<T> {
-    /// Builds the gate file at `path` for the model and rover of
-    /// `options`, its learner run as `learner` says.
+    /// Builds the gate file at `path` for the model `model` (loaded from
+    /// `model_path`) on the rover described at `rover_path`, its learner
+    /// run as `learner` says and checkpointed to `checkpoint`, else to the
+    /// file's path.
     ///
     /// # Errors
     /// A gate file, rover or model that cannot be read or used, named; a
@@ -52,16 +53,18 @@ impl<T> LiveGateRun<T> {
     /// |residual|.
     pub fn build(
         path: &Path,
-        options: &LiveOptions,
+        rover_path: &Path,
+        model_path: &Path,
+        checkpoint: Option<&Path>,
         model: &gpodo_node::LiveModel,
         learner: Learner,
     ) -> anyhow::Result<Self> {
         let file = crate::plan::gate::load_gate(path)?;
-        let rover = std::fs::read(&options.rover)
-            .with_context(|| format!("{}", options.rover.display()))?;
-        let saved = gpodo_regressors::model_file::ModelFile::load(&options.model)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", options.model.display()))?;
-        let checkpoint = options.checkpoint.clone().or_else(|| {
+        let rover =
+            std::fs::read(rover_path).with_context(|| format!("{}", rover_path.display()))?;
+        let saved = gpodo_regressors::model_file::ModelFile::load(model_path)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", model_path.display()))?;
+        let checkpoint = checkpoint.map(Path::to_path_buf).or_else(|| {
             file.checkpoint
                 .path
                 .as_ref()
@@ -78,7 +81,7 @@ impl<T> LiveGateRun<T> {
         if built.learner.is_some() && model.mode() == gpodo_node::OdometryMode::Authors {
             anyhow::bail!(
                 "{}: the model predicts |residual| (the authors' mode), which an online learner of the residual cannot replace; give a model of the residual",
-                options.model.display()
+                model_path.display()
             );
         }
         let learning = built.learner.map(|l| {
@@ -90,7 +93,7 @@ impl<T> LiveGateRun<T> {
                         .map_or(String::new(), |p| p.display().to_string())
                 ),
                 LearnerStart::SavedModel => {
-                    tracing::info!("the learner goes on from {}", options.model.display());
+                    tracing::info!("the learner goes on from {}", model_path.display());
                 }
                 LearnerStart::Empty => tracing::info!(
                     "the learner starts empty: /odom/gp carries its prior variance until it learns"
