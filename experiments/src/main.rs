@@ -243,6 +243,12 @@ enum Command {
         /// With `--camera`: frames per second.
         #[arg(long, default_value_t = 2.5)]
         camera_fps: f64,
+        /// With `--camera`, MCAP only: a VO trajectory on `/vo/pose`, the
+        /// ground truth at each frame (what `gpodo live --gate --replay`
+        /// answers forwarded pairs with, standing in for the SLAM behind
+        /// the gate).
+        #[arg(long, requires = "camera")]
+        vo_ground_truth: bool,
     },
 }
 
@@ -658,6 +664,7 @@ fn main() -> anyhow::Result<()> {
             camera,
             camera_scale,
             camera_fps,
+            vo_ground_truth,
         } => {
             use gpodo_datasets::bags::write::{WheelRate, WheelUnits};
             let rate = match wheel_rate {
@@ -693,6 +700,7 @@ fn main() -> anyhow::Result<()> {
                 camera: camera.then_some(gpodo_experiments::commands::simulate::CameraOutput {
                     scale: camera_scale,
                     fps: camera_fps,
+                    vo_ground_truth,
                 }),
             };
             simulate(&options, &out)

@@ -39,6 +39,7 @@ fn options(format: SimulateFormat) -> SimulateOptions {
         camera: Some(CameraOutput {
             scale: 0.5,
             fps: 2.5,
+            vo_ground_truth: false,
         }),
     }
 }

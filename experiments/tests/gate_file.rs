@@ -33,7 +33,7 @@ fn the_tutorials_gate_file_loads_with_its_defaults() {
     assert!(matches!(gate.selector, SelectorSpec::MaxGap { .. }));
     assert!(gate.online.is_some());
     assert_eq!(gate.lost_frame_period_secs, Some(0.4));
-    assert_eq!(gate.topics.vo_odometry, "/odom/vo");
+    assert_eq!(gate.topics.vo_odometry, "/vo/pose");
     assert_eq!(gate.topics.gated_prefix, "/gated");
     assert_eq!(gate.lost.status_topic, None);
     assert_eq!(gate.targets.min_interval_secs, 4.0);

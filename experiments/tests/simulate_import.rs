@@ -153,6 +153,7 @@ fn with_camera(format: SimulateFormat) -> SimulateOptions {
         camera: Some(CameraOutput {
             scale: 0.125,
             fps: 2.5,
+            vo_ground_truth: false,
         }),
         ..options(format, true)
     }
@@ -252,6 +253,7 @@ fn a_camera_that_does_not_fit_the_format_is_refused_before_anything_is_written()
                 camera: Some(CameraOutput {
                     scale: 1.5,
                     fps: 2.5,
+                    vo_ground_truth: false,
                 }),
                 ..with_camera(SimulateFormat::Mcap)
             },

@@ -9,7 +9,7 @@ use gpodo_datasets::bags::write::{WheelUnits, write_mcap_with_camera, written_to
 use gpodo_datasets::bags::write_camera::written_camera_topics;
 use gpodo_datasets::bags::write_camera::{intrinsics, projection};
 use gpodo_datasets::log::{RoverLog, write_log_csv};
-use gpodo_testbed::camera::traverse::camera_stream;
+use gpodo_testbed::camera::traverse::{camera_stream, frame_times, pose_at};
 use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_testbed::sim::preset::{Preset, SimulatedTestbed, SimulatorConfig};
 use gpodo_traits::CameraParams;
@@ -36,6 +36,10 @@ pub struct CameraOutput {
     pub scale: f64,
     /// Frames per second.
     pub fps: f64,
+    /// MCAP only: a VO trajectory on `/vo/pose` too, the ground truth at
+    /// each frame (a stand-in for the SLAM a gated replay answers
+    /// forwarded pairs with; `gpodo live --gate --replay`).
+    pub vo_ground_truth: bool,
 }
 
 /// The settings of one `gpodo simulate`.
@@ -181,6 +185,9 @@ fn check_camera(options: &SimulateOptions) -> Result<(), PipelineError> {
         (_, Some(c)) if !(c.fps.is_finite() && c.fps > 0.0 && c.fps <= 30.0) => {
             wrong(format!("camera fps {}: expected a rate in (0, 30] Hz", c.fps))
         }
+        (SimulateFormat::Png, Some(c)) if c.vo_ground_truth => {
+            wrong("a VO trajectory goes into format mcap (`/vo/pose`); a PNG folder has none".into())
+        }
         _ => Ok(()),
     }
 }
@@ -285,7 +292,14 @@ fn write_testbed(
                     (Some(renderer), Some(c)) => Some(camera_stream(renderer, log, c.fps)),
                     _ => None,
                 };
-                let bag = write_mcap_with_camera(log, out, &[], options.units, stream.as_mut())?;
+                let vo: Vec<_> = match options.camera {
+                    Some(c) if c.vo_ground_truth => frame_times(log, c.fps)
+                        .into_iter()
+                        .filter_map(|t| Some((t, pose_at(log, t)?)))
+                        .collect(),
+                    _ => Vec::new(),
+                };
+                let bag = write_mcap_with_camera(log, out, &vo, options.units, stream.as_mut())?;
                 written.push(Written::Bag {
                     path: bag.path,
                     messages: bag.messages,
