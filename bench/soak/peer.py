@@ -147,7 +147,7 @@ def main():
             if isinstance(a, DiagnosticArray):
                 for st in a.status:
                     for kv in st.values:
-                        if kv.key == "latency p99 (ms)":
+                        if kv.key == "latency p99 (ms)" and kv.value:
                             diagnostics_p99.append(float(kv.value))
 
     while True:

@@ -5,6 +5,7 @@
 #
 #   cargo build --release -p gpodo-experiments --features ros2
 #   PYTHON=target/ci-python/bin/python bash bench/soak/run.sh [DURATION]
+#   (RUNS=learning or RUNS=fixed for one of the two)
 #
 # Needs a Python with cyclonedds and mcap-ros2-support (CI's venv has
 # them). Writes bench/soak/out/{learning,fixed}.json and prints the
@@ -22,7 +23,7 @@ trap 'rm -rf "$work"' EXIT
 # A model of ExoTeR's residual, and a recording whose joint names and IMU
 # the peer takes.
 $GPODO --quiet simulate --preset exoter-prl --seed 3 --format mcap --training-runs 2 --training-run-secs 120 --test-max-secs 60 --out "$work/robot" >/dev/null
-sed "s|tutorial/robot|$work/robot|g" docs/tutorials/on-the-robot.yaml > "$work/experiment.yaml"
+sed -e "s|../../tutorial/robot|$work/robot|g" -e "s|../../kinematics|$PWD/kinematics|g" docs/tutorials/on-the-robot.yaml > "$work/experiment.yaml"
 $GPODO --quiet fit "$work/experiment.yaml" --regressor "exact GP: rbf" --save "$work/model.gpodo" >/dev/null
 
 cat > "$work/cyclone.xml" <<'XML'
@@ -54,16 +55,24 @@ run() {
     --topics "$work/topics.yaml" --gate "$work/gate-$name.yaml" --checkpoint "$work/$name-learner.json" \
     --domain-id "$domain" --dds-interface 127.0.0.1 --idle-exit-secs 10 > "$OUT/$name.log" 2>&1 &
   local node=$!
-  sleep 30
-  local rss_start; rss_start=$(ps -o rss= -p "$node")
+  # The node's resident memory every 30 s while the peer runs.
+  local rss=()
+  while kill -0 "$peer" 2>/dev/null; do
+    sleep 30
+    rss+=("$(ps -o rss= -p "$node" | tr -d ' ' || true)")
+  done
   wait "$peer"
-  local rss_end; rss_end=$(ps -o rss= -p "$node")
   wait "$node"
-  "$PYTHON" - "$OUT/$name.json" "$rss_start" "$rss_end" <<'PY'
+  "$PYTHON" - "$OUT/$name.json" "${rss[@]}" <<'PY'
 import json, sys
-path, start, end = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+path, rss = sys.argv[1], [int(v) for v in sys.argv[2:] if v]
 r = json.load(open(path))
-r["rss_kib"] = {"at_30_s": start, "at_end": end, "growth_percent": 100.0 * (end - start) / start}
+# From 120 s on, after the reliable writers' histories (ten pairs of
+# images each) have filled.
+at = {"30_s": rss[0], "120_s": rss[3], "end": rss[-1]}
+r["rss_kib"] = {"every_30_s": rss, **{"at_" + k: v for k, v in at.items()},
+                "growth_percent_from_30_s": 100.0 * (at["end"] - at["30_s"]) / at["30_s"],
+                "growth_percent_from_120_s": 100.0 * (at["end"] - at["120_s"]) / at["120_s"]}
 p99 = sorted(r.pop("node_latency_p99_ms"))
 r["node_latency_p99_ms"] = {"median_over_reports": p99[len(p99) // 2], "max": p99[-1], "reports": len(p99)}
 json.dump(r, open(path, "w"), indent=1)
@@ -71,5 +80,11 @@ print(json.dumps(r, indent=1))
 PY
 }
 
-run learning yes
-run fixed no
+for which in "${RUNS:-learning fixed}"; do
+  for name in $which; do
+    case $name in
+      learning) run learning yes ;;
+      fixed) run fixed no ;;
+    esac
+  done
+done

@@ -9,7 +9,8 @@
 //! * Republishes each chosen pair's four messages unchanged, byte for
 //!   byte, reliable (ORB-SLAM3's ROS 2 wrappers and OpenVINS subscribe
 //!   reliable, and a reliable reader does not take a best-effort writer).
-//! * Publishes each decision as a `diagnostic_msgs/DiagnosticStatus`.
+//! * Publishes each decision as a `diagnostic_msgs/DiagnosticStatus`,
+//!   before the pair it forwards.
 //!
 //! A pair is decided once the odometry has reached its stamp (a joint
 //! state stamped at or after it has been processed), so that the gate
@@ -31,6 +32,9 @@ use crate::gate::pairing::{Part, PartHeader, StereoPair};
 use crate::gate::report::decision_status;
 use crate::gate::session::GateSession;
 use crate::gate::topics::GateTopics;
+
+/// The bytes of an image or camera info read for its header and size.
+const HEADER_BYTES: usize = 1024;
 
 /// The gate given to [`super::run`].
 pub struct Ros2Gate<'a> {
@@ -149,7 +153,10 @@ impl GateIo {
             {
                 took = true;
                 let message = s.value().clone();
-                let Ok((header, width, height)) = decode_image_header("cdr", &message.encoded())
+                // The header and size, read from the message's head: a
+                // frame id longer than that is undecodable.
+                let Ok((header, width, height)) =
+                    decode_image_header("cdr", &message.encoded_head(HEADER_BYTES))
                 else {
                     session.undecodable();
                     continue;
@@ -217,6 +224,15 @@ impl GateIo {
             };
             let (decision, forwarded) = session.decide(pair, now_secs);
             self.traffic.decided += 1;
+            // The decision goes first, so that a consumer of both has it
+            // before the pair.
+            let status = decision_status(&decision);
+            self.decisions
+                .write(
+                    RawCdr::from_encoded(diagnostic_status_message(&status)),
+                    None,
+                )
+                .map_err(|e| dds_error("decision", e))?;
             if let Some(pair) = forwarded {
                 self.traffic.forwarded += 1;
                 let parts = [pair.left, pair.right, pair.left_info, pair.right_info];
@@ -225,13 +241,6 @@ impl GateIo {
                         .map_err(|e| dds_error("gated pair", e))?;
                 }
             }
-            let status = decision_status(&decision);
-            self.decisions
-                .write(
-                    RawCdr::from_encoded(diagnostic_status_message(&status)),
-                    None,
-                )
-                .map_err(|e| dds_error("decision", e))?;
         }
         Ok(())
     }

@@ -13,6 +13,9 @@
 //!   `nav_msgs/Odometry` on `/odom/gp` (the published odometry) and
 //!   `/odom/wheel` (the motion model's alone), and
 //!   `diagnostic_msgs/DiagnosticArray` on `/diagnostics` once a second.
+//! * With a gate ([`Ros2Gate`]), the stereo camera's four topics in, the
+//!   chosen pairs and every decision out, and the VO's odometry in
+//!   (`gate_io.rs`).
 //!
 //! Discovery: RustDDS announces itself to the well-known unicast ports of
 //! the first participants on 127.0.0.1 as well as by multicast, so that
@@ -136,6 +139,16 @@ impl RawCdr {
             representation: RepresentationIdentifier::CDR_LE,
             body: bytes,
         }
+    }
+
+    /// The first `max` bytes of [`RawCdr::encoded`]: what a decoder of
+    /// the header alone reads, without copying an image's pixels.
+    fn encoded_head(&self, max: usize) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(max.min(self.body.len()) + 4);
+        bytes.extend(self.representation.to_bytes());
+        bytes.extend([0, 0]);
+        bytes.extend(&self.body[..max.min(self.body.len())]);
+        bytes
     }
 
     /// The bytes with their encapsulation header, as a bag stores them.
