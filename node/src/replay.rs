@@ -3,7 +3,9 @@
 //! message is held, and the outputs go to an MCAP (`/odom/gp`, the
 //! published odometry; `/odom/wheel`, the motion model's alone) and, when
 //! asked, the input rows to a CSV in the columns `gpodo predict` reads
-//! (after a `time_secs` column).
+//! (after a `time_secs` column). With the frame gate ([`replay_gated`]),
+//! the recording's stereo pairs are decided as on the robot, and those
+//! forwarded go to a VO in the loop whose poses the learner learns from.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -324,8 +326,8 @@ pub fn replay_gated(
 }
 
 /// One camera message of a gated replay, at `ns` on the recording's
-/// clock: paired, and when it completes a pair, decided then; a forwarded pair goes to the VO, whose
-/// answer the session takes at once.
+/// clock: paired, and when it completes a pair, decided then; a forwarded
+/// pair goes to the VO, whose answer the session takes at once.
 fn gated_part(
     g: &mut GatedReplay<'_, '_>,
     messages: &[Vec<gpodo_datasets::bags::topic::Stamped>],
@@ -348,6 +350,7 @@ fn gated_part(
         },
         _ => return None,
     };
+    g.session.watch(now_secs);
     let pair = g.session.part(part, header, at, now_secs)?;
     let (decision, forwarded) = g.session.decide(pair, now_secs);
     if let Some(pair) = forwarded {
