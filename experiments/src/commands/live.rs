@@ -1,5 +1,7 @@
 //! `gpodo live`: a saved model run as on the robot, from a recording
-//! (`--replay`) or on ROS 2 (a build with the `ros2` feature).
+//! (`--replay`) or on ROS 2 (a build with the `ros2` feature); with
+//! `--gate`, the frame gate and its online learner too
+//! ([`crate::commands::live_gate`]).
 
 use std::path::{Path, PathBuf};
 
@@ -32,7 +34,8 @@ pub struct LiveOptions {
     pub idle_exit_secs: Option<f64>,
     /// On ROS 2, the network interfaces DDS uses (empty: all).
     pub dds_interfaces: Vec<std::net::IpAddr>,
-    /// On ROS 2, the gate file: the frame gate and its online learner.
+    /// The gate file: the frame gate and its online learner, on ROS 2 or
+    /// in a replay.
     pub gate: Option<PathBuf>,
     /// The learner's checkpoint (overrides the gate file's
     /// `checkpoint.path`).
