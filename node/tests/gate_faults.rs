@@ -7,7 +7,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use gpodo_datasets::bags::messages::{Header, Odometry, Pose, Twist};
+mod common;
+
+use gpodo_datasets::bags::messages::Odometry;
+
+use common::vo_odometry;
 use gpodo_frontends::SelectorSpec;
 use gpodo_frontends::gate::GateState;
 use gpodo_frontends::odometry::OdometryNoise;
@@ -82,27 +86,7 @@ fn output(t: f64) -> LiveOutput {
 }
 
 fn odometry(stamp_ns: i64, x: f64) -> Odometry {
-    let mut pose_covariance = vec![0.0; 36];
-    for i in 0..3 {
-        pose_covariance[i * 7] = 1e-6;
-    }
-    Odometry {
-        header: Header {
-            stamp_ns,
-            frame_id: "vo".into(),
-        },
-        child_frame_id: "base_link".into(),
-        pose: Pose {
-            position: [x, 0.0, 0.0],
-            orientation: [0.0, 0.0, 0.0, 1.0],
-        },
-        pose_covariance,
-        twist: Twist {
-            linear: [0.0; 3],
-            angular: [0.0; 3],
-        },
-        twist_covariance: vec![0.0; 36],
-    }
+    vo_odometry(stamp_ns, [x, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], 1e-6)
 }
 
 fn value(status: &gpodo_datasets::bags::write::DiagnosticStatus, key: &str) -> u64 {

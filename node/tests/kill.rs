@@ -11,18 +11,17 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use common::{fresh_learner, learner_identity, learner_target as target};
 use gpodo_frontends::online::OnlineMode;
-use gpodo_frontends::vo_target::VoTarget;
-use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
+use gpodo_node::learner::{LearnerIdentity, LiveLearner};
 use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
-use gpodo_regressors::RegressorSpec;
-use gpodo_regressors::online_model::OnlineModel;
-use nalgebra::Vector3;
 
 /// Seconds between checkpoints.
 const EVERY_SECS: f64 = 0.5;
@@ -30,36 +29,11 @@ const EVERY_SECS: f64 = 0.5;
 const RATE_HZ: f64 = 100.0;
 
 fn identity() -> LearnerIdentity {
-    LearnerIdentity {
-        label: "ILGR online".into(),
-        input_names: vec!["cmd_v".into(), "pitch".into()],
-        input_standardizer: None,
-        rows: None,
-        rover_sha256: "0".repeat(64),
-    }
+    learner_identity("0".repeat(64))
 }
 
 fn fresh() -> LiveLearner {
-    let spec: RegressorSpec = serde_json::from_str(r#"{"kind": "ilgr"}"#).unwrap();
-    LiveLearner::new(
-        OnlineModel::from_spec(&spec).unwrap(),
-        OnlineMode::Update,
-        1e-4,
-        identity(),
-        LearnerStart::Empty,
-    )
-    .unwrap()
-}
-
-/// Target `i`: a residual smooth in two inputs.
-fn target(i: usize) -> VoTarget {
-    let x = [(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()];
-    VoTarget {
-        inputs: x.to_vec(),
-        residual: Vector3::new(0.01 * x[0], -0.004 * x[1], 0.001),
-        time_secs: 4.0 * (i + 1) as f64,
-        duration_secs: 4.0,
-    }
+    fresh_learner(identity())
 }
 
 /// The process the test kills: hands the worker a target every

@@ -9,40 +9,18 @@ use gpodo_frontends::vo_target::VoTarget;
 use gpodo_node::checkpoint::{CheckpointError, sha256_hex};
 use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
 use gpodo_regressors::RegressorSpec;
-use gpodo_regressors::online_model::OnlineModel;
 use nalgebra::Vector3;
 
+mod common;
+
+use common::{fresh_learner, learner_identity, learner_target as target};
+
 fn identity(rover: &[u8]) -> LearnerIdentity {
-    LearnerIdentity {
-        label: "ILGR online".into(),
-        input_names: vec!["cmd_v".into(), "pitch".into()],
-        input_standardizer: None,
-        rows: None,
-        rover_sha256: sha256_hex(rover),
-    }
+    learner_identity(sha256_hex(rover))
 }
 
 fn fresh() -> LiveLearner {
-    let spec: RegressorSpec = serde_json::from_str(r#"{"kind": "ilgr"}"#).unwrap();
-    LiveLearner::new(
-        OnlineModel::from_spec(&spec).unwrap(),
-        OnlineMode::Update,
-        1e-4,
-        identity(b"rover"),
-        LearnerStart::Empty,
-    )
-    .unwrap()
-}
-
-/// Target `i`: a residual smooth in two inputs, one every 4 s.
-fn target(i: usize) -> VoTarget {
-    let x = [(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()];
-    VoTarget {
-        inputs: x.to_vec(),
-        residual: Vector3::new(0.01 * x[0], -0.004 * x[1], 0.001),
-        time_secs: 4.0 * (i + 1) as f64,
-        duration_secs: 4.0,
-    }
+    fresh_learner(identity(b"rover"))
 }
 
 #[test]

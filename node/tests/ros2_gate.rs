@@ -30,7 +30,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use gpodo_datasets::bags::messages::{Header, Odometry, Pose, RosMessage, Twist};
+use gpodo_datasets::bags::messages::{Odometry, RosMessage};
 use gpodo_datasets::bags::write::{
     EPOCH_NS, WheelUnits, write_mcap_with_camera, written_topic_map,
 };
@@ -57,7 +57,7 @@ use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_testkit::python_with;
 use gpodo_traits::CameraParams;
 
-use common::{exoter_yaml, fitted};
+use common::{exoter_yaml, fitted, vo_odometry};
 
 /// Cyclone DDS on loopback alone, finding peers by unicast.
 const CYCLONE_LOOPBACK: &str = r#"<CycloneDDS><Domain id="any"><General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>"#;
@@ -150,27 +150,7 @@ fn vo_pose(log: &gpodo_datasets::log::RoverLog, stamp_ns: i64) -> [f64; 7] {
 }
 
 fn odometry(stamp_ns: i64, pose: [f64; 7]) -> Odometry {
-    let mut pose_covariance = vec![0.0; 36];
-    for i in 0..3 {
-        pose_covariance[i * 7] = 1e-4;
-    }
-    Odometry {
-        header: Header {
-            stamp_ns,
-            frame_id: "vo".into(),
-        },
-        child_frame_id: "base_link".into(),
-        pose: Pose {
-            position: [pose[0], pose[1], pose[2]],
-            orientation: [pose[3], pose[4], pose[5], pose[6]],
-        },
-        pose_covariance,
-        twist: Twist {
-            linear: [0.0; 3],
-            angular: [0.0; 3],
-        },
-        twist_covariance: vec![0.0; 36],
-    }
+    vo_odometry(stamp_ns, pose, 1e-4)
 }
 
 fn learner_of<T>(session: GateSession<T>) -> LiveLearner {

@@ -97,3 +97,72 @@ pub fn bag_messages(
     all.sort_by_key(|(ns, t, _)| (*ns, *t));
     (map, all.into_iter().map(|(ns, _, m)| (ns, m)).collect())
 }
+
+/// A VO's `nav_msgs/Odometry` at `stamp_ns`: the pose `[x, y, z, qx, qy,
+/// qz, qw]` with `position_variance` on each axis.
+pub fn vo_odometry(
+    stamp_ns: i64,
+    pose: [f64; 7],
+    position_variance: f64,
+) -> gpodo_datasets::bags::messages::Odometry {
+    use gpodo_datasets::bags::messages::{Header, Odometry, Pose, Twist};
+    let mut pose_covariance = vec![0.0; 36];
+    for i in 0..3 {
+        pose_covariance[i * 7] = position_variance;
+    }
+    Odometry {
+        header: Header {
+            stamp_ns,
+            frame_id: "vo".into(),
+        },
+        child_frame_id: "base_link".into(),
+        pose: Pose {
+            position: [pose[0], pose[1], pose[2]],
+            orientation: [pose[3], pose[4], pose[5], pose[6]],
+        },
+        pose_covariance,
+        twist: Twist {
+            linear: [0.0; 3],
+            angular: [0.0; 3],
+        },
+        twist_covariance: vec![0.0; 36],
+    }
+}
+
+/// The identity of an ILGR learner on two inputs, for the rover whose
+/// description hashes to `rover_sha256`.
+pub fn learner_identity(rover_sha256: String) -> gpodo_node::learner::LearnerIdentity {
+    gpodo_node::learner::LearnerIdentity {
+        label: "ILGR online".into(),
+        input_names: vec!["cmd_v".into(), "pitch".into()],
+        input_standardizer: None,
+        rows: None,
+        rover_sha256,
+    }
+}
+
+/// A fresh ILGR learner with `identity`, its prior variance 1e-4.
+pub fn fresh_learner(
+    identity: gpodo_node::learner::LearnerIdentity,
+) -> gpodo_node::learner::LiveLearner {
+    let spec: RegressorSpec = serde_json::from_str(r#"{"kind": "ilgr"}"#).unwrap();
+    gpodo_node::learner::LiveLearner::new(
+        gpodo_regressors::online_model::OnlineModel::from_spec(&spec).unwrap(),
+        gpodo_frontends::online::OnlineMode::Update,
+        1e-4,
+        identity,
+        gpodo_node::learner::LearnerStart::Empty,
+    )
+    .unwrap()
+}
+
+/// Target `i`: a residual smooth in two inputs, one every 4 s.
+pub fn learner_target(i: usize) -> gpodo_frontends::vo_target::VoTarget {
+    let x = [(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()];
+    gpodo_frontends::vo_target::VoTarget {
+        inputs: x.to_vec(),
+        residual: nalgebra::Vector3::new(0.01 * x[0], -0.004 * x[1], 0.001),
+        time_secs: 4.0 * (i + 1) as f64,
+        duration_secs: 4.0,
+    }
+}
