@@ -9,39 +9,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-use gpodo_datasets::bags::messages::{Odometry, RosMessage};
-use gpodo_datasets::bags::topic::read_topic;
 use gpodo_datasets::bags::write::WheelUnits;
 use gpodo_experiments::commands::simulate::{SimulateFormat, SimulateOptions, simulate_to};
 use gpodo_testbed::sim::preset::Preset;
 
-use common::{GPODO, assert_succeeded};
-
-fn exoter() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
-}
-
-fn gpodo(args: &[&std::ffi::OsStr]) -> std::process::Output {
-    Command::new(GPODO)
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn odometry(bag: &Path, topic: &str) -> Vec<Odometry> {
-    let messages = read_topic(bag, topic, "odometry", &["nav_msgs/Odometry"]).unwrap();
-    messages
-        .into_iter()
-        .map(|s| match s.message {
-            RosMessage::Odometry(o) => o,
-            other => panic!("not odometry: {other:?}"),
-        })
-        .collect()
-}
+use common::{GPODO, assert_succeeded, bag_odometry, exoter, gpodo_quiet};
 
 #[test]
 fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_rows() {
@@ -77,7 +52,7 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
     )
     .unwrap();
     let model = dir.join("m.gpodo");
-    let out = gpodo(&[
+    let out = gpodo_quiet(&[
         "fit".as_ref(),
         experiment.as_os_str(),
         "--regressor".as_ref(),
@@ -92,7 +67,7 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
         dir.join("p.csv"),
     );
     let live = |model: &Path| {
-        gpodo(&[
+        gpodo_quiet(&[
             "live".as_ref(),
             "--model".as_ref(),
             model.as_os_str(),
@@ -112,7 +87,7 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
     assert_succeeded(&out, "gpodo live: ");
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(said.contains("750 joint states"), "{said}");
-    let out = gpodo(&[
+    let out = gpodo_quiet(&[
         "predict".as_ref(),
         "--model".as_ref(),
         model.as_os_str(),
@@ -123,8 +98,8 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
     ]);
     assert_succeeded(&out, "gpodo predict: ");
 
-    let gp = odometry(&mcap, "/odom/gp");
-    let wheel = odometry(&mcap, "/odom/wheel");
+    let gp = bag_odometry(&mcap, "/odom/gp");
+    let wheel = bag_odometry(&mcap, "/odom/wheel");
     assert_eq!(gp.len(), 750);
     assert_eq!(wheel.len(), gp.len());
     let text = std::fs::read_to_string(&predictions).unwrap();
@@ -206,7 +181,7 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
             said.contains("stopped before the recording's end"),
             "{said}"
         );
-        let kept = odometry(&stopped, "/odom/gp");
+        let kept = bag_odometry(&stopped, "/odom/gp");
         assert!(
             !kept.is_empty() && kept.len() < gp.len() / 2,
             "{} outputs kept of {}",
@@ -219,7 +194,7 @@ fn the_replayed_odometry_is_the_wheels_plus_what_gpodo_predict_predicts_on_its_r
     // Without `--replay`, a build without the `ros2` feature says how to
     // get one.
     if !cfg!(feature = "ros2") {
-        let out = gpodo(&[
+        let out = gpodo_quiet(&[
             "live".as_ref(),
             "--model".as_ref(),
             model.as_os_str(),

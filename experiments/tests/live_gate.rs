@@ -15,11 +15,8 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-use gpodo_datasets::bags::messages::{Odometry, RosMessage};
-use gpodo_datasets::bags::topic::read_topic;
 use gpodo_datasets::bags::write::{
     WheelUnits, write_mcap, write_mcap_with_camera, written_topic_map_in,
 };
@@ -28,30 +25,7 @@ use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 use gpodo_traits::CameraParams;
 
-use common::{GPODO, assert_succeeded};
-
-fn exoter() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
-}
-
-fn gpodo(args: &[&std::ffi::OsStr]) -> std::process::Output {
-    Command::new(GPODO)
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn odometry(bag: &Path, topic: &str) -> Vec<Odometry> {
-    read_topic(bag, topic, "odometry", &["nav_msgs/Odometry"])
-        .unwrap()
-        .into_iter()
-        .map(|s| match s.message {
-            RosMessage::Odometry(o) => o,
-            other => panic!("not odometry: {other:?}"),
-        })
-        .collect()
-}
+use common::{assert_succeeded, bag_odometry, exoter, gpodo_quiet};
 
 /// The VO gave nothing from here to there (s, the drive's clock).
 const GAP: std::ops::Range<f64> = 14.0..18.0;
@@ -138,7 +112,7 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
     )
     .unwrap();
     let model = dir.join("m.gpodo");
-    let out = gpodo(&[
+    let out = gpodo_quiet(&[
         "fit".as_ref(),
         experiment.as_os_str(),
         "--regressor".as_ref(),
@@ -151,7 +125,7 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
     std::fs::write(&gate, GATE).unwrap();
 
     let replay = |out: &Path, decisions: &Path| {
-        gpodo(&[
+        gpodo_quiet(&[
             "live".as_ref(),
             "--model".as_ref(),
             model.as_os_str(),
@@ -201,8 +175,8 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
 
     // The prior until the learner has learned, its predictions after.
     let (gp, wheel) = (
-        odometry(&first, "/odom/gp"),
-        odometry(&first, "/odom/wheel"),
+        bag_odometry(&first, "/odom/gp"),
+        bag_odometry(&first, "/odom/wheel"),
     );
     assert_eq!(gp[1].twist.linear, wheel[1].twist.linear);
     assert_eq!(gp[1].twist_covariance[0], 1e-4);
@@ -228,6 +202,6 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
     let again = String::from_utf8_lossy(&out.stdout).to_string();
     assert!(learned(&again) > n, "{again}");
     // Resumed, its first outputs carry the learned model's variance.
-    let resumed = odometry(&dir.join("second.mcap"), "/odom/gp");
+    let resumed = bag_odometry(&dir.join("second.mcap"), "/odom/gp");
     assert!(resumed[1].twist_covariance[0] < 1e-4);
 }

@@ -38,3 +38,30 @@ pub fn assert_succeeded(out: &Output, what: &str) {
 pub fn python() -> Option<String> {
     gpodo_testkit::python_with(&["numpy"], "NumPy")
 }
+
+/// ExoTeR's rover description.
+pub fn exoter() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../kinematics/rovers/exoter.yaml")
+}
+
+/// `gpodo --quiet ARGS…`.
+pub fn gpodo_quiet(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(GPODO)
+        .arg("--quiet")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The `nav_msgs/Odometry` messages on `topic` of the bag at `bag`.
+pub fn bag_odometry(bag: &Path, topic: &str) -> Vec<gpodo_datasets::bags::messages::Odometry> {
+    use gpodo_datasets::bags::messages::RosMessage;
+    gpodo_datasets::bags::topic::read_topic(bag, topic, "odometry", &["nav_msgs/Odometry"])
+        .unwrap()
+        .into_iter()
+        .map(|s| match s.message {
+            RosMessage::Odometry(o) => o,
+            other => panic!("not odometry: {other:?}"),
+        })
+        .collect()
+}
