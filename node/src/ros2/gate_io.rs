@@ -152,7 +152,7 @@ impl GateIo {
                 .map_err(|e| dds_error("camera", e))?
             {
                 took = true;
-                let message = s.value().clone();
+                let message = s.into_value();
                 // The header and size, read from the message's head: a
                 // frame id longer than that is undecodable.
                 let Ok((header, width, height)) =
