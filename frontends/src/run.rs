@@ -37,7 +37,10 @@ use crate::vo::{
 };
 use crate::vo_target::TargetInterval;
 
+mod stepper;
 mod trace;
+
+pub use stepper::FrontEnd;
 
 /// One processed frame, as the learning curve records it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -475,7 +478,11 @@ impl<'a> Session<'a> {
     }
 
     /// Processes camera frame `frame` with the selector's decision.
-    fn process(&mut self, frame: FrameRef, keyframe_scale: f64) -> Result<(), FrontendError> {
+    fn process(
+        &mut self,
+        frame: FrameRef,
+        keyframe_scale: f64,
+    ) -> Result<ProcessedFrame, FrontendError> {
         let gap = frame.time_secs - self.gate.last_processed_secs().unwrap_or(frame.time_secs);
         let interval = self.gate.processed(frame.time_secs);
         let previous = self.last_node;
@@ -578,7 +585,7 @@ impl<'a> Session<'a> {
             self.make_keyframe(node);
             self.close_loop(node, frame.time_secs);
         }
-        self.run.processed.push(ProcessedFrame {
+        let processed = ProcessedFrame {
             frame: frame.index,
             time_secs: frame.time_secs,
             distance_m: self
@@ -587,8 +594,9 @@ impl<'a> Session<'a> {
             keyframe: became_keyframe,
             tracked,
             vo_pose: self.nodes[node].map_pose.filter(|_| tracked),
-        });
-        Ok(())
+        };
+        self.run.processed.push(processed);
+        Ok(processed)
     }
 
     /// Tracking `request` failed: the tracker is lost from here.
@@ -702,18 +710,16 @@ pub fn run_frontend(
     source: &mut dyn ResidualSource,
     vo: &mut dyn VisualOdometry,
 ) -> Result<FrontendRun, FrontendError> {
-    params.validate()?;
     selector.reset();
-    let mut session = Session::new(traverse, params, source, vo);
+    let mut front_end = FrontEnd::new(traverse, params, source, vo)?;
     for (index, &time_secs) in traverse.camera_times_secs().iter().enumerate() {
-        session.advance_to(time_secs)?;
-        let ctx = session.context(time_secs);
+        front_end.advance_to(time_secs)?;
         if let FrameDecision::Process {
             keyframe_threshold_scale,
-        } = selector.decide(&ctx)
+        } = selector.decide(&front_end.context(time_secs))
         {
-            session.process(FrameRef { index, time_secs }, keyframe_threshold_scale)?;
+            front_end.process(FrameRef { index, time_secs }, keyframe_threshold_scale)?;
         }
     }
-    session.finish()
+    front_end.finish()
 }

@@ -114,6 +114,30 @@ impl TargetInterval {
         end_pose: Option<&Isometry3<f64>>,
         limits: &OnlineTargetParams,
     ) -> Result<VoTarget, NoTarget> {
+        let mut target = self.close_without_inputs(time_secs, end_pose, limits)?;
+        if self.inputs_secs <= 0.0 {
+            return Err(NoTarget::NoInputs);
+        }
+        target.inputs = self
+            .inputs_sum
+            .iter()
+            .map(|v| v / self.inputs_secs)
+            .collect();
+        Ok(target)
+    }
+
+    /// [`Self::close`] for a caller that attributes the regressor inputs
+    /// itself, once it knows them: the target's inputs are left empty, and
+    /// an interval driven without inputs is not refused for it.
+    ///
+    /// # Errors
+    /// As [`Self::close`], but never [`NoTarget::NoInputs`].
+    pub fn close_without_inputs(
+        &self,
+        time_secs: f64,
+        end_pose: Option<&Isometry3<f64>>,
+        limits: &OnlineTargetParams,
+    ) -> Result<VoTarget, NoTarget> {
         let duration = time_secs - self.start_secs;
         if !self.is_ready(time_secs, limits) {
             return Err(NoTarget::TooShort);
@@ -124,16 +148,9 @@ impl TargetInterval {
         if duration > limits.max_interval_secs {
             return Err(NoTarget::TooLong);
         }
-        if self.inputs_secs <= 0.0 {
-            return Err(NoTarget::NoInputs);
-        }
         let visual = a.inverse() * b;
         Ok(VoTarget {
-            inputs: self
-                .inputs_sum
-                .iter()
-                .map(|v| v / self.inputs_secs)
-                .collect(),
+            inputs: Vec::new(),
             residual: (visual.translation.vector - self.raw_relative.translation.vector) / duration,
             time_secs,
             duration_secs: duration,

@@ -72,6 +72,8 @@ pub struct LiveOutput {
     pub row: Option<Vec<f64>>,
     /// Seconds of steps the row averages.
     pub covered_secs: f64,
+    /// The sample's own inputs, in [`LiveModel::columns`]' order.
+    pub inputs: Vec<f64>,
     /// The motion model's twist.
     pub uncorrected: BodyTwist,
     /// The twist published.
@@ -276,6 +278,11 @@ impl LiveModel {
         &self.columns
     }
 
+    /// The window the rows average (s; none: one row per sample).
+    pub fn window_secs(&self) -> Option<f64> {
+        self.rows.window_secs()
+    }
+
     /// Gpodo's mode or the authors'.
     pub fn mode(&self) -> OdometryMode {
         self.mode
@@ -384,7 +391,7 @@ impl LiveModel {
                 ),
             },
         };
-        self.rows.commit(time_secs, inputs);
+        self.rows.commit(time_secs, inputs.clone());
         if let (Some(dt), Some((_, previous, wheels, previous_variance))) = (dt, self.last) {
             self.pose_covariance = propagate(
                 &self.pose_covariance,
@@ -418,6 +425,7 @@ impl LiveModel {
             time_secs,
             covered_secs: row.as_ref().map_or(0.0, |r| r.covered_secs),
             row: row.map(|r| r.inputs),
+            inputs,
             uncorrected,
             twist,
             variance,

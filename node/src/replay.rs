@@ -138,9 +138,9 @@ pub fn replay(
 }
 
 /// [`replay`] with the frame gate in front of a VO in the loop, when
-/// `gate` is given: each stereo pair is decided once the odometry has
-/// reached its stamp (a joint state stamped as it is sorts before it),
-/// on the recording's clock; a forwarded pair goes to the VO, whose
+/// `gate` is given: each stereo pair is decided once a joint state
+/// stamped at or after it has been run (as on DDS), on the odometry
+/// driven up to its stamp; a forwarded pair goes to the VO, whose
 /// odometry is learned from before the next message; with a learner, its
 /// residual is the one published.
 ///
@@ -245,6 +245,10 @@ pub fn replay_gated(
     };
     let mut latencies = Vec::new();
     let mut feed = LiveFeed::new(map, rover, model)?;
+    // Pairs waiting for a joint state stamped at or after them, with when
+    // they were completed (the recording's clock, s).
+    let mut waiting: std::collections::VecDeque<(StereoPair<(usize, usize)>, f64)> =
+        std::collections::VecDeque::new();
     let started = std::time::Instant::now();
     let first_ns = order.first().map_or(0, |o| o.0);
     // The longest sleep between two looks at `stop` at recorded speed.
@@ -268,8 +272,7 @@ pub fn replay_gated(
         if topic >= first_camera {
             if let Some(g) = gate.as_mut() {
                 let part = Part::ALL[topic - first_camera];
-                let decision = gated_part(g, &messages, part, (topic, k), ns);
-                summary.decisions.extend(decision);
+                waiting.extend(gated_part(g, &messages, part, (topic, k), ns));
             }
             continue;
         }
@@ -285,10 +288,21 @@ pub fn replay_gated(
                         continue;
                     }
                 };
-                if let Some(g) = gate.as_mut()
-                    && let Err(e) = g.session.output(&fed.output)
-                {
-                    summary.skipped.push(format!("the gate: {e}"));
+                if let Some(g) = gate.as_mut() {
+                    if let Err(e) = g.session.output(&fed.output, fed.stamp_ns) {
+                        summary.skipped.push(format!("the gate: {e}"));
+                    }
+                    // The pairs the odometry has now reached.
+                    while waiting
+                        .front()
+                        .is_some_and(|p| p.0.stamp_ns <= fed.stamp_ns)
+                    {
+                        if let Some((pair, now_secs)) = waiting.pop_front() {
+                            summary
+                                .decisions
+                                .push(decide_pair(g, &messages, pair, now_secs));
+                        }
+                    }
                 }
                 let output = &fed.output;
                 let stamp = u64::try_from(fed.stamp_ns).unwrap_or(0);
@@ -313,6 +327,14 @@ pub fn replay_gated(
             _ => {}
         }
     }
+    // Pairs after the last joint state, decided on the odometry there is.
+    if let Some(g) = gate.as_mut() {
+        for (pair, now_secs) in waiting {
+            summary
+                .decisions
+                .push(decide_pair(g, &messages, pair, now_secs));
+        }
+    }
     summary.latency_secs = percentile(&latencies, 50.0).zip(percentile(&latencies, 99.0));
     summary.processing_secs = latencies.iter().sum();
     mcap.finish().map_err(|e| io_error(out, e))?;
@@ -326,15 +348,14 @@ pub fn replay_gated(
 }
 
 /// One camera message of a gated replay, at `ns` on the recording's
-/// clock: paired, and when it completes a pair, decided then; a forwarded
-/// pair goes to the VO, whose answer the session takes at once.
+/// clock: paired; the pair it completes, with the time it was completed.
 fn gated_part(
     g: &mut GatedReplay<'_, '_>,
     messages: &[Vec<gpodo_datasets::bags::topic::Stamped>],
     part: Part,
     at: (usize, usize),
     ns: i64,
-) -> Option<GateDecision> {
+) -> Option<(StereoPair<(usize, usize)>, f64)> {
     let now_secs = ns as f64 * 1e-9;
     // Pairs are matched by header stamps, as on DDS, whatever the clock.
     let header = match &messages[at.0][at.1].message {
@@ -352,6 +373,17 @@ fn gated_part(
     };
     g.session.watch(now_secs);
     let pair = g.session.part(part, header, at, now_secs)?;
+    Some((pair, now_secs))
+}
+
+/// Decides `pair` (completed at `now_secs`); a forwarded pair goes to the
+/// VO, whose answer the session takes at once.
+fn decide_pair(
+    g: &mut GatedReplay<'_, '_>,
+    messages: &[Vec<gpodo_datasets::bags::topic::Stamped>],
+    pair: StereoPair<(usize, usize)>,
+    now_secs: f64,
+) -> GateDecision {
     let (decision, forwarded) = g.session.decide(pair, now_secs);
     if let Some(pair) = forwarded {
         let message = |(topic, k): (usize, usize)| &messages[topic][k].message;
@@ -366,7 +398,7 @@ fn gated_part(
             g.session.vo_odometry(&odometry);
         }
     }
-    Some(decision)
+    decision
 }
 
 /// The CDR of the two odometry messages of one output, stamped

@@ -43,6 +43,11 @@ impl LiveRows {
         }
     }
 
+    /// The window the rows average (s; none: one row per sample).
+    pub fn window_secs(&self) -> Option<f64> {
+        self.window_secs
+    }
+
     /// Adds the sample at `time_secs` with its `inputs`, and returns the
     /// row in force from then on; `None` while no step has finished (the
     /// first sample of a windowed stream).

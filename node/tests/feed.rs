@@ -33,6 +33,7 @@ fn fed(imu_age_secs: Option<f64>, out_of_range: &[&str]) -> Fed {
             time_secs: 0.0,
             row: None,
             covered_secs: 0.0,
+            inputs: Vec::new(),
             uncorrected: BodyTwist::default(),
             twist: BodyTwist::default(),
             variance: [1.0; 6],

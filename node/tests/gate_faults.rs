@@ -20,7 +20,7 @@ use gpodo_frontends::online::OnlineMode;
 use gpodo_frontends::scheme::causal_selector;
 use gpodo_node::LiveOutput;
 use gpodo_node::gate::pairing::{PairingSettings, Part, PartHeader};
-use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning};
+use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning, PredictionClock};
 use gpodo_node::gate::{LiveGate, LiveGateSettings, PoseOutcome};
 use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
 use gpodo_regressors::online_model::OnlineModel;
@@ -59,6 +59,7 @@ fn session() -> GateSession<u32> {
         PairingSettings::default(),
         Some(Learning::LockStep(Box::new(learner))),
         &["a".to_string()],
+        PredictionClock::Sample,
         2.4,
     )
     .unwrap()
@@ -74,6 +75,7 @@ fn output(t: f64) -> LiveOutput {
         time_secs: t,
         row: Some(vec![1.0]),
         covered_secs: 1.0,
+        inputs: vec![1.0],
         uncorrected: twist,
         twist,
         variance: [1e-4; 6],
@@ -109,7 +111,8 @@ fn faults_are_counted_and_warned_of_and_none_is_learned_from() {
         let now = stamp as f64 * 1e-9;
         // The odometry up to the frame: 12.5 Hz.
         while step * 80_000_000 <= stamp {
-            s.output(&output(step as f64 * 0.08)).unwrap();
+            s.output(&output(step as f64 * 0.08), step * 80_000_000)
+                .unwrap();
             step += 1;
         }
         s.watch(now);

@@ -36,7 +36,7 @@ fn s_curve(secs: f64) -> Traverse {
     let n = (secs / DT).round() as usize + 1;
     // Times from nanosecond stamps, as a recording's are.
     let times: Vec<f64> = (0..n)
-        .map(|k| (k as i64 * 80_000_000) as f64 / 1e9)
+        .map(|k| (k as i64 * 80_000_000) as f64 * 1e-9)
         .collect();
     let pose = |t: f64| {
         let yaw = 0.6 * (0.05 * t).sin();
@@ -204,7 +204,7 @@ fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
             }
         }
         let stamp_ns = (time * 1e9).round() as i64;
-        assert_eq!(stamp_ns as f64 / 1e9, time);
+        assert_eq!(stamp_ns as f64 * 1e-9, time);
         if !gate.decide(stamp_ns, time).processed {
             continue;
         }

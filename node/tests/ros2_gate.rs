@@ -43,7 +43,7 @@ use gpodo_frontends::params::FrontendParams;
 use gpodo_frontends::scheme::causal_selector;
 use gpodo_node::gate::lost::LostSettings;
 use gpodo_node::gate::pairing::PairingSettings;
-use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning};
+use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning, PredictionClock};
 use gpodo_node::gate::topics::GateTopics;
 use gpodo_node::gate::{LiveGate, LiveGateSettings};
 use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
@@ -131,6 +131,7 @@ fn session<T>(model: &LiveModel) -> GateSession<T> {
         PairingSettings::default(),
         Some(Learning::LockStep(Box::new(learner))),
         model.columns(),
+        PredictionClock::Sample,
         2.4,
     )
     .unwrap()

@@ -12,11 +12,11 @@ use anyhow::Context as _;
 use gpodo_datasets::bags::messages::{Odometry, RosMessage, Twist};
 use gpodo_node::gate::GateDecision;
 use gpodo_node::gate::pairing::Part;
-use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning};
+use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning, PredictionClock};
 use gpodo_node::learner::LearnerStart;
 use gpodo_node::learner_worker::{CheckpointPolicy, LearnerWorker};
 
-use crate::config::gate::GateFile;
+use crate::config::gate::{GateFile, Predictions};
 
 /// Where the learner runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -110,13 +110,27 @@ impl<T> LiveGateRun<T> {
                 Learner::LockStep => Learning::LockStep(Box::new(l)),
             }
         });
+        let clock = match file.predictions {
+            Predictions::EverySample => PredictionClock::Sample,
+            Predictions::Windows => PredictionClock::Windows {
+                window_secs: model.window_secs().ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "{}: `predictions: windows` needs rows averaged over a window; {} has one row per sample",
+                        path.display(),
+                        model_path.display()
+                    )
+                })?,
+            },
+        };
         let session = GateSession::new(
             built.gate,
             built.pairing,
             learning,
             model.columns(),
+            clock,
             IMAGE_SILENT_SECS,
-        )?;
+        )
+        .with_context(|| format!("the gate file {}", path.display()))?;
         tracing::info!(
             "gating {} and {} onto {} and {}; decisions on {}",
             file.topics.left_image,

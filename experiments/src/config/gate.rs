@@ -44,6 +44,9 @@ pub struct GateFile {
     /// that reads the residuals, as the offline schemes do.
     #[serde(default = "default_lost_period")]
     pub lost_frame_period_secs: Option<f64>,
+    /// When the residual the policy reads changes.
+    #[serde(default)]
+    pub predictions: Predictions,
     /// The residual variance per axis of a model that knows nothing
     /// ((m/s)²; default 1e-4), which the policy reads until the learner
     /// has learned.
@@ -72,6 +75,22 @@ pub struct GateFile {
     /// Where and how often the learner's model is written.
     #[serde(default)]
     pub checkpoint: CheckpointSpec,
+}
+
+/// When the residual the policy reads changes (a gate file's
+/// `predictions:`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Predictions {
+    /// At every joint state, predicted on the row the node publishes with
+    /// (its trailing window; default).
+    #[default]
+    EverySample,
+    /// At the end of each regressor window on the grid from the first
+    /// joint state, predicted on that window's row, as Table II's offline
+    /// schemes do: a replay then makes their decisions. Needs `online:`
+    /// and rows averaged over a window.
+    Windows,
 }
 
 fn default_lost_period() -> Option<f64> {

@@ -27,6 +27,7 @@ pub mod pairing;
 pub mod report;
 pub mod session;
 pub mod topics;
+pub mod windows;
 
 use std::collections::VecDeque;
 
@@ -151,6 +152,11 @@ pub struct LiveGate {
     target: Option<TargetInterval>,
     last_pose: Option<Isometry3<f64>>,
     counts: GateCounts,
+    /// Whether the targets' inputs are attributed by the caller (the
+    /// gate is then driven without them).
+    inputs_later: bool,
+    /// The stamp its times count from (ns).
+    origin_ns: i64,
 }
 
 impl LiveGate {
@@ -173,6 +179,8 @@ impl LiveGate {
             target: None,
             last_pose: None,
             counts: GateCounts::default(),
+            inputs_later: false,
+            origin_ns: 0,
         }
     }
 
@@ -195,10 +203,10 @@ impl LiveGate {
         self.lost.reported(lost);
     }
 
-    /// Decides the pair stamped `stamp_ns`, at `now_secs` on the node's
-    /// clock.
+    /// Decides the pair stamped `stamp_ns` (its time counted from the
+    /// origin), at `now_secs` on the node's clock.
     pub fn decide(&mut self, stamp_ns: i64, now_secs: f64) -> GateDecision {
-        let time_secs = stamp_ns as f64 / 1e9;
+        let time_secs = self.secs(stamp_ns);
         let lost = self.lost.lost(now_secs);
         let ctx = self.state.context(time_secs, lost.is_some());
         let decision = self.selector.decide(&ctx);
@@ -278,7 +286,7 @@ impl LiveGate {
             rotation,
         );
         let pose = child * self.settings.body_from_child.inverse();
-        let time_secs = stamp_ns as f64 / 1e9;
+        let time_secs = self.secs(stamp_ns);
         let previous = self.last_pose.replace(pose);
         if let Some(previous) = previous
             && self.is_jump(&previous, &pose, &interval, position_variances)
@@ -300,7 +308,11 @@ impl LiveGate {
         if !target.is_ready(time_secs, &limits) {
             return PoseOutcome::Pose(Some(NoTarget::TooShort));
         }
-        let closed = target.close(time_secs, Some(&pose), &limits);
+        let closed = if self.inputs_later {
+            target.close_without_inputs(time_secs, Some(&pose), &limits)
+        } else {
+            target.close(time_secs, Some(&pose), &limits)
+        };
         self.target = Some(TargetInterval::open(time_secs, Some(pose)));
         match closed {
             Ok(t) => {
@@ -335,6 +347,28 @@ impl LiveGate {
     /// What the gate counted.
     pub fn counts(&self) -> GateCounts {
         self.counts
+    }
+
+    /// The caller attributes the targets' inputs (the window clock of
+    /// [`session::GateSession`]): targets are formed without them.
+    pub(crate) fn attribute_inputs_later(&mut self) {
+        self.inputs_later = true;
+    }
+
+    /// Times count from the stamp `origin_ns` (the node's clock: that of
+    /// the odometry it is driven with); from 0 unless set.
+    pub fn set_origin_ns(&mut self, origin_ns: i64) {
+        self.origin_ns = origin_ns;
+    }
+
+    /// A stamp's time on the gate's clock (s).
+    pub fn secs(&self, stamp_ns: i64) -> f64 {
+        (stamp_ns - self.origin_ns) as f64 * 1e-9
+    }
+
+    /// How the gate decides and learns.
+    pub fn settings(&self) -> &LiveGateSettings {
+        &self.settings
     }
 
     /// The selector's name.

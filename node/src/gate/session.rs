@@ -2,9 +2,15 @@
 //! message of the gate's topics and with each odometry output, whether
 //! the messages come over DDS or from a recording.
 //!
-//! * Each odometry output drives the gate with the motion model's twist
-//!   over the step before it and the row in force, and puts the residual
-//!   predicted on that row in force for the selector.
+//! * Each odometry output ends a step: the motion model's twist of the
+//!   output before it, over the time between them. The gate is driven
+//!   along the steps lazily, up to each pair's stamp when it is decided,
+//!   so a policy reads the odometry up to the frame, as offline.
+//! * The residual the selector reads is put in force either at every
+//!   output, predicted on its row ([`PredictionClock::Sample`]), or at the
+//!   end of each regressor window on the offline grid, predicted on that
+//!   window's row ([`PredictionClock::Windows`], [`super::windows`]): the
+//!   offline front end's clock, so a replay makes its decisions.
 //! * With a learner, the residual the node publishes on `/odom/gp` is the
 //!   learner's ([`RowResidual`]): its prior (a zero residual with the
 //!   prior variance) before it has learned, its model after.
@@ -21,6 +27,7 @@ use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::vo_target::VoTarget;
 use gpodo_traits::BodyTwist;
 use nalgebra::Vector3;
+use std::collections::VecDeque;
 
 use crate::NodeError;
 use crate::diagnostics::{OK, WARN};
@@ -28,6 +35,7 @@ use crate::gate::pairing::{
     PairingFaults, PairingSettings, Part, PartHeader, StereoPair, StereoPairer,
 };
 use crate::gate::report::{LearnerReport, gate_status};
+use crate::gate::windows::GridWindows;
 use crate::gate::{GateCounts, GateDecision, LiveGate, PoseOutcome};
 use crate::learner::{LearnerStart, LiveLearner};
 use crate::learner_worker::{LearnerWorker, WorkerSummary};
@@ -77,6 +85,45 @@ impl Learning {
     }
 }
 
+/// When the gate puts a new residual prediction in force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PredictionClock {
+    /// At every odometry output, predicted on the row the node publishes
+    /// with (its trailing window).
+    Sample,
+    /// At the end of each window of `window_secs` on the grid from the
+    /// first output, predicted on that window's row, as the offline front
+    /// end does (a learner is needed: it predicts on the rows); a
+    /// target's inputs are those of the windows its interval spans.
+    Windows {
+        /// The windows' length (s): the learner's rows'.
+        window_secs: f64,
+    },
+}
+
+/// An output, as the step from it needs it.
+struct Sample {
+    time_secs: f64,
+    /// The motion model's twist.
+    twist: BodyTwist,
+    /// The learner's inputs: of its row on the sample clock, its own on
+    /// the window clock.
+    inputs: Option<Vec<f64>>,
+}
+
+/// A step between two outputs, known once the second has come.
+struct Step {
+    start_secs: f64,
+    end_secs: f64,
+    twist: BodyTwist,
+    /// The learner's inputs the gate is driven with (the sample clock).
+    inputs: Option<Vec<f64>>,
+    /// Its window (the window clock).
+    window: Option<i64>,
+    /// The prediction put in force at its end (the sample clock).
+    then_predict: Option<ResidualPrediction>,
+}
+
 /// Faults the session counts beyond the pairing's and the gate's.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct SessionFaults {
@@ -88,6 +135,9 @@ pub struct SessionFaults {
     /// Targets the learner refused (in lock-step; the worker reports its
     /// own when it stops).
     pub learn_errors: u64,
+    /// Predictions the gate could not put in force while driving to a
+    /// pair.
+    pub predictions_refused: u64,
 }
 
 /// How the learner ended.
@@ -107,9 +157,16 @@ pub struct GateSession<T> {
     learner: Option<Learning>,
     /// Per learner input, its column in the node's rows.
     learner_columns: Vec<usize>,
-    /// The previous output's time, the motion model's twist and the
-    /// learner's inputs of its row.
-    previous: Option<(f64, BodyTwist, Option<Vec<f64>>)>,
+    /// The previous output.
+    previous: Option<Sample>,
+    /// The step the gate is being driven along, and how far (s).
+    step: Option<Step>,
+    driven_secs: f64,
+    /// The regressor windows (the window clock).
+    windows: Option<GridWindows>,
+    /// Targets formed, waiting for their windows to close (the window
+    /// clock).
+    waiting: VecDeque<VoTarget>,
     image_silent_secs: f64,
     /// Per image topic (left, right): when its last message came (node
     /// clock, s) and whether its silence has been counted.
@@ -119,20 +176,41 @@ pub struct GateSession<T> {
 
 impl<T> GateSession<T> {
     /// The gate `gate` pairing as `pairing` says, with `learner` learning
-    /// from its targets on the node's rows of `node_columns`; an image
-    /// topic silent for `image_silent_secs` while the other goes on is a
-    /// fault.
+    /// from its targets on the node's rows of `node_columns` and
+    /// predictions put in force on `clock`; an image topic silent for
+    /// `image_silent_secs` while the other goes on is a fault.
     ///
     /// # Errors
     /// [`NodeError::Topics`] when the learner reads a column the node's
-    /// rows do not have.
+    /// rows do not have, or the window clock has no learner or no window.
     pub fn new(
         gate: LiveGate,
         pairing: PairingSettings,
         learner: Option<Learning>,
         node_columns: &[String],
+        clock: PredictionClock,
         image_silent_secs: f64,
     ) -> Result<Self, NodeError> {
+        let windows = match clock {
+            PredictionClock::Sample => None,
+            PredictionClock::Windows { window_secs } => {
+                if learner.is_none() {
+                    return Err(NodeError::Topics(
+                        "predictions on the window clock need an online learner (`online:`), which predicts on the windows' rows".into(),
+                    ));
+                }
+                if !(window_secs.is_finite() && window_secs > 0.0) {
+                    return Err(NodeError::Topics(format!(
+                        "predictions on the window clock need rows averaged over a window; these have {window_secs} s"
+                    )));
+                }
+                Some(GridWindows::new(window_secs))
+            }
+        };
+        let mut gate = gate;
+        if windows.is_some() {
+            gate.attribute_inputs_later();
+        }
         let names: Vec<String> = match &learner {
             Some(Learning::LockStep(l)) => l.input_names().to_vec(),
             Some(Learning::Worker(w)) => w.input_names(),
@@ -154,6 +232,10 @@ impl<T> GateSession<T> {
             learner,
             learner_columns,
             previous: None,
+            step: None,
+            driven_secs: f64::NEG_INFINITY,
+            windows,
+            waiting: VecDeque::new(),
             image_silent_secs,
             image_seen: [(None, false); 2],
             faults: SessionFaults::default(),
@@ -180,31 +262,167 @@ impl<T> GateSession<T> {
         self.learner_columns.iter().map(|&c| row[c]).collect()
     }
 
-    /// One odometry output: the gate drives the step before it with the
-    /// previous output's twist, and the residual predicted on its row is
-    /// put in force.
+    /// One odometry output, of the joint state stamped `stamp_ns`: the
+    /// step since the output before it is known. The gate is driven to
+    /// that output (the step before is finished), and along the new step
+    /// as pairs are decided. The first output sets the gate's clock: the
+    /// outputs' own, so a pair stamped as a joint state is at its time.
     ///
     /// # Errors
-    /// A prediction the gate's odometry cannot use.
-    pub fn output(&mut self, out: &LiveOutput) -> Result<(), FrontendError> {
-        if let Some((time, twist, inputs)) = self.previous.take() {
-            self.gate
-                .drive(&twist, out.time_secs - time, inputs.as_deref());
-        }
-        let inputs = out
-            .row
-            .as_deref()
-            .filter(|_| self.learner.is_some())
-            .map(|row| self.learner_row(row));
-        self.previous = Some((out.time_secs, out.uncorrected, inputs));
-        if let Some((mean, variance)) = out.residual {
-            self.gate.predict(ResidualPrediction {
+    /// A prediction the gate's odometry cannot use, or the learner's
+    /// failure on a window's row.
+    pub fn output(&mut self, out: &LiveOutput, stamp_ns: i64) -> Result<(), FrontendError> {
+        let prediction = match (out.residual, &self.windows) {
+            (Some((mean, variance)), None) => Some(ResidualPrediction {
                 mean: Vector3::from(mean),
                 variance: Vector3::from(variance),
                 absolute: None,
-            })?;
+            }),
+            _ => None,
+        };
+        let inputs = match &self.windows {
+            Some(_) => Some(self.learner_row(&out.inputs)),
+            None => out
+                .row
+                .as_deref()
+                .filter(|_| self.learner.is_some())
+                .map(|row| self.learner_row(row)),
+        };
+        let previous = self.previous.replace(Sample {
+            time_secs: out.time_secs,
+            twist: out.uncorrected,
+            inputs,
+        });
+        if let Some(step) = &self.step {
+            self.drive_to(step.end_secs)?;
+        }
+        match previous {
+            None => {
+                self.gate
+                    .set_origin_ns(stamp_ns - (out.time_secs * 1e9).round() as i64);
+                if let Some(windows) = self.windows.as_mut() {
+                    windows.index_at(out.time_secs);
+                }
+                self.driven_secs = out.time_secs;
+                if let Some(p) = prediction {
+                    self.gate.predict(p)?;
+                }
+            }
+            Some(Sample {
+                time_secs: time,
+                twist,
+                inputs,
+            }) => {
+                let dt = out.time_secs - time;
+                let (inputs, window) = match self.windows.as_mut() {
+                    Some(windows) => (
+                        None,
+                        Some(windows.step(time, dt, inputs.unwrap_or_default())),
+                    ),
+                    None => (inputs, None),
+                };
+                self.step = Some(Step {
+                    start_secs: time,
+                    end_secs: out.time_secs,
+                    twist,
+                    inputs,
+                    window,
+                    then_predict: prediction,
+                });
+            }
         }
         Ok(())
+    }
+
+    /// Drives the gate along the step known up to `time_secs` (no further
+    /// than the step's end), putting predictions in force where they are
+    /// due: at the step's end on the sample clock, at each window's end on
+    /// the window clock, after the targets waiting for that window.
+    fn drive_to(&mut self, time_secs: f64) -> Result<(), FrontendError> {
+        let Some(step) = self.step.as_mut() else {
+            return Ok(());
+        };
+        let target = time_secs.min(step.end_secs);
+        loop {
+            self.close_windows()?;
+            let Some(step) = self.step.as_mut() else {
+                return Ok(());
+            };
+            if self.driven_secs >= target {
+                break;
+            }
+            let mut end = target;
+            if let Some(next) = self.windows.as_ref().and_then(GridWindows::next_end)
+                && next > self.driven_secs
+            {
+                end = end.min(next);
+            }
+            let from = self.driven_secs.max(step.start_secs);
+            self.gate
+                .drive(&step.twist, end - from, step.inputs.as_deref());
+            if let (Some(windows), Some(w)) = (self.windows.as_mut(), step.window) {
+                windows.driven(from, end, w);
+            }
+            self.driven_secs = end;
+        }
+        if let Some(step) = self.step.as_mut()
+            && self.driven_secs >= step.end_secs
+            && let Some(p) = step.then_predict.take()
+        {
+            self.gate.predict(p)?;
+        }
+        Ok(())
+    }
+
+    /// Closes the windows that have ended by now: the targets waiting for
+    /// them are learned, then each window's prediction is put in force.
+    fn close_windows(&mut self) -> Result<(), FrontendError> {
+        loop {
+            let Some(closed) = self
+                .windows
+                .as_mut()
+                .and_then(|w| w.close_until(self.driven_secs))
+            else {
+                return Ok(());
+            };
+            self.learn_waiting();
+            if let (Some(row), Some(learner)) = (closed.row, self.learner.as_ref()) {
+                let prediction = learner.predict(&row)?;
+                self.gate.predict(prediction)?;
+            }
+        }
+    }
+
+    /// Learns the waiting targets whose windows have all closed, in the
+    /// order they were formed; a target none of whose stretches had a
+    /// row is dropped, as offline.
+    fn learn_waiting(&mut self) {
+        let Some(windows) = self.windows.as_mut() else {
+            return;
+        };
+        while let Some(target) = self.waiting.front() {
+            let start = target.time_secs - target.duration_secs;
+            let Some(inputs) = windows.inputs_over(start, target.time_secs) else {
+                break;
+            };
+            let Some(mut target) = self.waiting.pop_front() else {
+                break;
+            };
+            if let Some(inputs) = inputs {
+                target.inputs = inputs;
+                if let Some(learner) = self.learner.as_mut()
+                    && learner.learn(target).is_err()
+                {
+                    self.faults.learn_errors += 1;
+                }
+            }
+        }
+        let oldest = self
+            .waiting
+            .front()
+            .map_or(self.driven_secs, |t| t.time_secs - t.duration_secs);
+        let span = self.gate.settings().targets.max_interval_secs;
+        windows.forget_before(oldest.min(self.driven_secs - span));
     }
 
     /// One image or camera-info message received at `now_secs` on the
@@ -224,13 +442,19 @@ impl<T> GateSession<T> {
         self.pairer.push(part, header, message)
     }
 
-    /// The gate's decision on `pair` at `now_secs`, with the pair when it
-    /// is to be forwarded.
+    /// The gate's decision on `pair` at `now_secs`, on the odometry
+    /// driven up to its stamp (as far as the outputs so far reach), with
+    /// the pair when it is to be forwarded. A prediction due on the way
+    /// that the gate's odometry cannot use, or that the learner failed
+    /// to make, is counted and the one in force kept.
     pub fn decide(
         &mut self,
         pair: StereoPair<T>,
         now_secs: f64,
     ) -> (GateDecision, Option<StereoPair<T>>) {
+        if self.drive_to(self.gate.secs(pair.stamp_ns)).is_err() {
+            self.faults.predictions_refused += 1;
+        }
         let decision = self.gate.decide(pair.stamp_ns, now_secs);
         let forwarded = decision.processed.then_some(pair);
         (decision, forwarded)
@@ -255,10 +479,15 @@ impl<T> GateSession<T> {
             m.pose.orientation,
             variances,
         );
-        if let (PoseOutcome::Target(target), Some(learner)) = (&outcome, self.learner.as_mut())
-            && learner.learn(target.clone()).is_err()
-        {
-            self.faults.learn_errors += 1;
+        if let PoseOutcome::Target(target) = &outcome {
+            if self.windows.is_some() {
+                self.waiting.push_back(target.clone());
+                self.learn_waiting();
+            } else if let Some(learner) = self.learner.as_mut()
+                && learner.learn(target.clone()).is_err()
+            {
+                self.faults.learn_errors += 1;
+            }
         }
         outcome
     }
@@ -331,20 +560,36 @@ impl<T> GateSession<T> {
                 f.undecodable.to_string(),
             ),
             ("targets refused".to_string(), f.learn_errors.to_string()),
+            (
+                "predictions refused".to_string(),
+                f.predictions_refused.to_string(),
+            ),
         ]);
-        if f.silent_image_topics + f.undecodable + f.learn_errors > 0 && status.level == OK {
+        if f.silent_image_topics + f.undecodable + f.learn_errors + f.predictions_refused > 0
+            && status.level == OK
+        {
             status.level = WARN;
             status.message = format!(
-                "{} image topics gone silent, {} undecodable, {} targets refused",
-                f.silent_image_topics, f.undecodable, f.learn_errors
+                "{} image topics gone silent, {} undecodable, {} targets refused, {} predictions refused",
+                f.silent_image_topics, f.undecodable, f.learn_errors, f.predictions_refused
             );
         }
         status
     }
 
-    /// Ends the session: a worker is stopped after the targets handed to
-    /// it, writing its last checkpoint.
-    pub fn finish(self) -> LearnerEnd {
+    /// Ends the session: the gate is driven to the last output; on the
+    /// window clock the windows still open are closed with the steps they
+    /// have, and the targets waiting for them learned; a worker is stopped
+    /// after the targets handed to it, writing its last checkpoint.
+    pub fn finish(mut self) -> LearnerEnd {
+        if let Some(end) = self.step.as_ref().map(|s| s.end_secs) {
+            // A prediction the odometry cannot use changes nothing learned.
+            let _ = self.drive_to(end);
+        }
+        if let Some(windows) = self.windows.as_mut() {
+            windows.close_all();
+            self.learn_waiting();
+        }
         match self.learner {
             None => LearnerEnd::None,
             Some(Learning::LockStep(l)) => LearnerEnd::LockStep(l),

@@ -424,7 +424,7 @@ pub fn run(
             match feed.joints_with(&m, receive_ns, residual) {
                 Ok(fed) => {
                     if let Some(g) = gate.as_mut()
-                        && let Err(e) = g.session.output(&fed.output)
+                        && let Err(e) = g.session.output(&fed.output, fed.stamp_ns)
                     {
                         health.skipped(format!("the gate: {e}"));
                     }
