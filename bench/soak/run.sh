@@ -43,7 +43,7 @@ sed 's/^rate_hz: .*/rate_hz: 100.0/' "$work/robot/topics.yaml" > "$work/topics.y
 
 run() {
   local name=$1 online=$2
-  sed -e '/^online:/d' -e 's|vo_odometry: /vo/pose|vo_odometry: /vo/odometry|' docs/tutorials/gate.yaml > "$work/gate-$name.yaml"
+  sed -e '/^online:/d' -e 's|vo_odometry: /vo/pose|vo_odometry: /vo/odometry|' -e 's|^predictions: windows|predictions: every_sample|' docs/tutorials/gate.yaml > "$work/gate-$name.yaml"
   if [ "$online" = yes ]; then
     echo 'online: { regressor: { kind: ilgr, init_lengthscale: 2.0 } }' >> "$work/gate-$name.yaml"
   fi

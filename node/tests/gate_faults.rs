@@ -63,6 +63,7 @@ fn session() -> GateSession<u32> {
         2.4,
     )
     .unwrap()
+    .with_child_frame_id(Some("base_link".into()))
 }
 
 /// An odometry output at `t`: 0.1 m/s ahead on the wheels, the row `[1]`.
@@ -148,8 +149,15 @@ fn faults_are_counted_and_warned_of_and_none_is_learned_from() {
         // The VO sees the rover 10 % faster than the wheels; it restarts
         // from the origin at pair 40.
         let x = if k == 40 { 0.0 } else { 0.11 * now };
-        if let PoseOutcome::Target(t) = s.vo_odometry(&odometry(stamp, x)) {
-            targets.push(t);
+        let mut pose = odometry(stamp, x);
+        // Pair 50's pose comes in the camera's frame, not the body's.
+        if k == 50 {
+            pose.child_frame_id = "left_camera".into();
+        }
+        match s.vo_odometry(&pose) {
+            PoseOutcome::Target(t) => targets.push(t),
+            PoseOutcome::OtherFrame => assert_eq!(k, 50),
+            _ => {}
         }
     }
     let status = s.status();
@@ -162,6 +170,7 @@ fn faults_are_counted_and_warned_of_and_none_is_learned_from() {
     // The restart, and the pose after it, off the origin by the route.
     assert_eq!(value(&status, "VO jumps"), 2);
     assert_eq!(value(&status, "targets refused"), 0);
+    assert_eq!(value(&status, "VO poses of another child frame"), 1);
     // Pairs 5, 10 and 20–28 were never made.
     let counts = s.counts();
     assert_eq!(counts.decided, 60 - 11);

@@ -224,7 +224,9 @@ fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
             PoseOutcome::Jump => jumps += 1,
             PoseOutcome::Lost(_) => lost += 1,
             PoseOutcome::Pose(_) => {}
-            PoseOutcome::Unexpected => panic!("frame {frame}: a pose for no forwarded pair"),
+            PoseOutcome::Unexpected | PoseOutcome::OtherFrame => {
+                panic!("frame {frame}: a pose for no forwarded pair")
+            }
         }
     }
     let offline_frames: Vec<usize> = run.processed.iter().map(|f| f.frame).collect();

@@ -341,3 +341,80 @@ fn gate_against_offline(secs: f64, vo_params: SimulatedVoParams) -> (usize, usiz
     );
     (lost, run.relocalisations)
 }
+
+#[test]
+fn without_a_learner_the_saved_models_prediction_changes_only_at_window_ends() {
+    let gate = LiveGate::new(
+        causal_selector(
+            &SelectorSpec::FixedRate {
+                fps: 0.5,
+                phase_secs: 0.0,
+            },
+            None,
+            None,
+        )
+        .unwrap(),
+        GateState::new(Default::default(), Default::default(), 1e-4),
+        LiveGateSettings::default(),
+    );
+    let mut session: GateSession<()> = GateSession::new(
+        gate,
+        PairingSettings::default(),
+        None,
+        &["a".to_string(), "b".to_string()],
+        PredictionClock::Windows {
+            window_secs: WINDOW_SECS,
+        },
+        2.4,
+    )
+    .unwrap();
+    // Samples every 0.3 s; the saved model's variance on each one's row
+    // is 1e-6 times its index.
+    let mut in_force = Vec::new();
+    for k in 0..12_i64 {
+        let mut out = output_at(0.3 * k as f64);
+        out.residual = Some(([0.0; 3], [1e-6 * k as f64; 3]));
+        session.output(&out, k * 300_000_000).unwrap();
+        // A pair at the sample: the gate is driven to it.
+        session.decide(pair(k * 300_000_000), 0.0);
+        in_force.push(session.prediction().variance.x);
+    }
+    // Windows end at 1, 2 and 3 s; the samples at or after them are 4
+    // (1.2 s), 7 (2.1 s) and 10 (3.0 s). Before the first: the prior.
+    let expected: Vec<f64> = (0..12_i64)
+        .map(|k| match k {
+            0..4 => 1e-4,
+            4..7 => 1e-6 * 4.0,
+            7..10 => 1e-6 * 7.0,
+            _ => 1e-6 * 10.0,
+        })
+        .collect();
+    assert_eq!(in_force, expected);
+}
+
+fn output_at(time_secs: f64) -> LiveOutput {
+    LiveOutput {
+        time_secs,
+        row: None,
+        covered_secs: 0.0,
+        inputs: vec![0.0, 0.0],
+        uncorrected: BodyTwist::default(),
+        twist: BodyTwist::default(),
+        variance: [1e-4; 6],
+        pose: Isometry3::identity(),
+        pose_covariance: [0.0; 36],
+        uncorrected_pose: Isometry3::identity(),
+        out_of_range: Vec::new(),
+        residual: None,
+    }
+}
+
+fn pair(stamp_ns: i64) -> StereoPair<()> {
+    StereoPair {
+        stamp_ns,
+        left: (),
+        right: (),
+        left_info: (),
+        right_info: (),
+    }
+}

@@ -110,17 +110,16 @@ impl<T> LiveGateRun<T> {
                 Learner::LockStep => Learning::LockStep(Box::new(l)),
             }
         });
-        let clock = match file.predictions {
-            Predictions::EverySample => PredictionClock::Sample,
-            Predictions::Windows => PredictionClock::Windows {
-                window_secs: model.window_secs().ok_or_else(|| {
-                    anyhow::anyhow!(
-                        "{}: `predictions: windows` needs rows averaged over a window; {} has one row per sample",
-                        path.display(),
-                        model_path.display()
-                    )
-                })?,
-            },
+        let clock = match (file.predictions, model.window_secs()) {
+            (Some(Predictions::EverySample), _) | (None, None) => PredictionClock::Sample,
+            (Some(Predictions::Windows) | None, Some(window_secs)) => {
+                PredictionClock::Windows { window_secs }
+            }
+            (Some(Predictions::Windows), None) => anyhow::bail!(
+                "{}: `predictions: windows` needs rows averaged over a window; {} has one row per sample",
+                path.display(),
+                model_path.display()
+            ),
         };
         let session = GateSession::new(
             built.gate,
@@ -130,7 +129,8 @@ impl<T> LiveGateRun<T> {
             clock,
             IMAGE_SILENT_SECS,
         )
-        .with_context(|| format!("the gate file {}", path.display()))?;
+        .with_context(|| format!("the gate file {}", path.display()))?
+        .with_child_frame_id(file.vo_child_frame_id.clone());
         tracing::info!(
             "gating {} and {} onto {} and {}; decisions on {}",
             file.topics.left_image,

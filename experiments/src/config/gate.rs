@@ -44,9 +44,10 @@ pub struct GateFile {
     /// that reads the residuals, as the offline schemes do.
     #[serde(default = "default_lost_period")]
     pub lost_frame_period_secs: Option<f64>,
-    /// When the residual the policy reads changes.
+    /// When the residual the policy reads changes (default: `windows`
+    /// when the model's rows average a window, else `every_sample`).
     #[serde(default)]
-    pub predictions: Predictions,
+    pub predictions: Option<Predictions>,
     /// The residual variance per axis of a model that knows nothing
     /// ((m/s)²; default 1e-4), which the policy reads until the learner
     /// has learned.
@@ -69,6 +70,11 @@ pub struct GateFile {
     /// description's URDF or measured).
     #[serde(default)]
     pub body_from_child: Option<PoseSpec>,
+    /// The VO's `child_frame_id` that `body_from_child` is the transform
+    /// of: a pose of another frame is counted and not used (null: not
+    /// checked).
+    #[serde(default)]
+    pub vo_child_frame_id: Option<String>,
     /// The topics.
     #[serde(default)]
     pub topics: GateTopics,
@@ -79,17 +85,18 @@ pub struct GateFile {
 
 /// When the residual the policy reads changes (a gate file's
 /// `predictions:`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Predictions {
     /// At every joint state, predicted on the row the node publishes with
-    /// (its trailing window; default).
-    #[default]
+    /// (its trailing window). Each prediction starts a new block of fully
+    /// correlated drift, so a policy reading the drift's variance sees
+    /// blocks of one sample, far less than offline.
     EverySample,
     /// At the end of each regressor window on the grid from the first
     /// joint state, predicted on that window's row, as Table II's offline
-    /// schemes do: a replay then makes their decisions. Needs `online:`
-    /// and rows averaged over a window.
+    /// schemes do: the drift's blocks are windows, and a replay makes the
+    /// offline decisions. Needs rows averaged over a window.
     Windows,
 }
 

@@ -119,6 +119,10 @@ pub enum PoseOutcome {
     Jump,
     /// A pose for no pair the gate forwarded.
     Unexpected,
+    /// A pose of another child frame than the one the gate expects
+    /// (`child_frame_id`): not used, since `body_from_child` is not its
+    /// transform.
+    OtherFrame,
 }
 
 /// What the gate counted.
@@ -347,6 +351,11 @@ impl LiveGate {
     /// What the gate counted.
     pub fn counts(&self) -> GateCounts {
         self.counts
+    }
+
+    /// The residual prediction in force.
+    pub fn prediction(&self) -> &ResidualPrediction {
+        self.state.prediction()
     }
 
     /// The caller attributes the targets' inputs (the window clock of

@@ -25,8 +25,6 @@ use gpodo_datasets::bags::messages::Odometry;
 use gpodo_frontends::FrontendError;
 use gpodo_frontends::prediction::ResidualPrediction;
 use gpodo_frontends::vo_target::VoTarget;
-use gpodo_traits::BodyTwist;
-use nalgebra::Vector3;
 use std::collections::VecDeque;
 
 use crate::NodeError;
@@ -36,10 +34,13 @@ use crate::gate::pairing::{
 };
 use crate::gate::report::{LearnerReport, gate_status};
 use crate::gate::windows::GridWindows;
+
+mod drive;
 use crate::gate::{GateCounts, GateDecision, LiveGate, PoseOutcome};
 use crate::learner::{LearnerStart, LiveLearner};
 use crate::learner_worker::{LearnerWorker, WorkerSummary};
-use crate::pipeline::{LiveOutput, RowResidual};
+use crate::pipeline::RowResidual;
+use drive::{Sample, Step};
 use gpodo_datasets::bags::write::DiagnosticStatus;
 
 /// Where the learner runs.
@@ -92,36 +93,17 @@ pub enum PredictionClock {
     /// with (its trailing window).
     Sample,
     /// At the end of each window of `window_secs` on the grid from the
-    /// first output, predicted on that window's row, as the offline front
-    /// end does (a learner is needed: it predicts on the rows); a
-    /// target's inputs are those of the windows its interval spans.
+    /// first output, as the offline front end does: the learner's
+    /// prediction on that window's row, or without a learner the saved
+    /// model's on the row of the first output at or after the window's
+    /// end (its trailing window); a target's inputs are those of the
+    /// windows its interval spans. Each prediction starts a new block of
+    /// fully correlated drift in what the policy reads, so the blocks are
+    /// windows, as offline, not samples.
     Windows {
         /// The windows' length (s): the learner's rows'.
         window_secs: f64,
     },
-}
-
-/// An output, as the step from it needs it.
-struct Sample {
-    time_secs: f64,
-    /// The motion model's twist.
-    twist: BodyTwist,
-    /// The learner's inputs: of its row on the sample clock, its own on
-    /// the window clock.
-    inputs: Option<Vec<f64>>,
-}
-
-/// A step between two outputs, known once the second has come.
-struct Step {
-    start_secs: f64,
-    end_secs: f64,
-    twist: BodyTwist,
-    /// The learner's inputs the gate is driven with (the sample clock).
-    inputs: Option<Vec<f64>>,
-    /// Its window (the window clock).
-    window: Option<i64>,
-    /// The prediction put in force at its end (the sample clock).
-    then_predict: Option<ResidualPrediction>,
 }
 
 /// Faults the session counts beyond the pairing's and the gate's.
@@ -138,6 +120,8 @@ pub struct SessionFaults {
     /// Predictions the gate could not put in force while driving to a
     /// pair.
     pub predictions_refused: u64,
+    /// VO poses of another child frame than the gate expects.
+    pub other_child_frame: u64,
 }
 
 /// How the learner ended.
@@ -167,7 +151,12 @@ pub struct GateSession<T> {
     /// Targets formed, waiting for their windows to close (the window
     /// clock).
     waiting: VecDeque<VoTarget>,
+    /// The saved model's prediction on the last output's row (the window
+    /// clock without a learner).
+    saved: Option<ResidualPrediction>,
     image_silent_secs: f64,
+    /// The VO's `child_frame_id` the gate expects, if it checks.
+    child_frame_id: Option<String>,
     /// Per image topic (left, right): when its last message came (node
     /// clock, s) and whether its silence has been counted.
     image_seen: [(Option<f64>, bool); 2],
@@ -182,7 +171,7 @@ impl<T> GateSession<T> {
     ///
     /// # Errors
     /// [`NodeError::Topics`] when the learner reads a column the node's
-    /// rows do not have, or the window clock has no learner or no window.
+    /// rows do not have, or the window clock has no window.
     pub fn new(
         gate: LiveGate,
         pairing: PairingSettings,
@@ -194,11 +183,6 @@ impl<T> GateSession<T> {
         let windows = match clock {
             PredictionClock::Sample => None,
             PredictionClock::Windows { window_secs } => {
-                if learner.is_none() {
-                    return Err(NodeError::Topics(
-                        "predictions on the window clock need an online learner (`online:`), which predicts on the windows' rows".into(),
-                    ));
-                }
                 if !(window_secs.is_finite() && window_secs > 0.0) {
                     return Err(NodeError::Topics(format!(
                         "predictions on the window clock need rows averaged over a window; these have {window_secs} s"
@@ -236,10 +220,21 @@ impl<T> GateSession<T> {
             driven_secs: f64::NEG_INFINITY,
             windows,
             waiting: VecDeque::new(),
+            saved: None,
             image_silent_secs,
+            child_frame_id: None,
             image_seen: [(None, false); 2],
             faults: SessionFaults::default(),
         })
+    }
+
+    /// Poses are used only when the VO's `child_frame_id` is `frame`
+    /// (the frame `body_from_child` is the transform of); others are
+    /// counted and not used.
+    #[must_use]
+    pub fn with_child_frame_id(mut self, frame: Option<String>) -> Self {
+        self.child_frame_id = frame;
+        self
     }
 
     /// Messages kept per camera topic while they wait for their partners.
@@ -260,169 +255,6 @@ impl<T> GateSession<T> {
     /// The learner's inputs of a node row.
     fn learner_row(&self, row: &[f64]) -> Vec<f64> {
         self.learner_columns.iter().map(|&c| row[c]).collect()
-    }
-
-    /// One odometry output, of the joint state stamped `stamp_ns`: the
-    /// step since the output before it is known. The gate is driven to
-    /// that output (the step before is finished), and along the new step
-    /// as pairs are decided. The first output sets the gate's clock: the
-    /// outputs' own, so a pair stamped as a joint state is at its time.
-    ///
-    /// # Errors
-    /// A prediction the gate's odometry cannot use, or the learner's
-    /// failure on a window's row.
-    pub fn output(&mut self, out: &LiveOutput, stamp_ns: i64) -> Result<(), FrontendError> {
-        let prediction = match (out.residual, &self.windows) {
-            (Some((mean, variance)), None) => Some(ResidualPrediction {
-                mean: Vector3::from(mean),
-                variance: Vector3::from(variance),
-                absolute: None,
-            }),
-            _ => None,
-        };
-        let inputs = match &self.windows {
-            Some(_) => Some(self.learner_row(&out.inputs)),
-            None => out
-                .row
-                .as_deref()
-                .filter(|_| self.learner.is_some())
-                .map(|row| self.learner_row(row)),
-        };
-        let previous = self.previous.replace(Sample {
-            time_secs: out.time_secs,
-            twist: out.uncorrected,
-            inputs,
-        });
-        if let Some(step) = &self.step {
-            self.drive_to(step.end_secs)?;
-        }
-        match previous {
-            None => {
-                self.gate
-                    .set_origin_ns(stamp_ns - (out.time_secs * 1e9).round() as i64);
-                if let Some(windows) = self.windows.as_mut() {
-                    windows.index_at(out.time_secs);
-                }
-                self.driven_secs = out.time_secs;
-                if let Some(p) = prediction {
-                    self.gate.predict(p)?;
-                }
-            }
-            Some(Sample {
-                time_secs: time,
-                twist,
-                inputs,
-            }) => {
-                let dt = out.time_secs - time;
-                let (inputs, window) = match self.windows.as_mut() {
-                    Some(windows) => (
-                        None,
-                        Some(windows.step(time, dt, inputs.unwrap_or_default())),
-                    ),
-                    None => (inputs, None),
-                };
-                self.step = Some(Step {
-                    start_secs: time,
-                    end_secs: out.time_secs,
-                    twist,
-                    inputs,
-                    window,
-                    then_predict: prediction,
-                });
-            }
-        }
-        Ok(())
-    }
-
-    /// Drives the gate along the step known up to `time_secs` (no further
-    /// than the step's end), putting predictions in force where they are
-    /// due: at the step's end on the sample clock, at each window's end on
-    /// the window clock, after the targets waiting for that window.
-    fn drive_to(&mut self, time_secs: f64) -> Result<(), FrontendError> {
-        let Some(step) = self.step.as_mut() else {
-            return Ok(());
-        };
-        let target = time_secs.min(step.end_secs);
-        loop {
-            self.close_windows()?;
-            let Some(step) = self.step.as_mut() else {
-                return Ok(());
-            };
-            if self.driven_secs >= target {
-                break;
-            }
-            let mut end = target;
-            if let Some(next) = self.windows.as_ref().and_then(GridWindows::next_end)
-                && next > self.driven_secs
-            {
-                end = end.min(next);
-            }
-            let from = self.driven_secs.max(step.start_secs);
-            self.gate
-                .drive(&step.twist, end - from, step.inputs.as_deref());
-            if let (Some(windows), Some(w)) = (self.windows.as_mut(), step.window) {
-                windows.driven(from, end, w);
-            }
-            self.driven_secs = end;
-        }
-        if let Some(step) = self.step.as_mut()
-            && self.driven_secs >= step.end_secs
-            && let Some(p) = step.then_predict.take()
-        {
-            self.gate.predict(p)?;
-        }
-        Ok(())
-    }
-
-    /// Closes the windows that have ended by now: the targets waiting for
-    /// them are learned, then each window's prediction is put in force.
-    fn close_windows(&mut self) -> Result<(), FrontendError> {
-        loop {
-            let Some(closed) = self
-                .windows
-                .as_mut()
-                .and_then(|w| w.close_until(self.driven_secs))
-            else {
-                return Ok(());
-            };
-            self.learn_waiting();
-            if let (Some(row), Some(learner)) = (closed.row, self.learner.as_ref()) {
-                let prediction = learner.predict(&row)?;
-                self.gate.predict(prediction)?;
-            }
-        }
-    }
-
-    /// Learns the waiting targets whose windows have all closed, in the
-    /// order they were formed; a target none of whose stretches had a
-    /// row is dropped, as offline.
-    fn learn_waiting(&mut self) {
-        let Some(windows) = self.windows.as_mut() else {
-            return;
-        };
-        while let Some(target) = self.waiting.front() {
-            let start = target.time_secs - target.duration_secs;
-            let Some(inputs) = windows.inputs_over(start, target.time_secs) else {
-                break;
-            };
-            let Some(mut target) = self.waiting.pop_front() else {
-                break;
-            };
-            if let Some(inputs) = inputs {
-                target.inputs = inputs;
-                if let Some(learner) = self.learner.as_mut()
-                    && learner.learn(target).is_err()
-                {
-                    self.faults.learn_errors += 1;
-                }
-            }
-        }
-        let oldest = self
-            .waiting
-            .front()
-            .map_or(self.driven_secs, |t| t.time_secs - t.duration_secs);
-        let span = self.gate.settings().targets.max_interval_secs;
-        windows.forget_before(oldest.min(self.driven_secs - span));
     }
 
     /// One image or camera-info message received at `now_secs` on the
@@ -467,6 +299,14 @@ impl<T> GateSession<T> {
 
     /// The VO's odometry: learned from when it closes a target interval.
     pub fn vo_odometry(&mut self, m: &Odometry) -> PoseOutcome {
+        if self
+            .child_frame_id
+            .as_ref()
+            .is_some_and(|f| *f != m.child_frame_id)
+        {
+            self.faults.other_child_frame += 1;
+            return PoseOutcome::OtherFrame;
+        }
         let c = &m.pose_covariance;
         let variances = if c.len() == 36 {
             [c[0], c[7], c[14]]
@@ -514,6 +354,11 @@ impl<T> GateSession<T> {
                 self.faults.silent_image_topics += 1;
             }
         }
+    }
+
+    /// The residual prediction in force for the policy.
+    pub fn prediction(&self) -> &ResidualPrediction {
+        self.gate.prediction()
     }
 
     /// The gate's counts.
@@ -564,14 +409,25 @@ impl<T> GateSession<T> {
                 "predictions refused".to_string(),
                 f.predictions_refused.to_string(),
             ),
+            (
+                "VO poses of another child frame".to_string(),
+                f.other_child_frame.to_string(),
+            ),
         ]);
-        if f.silent_image_topics + f.undecodable + f.learn_errors + f.predictions_refused > 0
-            && status.level == OK
-        {
+        let faults = f.silent_image_topics
+            + f.undecodable
+            + f.learn_errors
+            + f.predictions_refused
+            + f.other_child_frame;
+        if faults > 0 && status.level == OK {
             status.level = WARN;
             status.message = format!(
-                "{} image topics gone silent, {} undecodable, {} targets refused, {} predictions refused",
-                f.silent_image_topics, f.undecodable, f.learn_errors, f.predictions_refused
+                "{} image topics gone silent, {} undecodable, {} targets refused, {} predictions refused, {} VO poses of another child frame",
+                f.silent_image_topics,
+                f.undecodable,
+                f.learn_errors,
+                f.predictions_refused,
+                f.other_child_frame
             );
         }
         status
