@@ -3,6 +3,7 @@
 //! PnP with RANSAC from a minimal solver ([`p3p`]) and a robust
 //! motion-only refinement ([`pose`]).
 
+pub mod bundle;
 pub mod frames;
 mod grid;
 pub mod p3p;

@@ -117,12 +117,12 @@ pub struct Correspondence {
 
 /// An observation's whitened residual (one entry per observed coordinate),
 /// its Jacobian rows in the pose and in the map point.
-type Whitened = (Vec<f64>, Vec<Vector6<f64>>, Vec<Vector3<f64>>);
+pub(super) type Whitened = (Vec<f64>, Vec<Vector6<f64>>, Vec<Vector3<f64>>);
 
 /// The residual (prediction − observation, in σ) of `c` at `pose`, its
 /// Jacobian in the pose (rows per observed coordinate) and in the map point
 /// (keyframe frame); `None` behind the camera.
-fn whitened(
+pub(super) fn whitened(
     c: &Correspondence,
     pose: &Isometry3<f64>,
     camera: &StereoIntrinsics,
