@@ -26,7 +26,7 @@ use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
 use gpodo_regressors::online_model::OnlineModel;
 use gpodo_regressors::{IlgrParams, RegressorSpec};
 use gpodo_traits::BodyTwist;
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::Vector3;
 
 const NS: i64 = 1_000_000_000;
 
@@ -73,18 +73,11 @@ fn output(t: f64) -> LiveOutput {
         angular_radps: Vector3::zeros(),
     };
     LiveOutput {
-        time_secs: t,
         row: Some(vec![1.0]),
         covered_secs: 1.0,
         inputs: vec![1.0],
-        uncorrected: twist,
-        twist,
-        variance: [1e-4; 6],
-        pose: Isometry3::identity(),
-        pose_covariance: [0.0; 36],
-        uncorrected_pose: Isometry3::identity(),
-        out_of_range: Vec::new(),
         residual: Some(([0.0; 3], [1e-4; 3])),
+        ..common::output_at(t, twist)
     }
 }
 

@@ -9,21 +9,19 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::collections::HashMap;
 
 use gpodo_frontends::gate::GateState;
-use gpodo_frontends::gating::UncertaintyBudgetParams;
 use gpodo_frontends::online::{OnlineLearner, OnlineMode};
 use gpodo_frontends::params::{FrontendParams, VoSpec};
-use gpodo_frontends::prediction::ResidualSource;
+use gpodo_frontends::run_frontend;
 use gpodo_frontends::scheme::causal_selector;
 use gpodo_frontends::traverse::{Traverse, TraverseWindow};
 use gpodo_frontends::vo::{CameraParams, SimulatedVo, SimulatedVoParams};
-use gpodo_frontends::{SelectorSpec, run_frontend};
 use gpodo_node::gate::{LiveGate, LiveGateSettings, PoseOutcome};
-use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
-use gpodo_regressors::online_model::OnlineModel;
-use gpodo_regressors::{Ilgr, IlgrParams, RegressorSpec};
+use gpodo_regressors::Ilgr;
 use gpodo_traits::BodyTwist;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -75,13 +73,6 @@ fn s_curve(secs: f64) -> Traverse {
     Traverse::new("s-curve", times, gt, twists, windows, camera).unwrap()
 }
 
-fn ilgr_params() -> IlgrParams {
-    IlgrParams {
-        init_lengthscale: 2.0,
-        ..IlgrParams::default()
-    }
-}
-
 #[test]
 fn the_live_gate_forwards_the_offline_schemes_frames_and_learns_the_same_model() {
     let vo = SimulatedVoParams {
@@ -116,23 +107,14 @@ fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
         vo: VoSpec::Simulated(vo_params),
         ..FrontendParams::default()
     };
-    let spec = SelectorSpec::MaxGap {
-        inner: Box::new(SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
-            budget_m2: 1e-4,
-            min_period_secs: 0.4,
-            count_mean: Some(false),
-        })),
-        max_gap_secs: None,
-        max_distance_m: Some(0.3),
-        max_rotation_rad: Some(0.15),
-    };
+    let spec = common::drift_budget_with_guard();
     let lost_period = params.lost_frame_period_secs;
 
     // Offline.
     let mut selector = causal_selector(&spec, lost_period, None).unwrap();
     let mut offline_learner = OnlineLearner::new(
         "ilgr",
-        Box::new(Ilgr::new(ilgr_params()).unwrap()),
+        Box::new(Ilgr::new(common::ilgr_params()).unwrap()),
         OnlineMode::Update,
         params.initial_residual_variance,
     )
@@ -164,20 +146,7 @@ fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
             ..LiveGateSettings::default()
         },
     );
-    let mut learner = LiveLearner::new(
-        OnlineModel::from_spec(&RegressorSpec::Ilgr(ilgr_params())).unwrap(),
-        OnlineMode::Update,
-        params.initial_residual_variance,
-        LearnerIdentity {
-            label: "ilgr".into(),
-            input_names: vec!["a".into(), "b".into()],
-            input_standardizer: None,
-            rows: None,
-            rover_sha256: String::new(),
-        },
-        LearnerStart::Empty,
-    )
-    .unwrap();
+    let mut learner = common::live_ilgr(params.initial_residual_variance);
     let times = t.times_secs();
     let windows = t.windows();
     let mut step_window = vec![None; times.len() - 1];
@@ -235,22 +204,7 @@ fn gate_against_offline(vo_params: SimulatedVoParams) -> usize {
     assert_eq!(lost, run.processed.iter().filter(|f| !f.tracked).count());
     assert_eq!(learner.targets_learned(), run.online_targets as u64);
     // The learners end in the same state: the same predictions.
-    for inputs in [[0.0, 1.0], [0.5, -0.8], [-0.9, 0.1]] {
-        let window = TraverseWindow {
-            start_secs: 0.0,
-            end_secs: 0.0,
-            steps: 0..0,
-            inputs: inputs.to_vec(),
-            true_residual: Vector3::zeros(),
-        };
-        let offline = offline_learner.on_window(0, &window).unwrap();
-        let live = learner.predict(&inputs).unwrap();
-        assert!(
-            (offline.mean - live.mean).abs().max() <= 1e-12,
-            "{offline:?} {live:?}"
-        );
-        assert!((offline.variance - live.variance).abs().max() <= 1e-12);
-    }
+    common::assert_same_learner(&mut offline_learner, &learner);
     println!(
         "{} frames forwarded of {}, {} lost, {} targets",
         forwarded.len(),

@@ -19,10 +19,9 @@ mod common;
 
 use gpodo_datasets::residuals::{LogStep, window_rows};
 use gpodo_frontends::gate::GateState;
-use gpodo_frontends::gating::UncertaintyBudgetParams;
 use gpodo_frontends::online::{OnlineLearner, OnlineMode};
 use gpodo_frontends::params::{FrontendParams, MotionPrior, VoSpec};
-use gpodo_frontends::prediction::{Precomputed, ResidualPrediction, ResidualSource};
+use gpodo_frontends::prediction::{Precomputed, ResidualPrediction};
 use gpodo_frontends::run::FrontEnd;
 use gpodo_frontends::scheme::causal_selector;
 use gpodo_frontends::traverse::{Traverse, TraverseWindow};
@@ -32,9 +31,7 @@ use gpodo_node::LiveOutput;
 use gpodo_node::gate::pairing::{PairingSettings, StereoPair};
 use gpodo_node::gate::session::{GateSession, LearnerEnd, Learning, PredictionClock};
 use gpodo_node::gate::{LiveGate, LiveGateSettings};
-use gpodo_node::learner::{LearnerIdentity, LearnerStart, LiveLearner};
-use gpodo_regressors::online_model::OnlineModel;
-use gpodo_regressors::{Ilgr, IlgrParams, RegressorSpec};
+use gpodo_regressors::Ilgr;
 use gpodo_traits::BodyTwist;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -103,13 +100,6 @@ fn s_curve(secs: f64) -> (Traverse, Vec<LogStep>) {
     (traverse, steps)
 }
 
-fn ilgr_params() -> IlgrParams {
-    IlgrParams {
-        init_lengthscale: 2.0,
-        ..IlgrParams::default()
-    }
-}
-
 /// An odometry output at sample `k`: its time, the step's twist from
 /// there and the sample's inputs (the published row and residual do not
 /// reach the gate on the window clock).
@@ -117,18 +107,8 @@ fn output(t: &Traverse, steps: &[LogStep], k: usize) -> LiveOutput {
     let time_secs = t.times_secs()[k];
     let twist = steps.get(k).map_or_else(BodyTwist::default, |s| s.twist);
     LiveOutput {
-        time_secs,
-        row: None,
-        covered_secs: 0.0,
         inputs: sample_inputs(time_secs),
-        uncorrected: twist,
-        twist,
-        variance: [1e-4; 6],
-        pose: Isometry3::identity(),
-        pose_covariance: [0.0; 36],
-        uncorrected_pose: Isometry3::identity(),
-        out_of_range: Vec::new(),
-        residual: None,
+        ..common::output_at(time_secs, twist)
     }
 }
 
@@ -174,23 +154,14 @@ fn gate_against_offline(secs: f64, vo_params: SimulatedVoParams) -> (usize, usiz
         motion_prior: MotionPrior::ConstantVelocity,
         ..FrontendParams::default()
     };
-    let spec = SelectorSpec::MaxGap {
-        inner: Box::new(SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
-            budget_m2: 1e-4,
-            min_period_secs: 0.4,
-            count_mean: Some(false),
-        })),
-        max_gap_secs: None,
-        max_distance_m: Some(0.3),
-        max_rotation_rad: Some(0.15),
-    };
+    let spec = common::drift_budget_with_guard();
     let lost_period = params.lost_frame_period_secs;
 
     // Offline.
     let mut selector = causal_selector(&spec, lost_period, None).unwrap();
     let mut offline_learner = OnlineLearner::new(
         "ilgr",
-        Box::new(Ilgr::new(ilgr_params()).unwrap()),
+        Box::new(Ilgr::new(common::ilgr_params()).unwrap()),
         OnlineMode::Update,
         params.initial_residual_variance,
     )
@@ -225,20 +196,7 @@ fn gate_against_offline(secs: f64, vo_params: SimulatedVoParams) -> (usize, usiz
             ..LiveGateSettings::default()
         },
     );
-    let learner = LiveLearner::new(
-        OnlineModel::from_spec(&RegressorSpec::Ilgr(ilgr_params())).unwrap(),
-        OnlineMode::Update,
-        params.initial_residual_variance,
-        LearnerIdentity {
-            label: "ilgr".into(),
-            input_names: vec!["a".into(), "b".into()],
-            input_standardizer: None,
-            rows: None,
-            rover_sha256: String::new(),
-        },
-        LearnerStart::Empty,
-    )
-    .unwrap();
+    let learner = common::live_ilgr(params.initial_residual_variance);
     let mut session = GateSession::new(
         gate,
         PairingSettings::default(),
@@ -315,22 +273,7 @@ fn gate_against_offline(secs: f64, vo_params: SimulatedVoParams) -> (usize, usiz
     assert_eq!(lost, run.processed.iter().filter(|f| !f.tracked).count());
     assert_eq!(learner.targets_learned(), run.online_targets as u64);
     // The learners end in the same state: the same predictions.
-    for inputs in [[0.0, 1.0], [0.5, -0.8], [-0.9, 0.1]] {
-        let window = TraverseWindow {
-            start_secs: 0.0,
-            end_secs: 0.0,
-            steps: 0..0,
-            inputs: inputs.to_vec(),
-            true_residual: Vector3::zeros(),
-        };
-        let offline = offline_learner.on_window(0, &window).unwrap();
-        let live = learner.predict(&inputs).unwrap();
-        assert!(
-            (offline.mean - live.mean).abs().max() <= 1e-12,
-            "{offline:?} {live:?}"
-        );
-        assert!((offline.variance - live.variance).abs().max() <= 1e-12);
-    }
+    common::assert_same_learner(&mut offline_learner, &learner);
     println!(
         "{} frames forwarded of {}, {} lost, {} relocalisations, {} targets",
         forwarded.len(),
@@ -372,8 +315,11 @@ fn without_a_learner_the_saved_models_prediction_changes_only_at_window_ends() {
     // is 1e-6 times its index.
     let mut in_force = Vec::new();
     for k in 0..12_i64 {
-        let mut out = output_at(0.3 * k as f64);
-        out.residual = Some(([0.0; 3], [1e-6 * k as f64; 3]));
+        let out = LiveOutput {
+            inputs: vec![0.0, 0.0],
+            residual: Some(([0.0; 3], [1e-6 * k as f64; 3])),
+            ..common::output_at(0.3 * k as f64, BodyTwist::default())
+        };
         session.output(&out, k * 300_000_000).unwrap();
         // A pair at the sample: the gate is driven to it.
         session.decide(pair(k * 300_000_000), 0.0);
@@ -390,23 +336,6 @@ fn without_a_learner_the_saved_models_prediction_changes_only_at_window_ends() {
         })
         .collect();
     assert_eq!(in_force, expected);
-}
-
-fn output_at(time_secs: f64) -> LiveOutput {
-    LiveOutput {
-        time_secs,
-        row: None,
-        covered_secs: 0.0,
-        inputs: vec![0.0, 0.0],
-        uncorrected: BodyTwist::default(),
-        twist: BodyTwist::default(),
-        variance: [1e-4; 6],
-        pose: Isometry3::identity(),
-        pose_covariance: [0.0; 36],
-        uncorrected_pose: Isometry3::identity(),
-        out_of_range: Vec::new(),
-        residual: None,
-    }
 }
 
 fn pair(stamp_ns: i64) -> StereoPair<()> {

@@ -35,9 +35,7 @@ use gpodo_datasets::bags::write::{
     EPOCH_NS, WheelUnits, write_mcap_with_camera, written_topic_map,
 };
 use gpodo_datasets::bags::write_camera::written_camera_topics;
-use gpodo_frontends::SelectorSpec;
 use gpodo_frontends::gate::GateState;
-use gpodo_frontends::gating::UncertaintyBudgetParams;
 use gpodo_frontends::online::OnlineMode;
 use gpodo_frontends::params::FrontendParams;
 use gpodo_frontends::scheme::causal_selector;
@@ -83,16 +81,7 @@ fn topics() -> GateTopics {
 /// learning online on the node's rows, lost only on what the VO says.
 fn session<T>(model: &LiveModel) -> GateSession<T> {
     let params = FrontendParams::default();
-    let spec = SelectorSpec::MaxGap {
-        inner: Box::new(SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
-            budget_m2: 1e-4,
-            min_period_secs: 0.4,
-            count_mean: Some(false),
-        })),
-        max_gap_secs: None,
-        max_distance_m: Some(0.3),
-        max_rotation_rad: Some(0.15),
-    };
+    let spec = common::drift_budget_with_guard();
     let gate = LiveGate::new(
         causal_selector(&spec, params.lost_frame_period_secs, None).unwrap(),
         GateState::new(

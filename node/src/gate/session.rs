@@ -173,7 +173,7 @@ impl<T> GateSession<T> {
     /// [`NodeError::Topics`] when the learner reads a column the node's
     /// rows do not have, or the window clock has no window.
     pub fn new(
-        gate: LiveGate,
+        mut gate: LiveGate,
         pairing: PairingSettings,
         learner: Option<Learning>,
         node_columns: &[String],
@@ -191,7 +191,6 @@ impl<T> GateSession<T> {
                 Some(GridWindows::new(window_secs))
             }
         };
-        let mut gate = gate;
         if windows.is_some() {
             gate.attribute_inputs_later();
         }

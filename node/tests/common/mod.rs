@@ -166,3 +166,89 @@ pub fn learner_target(i: usize) -> gpodo_frontends::vo_target::VoTarget {
         duration_secs: 4.0,
     }
 }
+
+/// The drift budget (1e-4 m², at most every 0.4 s) with a turn and
+/// distance guard: the gated policy the gate's tests run.
+pub fn drift_budget_with_guard() -> gpodo_frontends::SelectorSpec {
+    use gpodo_frontends::SelectorSpec;
+    use gpodo_frontends::gating::UncertaintyBudgetParams;
+    SelectorSpec::MaxGap {
+        inner: Box::new(SelectorSpec::UncertaintyBudget(UncertaintyBudgetParams {
+            budget_m2: 1e-4,
+            min_period_secs: 0.4,
+            count_mean: Some(false),
+        })),
+        max_gap_secs: None,
+        max_distance_m: Some(0.3),
+        max_rotation_rad: Some(0.15),
+    }
+}
+
+/// ILGR with a 2-s initial lengthscale, offline and live alike.
+pub fn ilgr_params() -> gpodo_regressors::IlgrParams {
+    gpodo_regressors::IlgrParams {
+        init_lengthscale: 2.0,
+        ..gpodo_regressors::IlgrParams::default()
+    }
+}
+
+/// A live ILGR learner ([`ilgr_params`]) starting empty on the inputs
+/// `a` and `b`, with prior variance `variance`.
+pub fn live_ilgr(variance: f64) -> gpodo_node::learner::LiveLearner {
+    gpodo_node::learner::LiveLearner::new(
+        gpodo_regressors::online_model::OnlineModel::from_spec(&RegressorSpec::Ilgr(ilgr_params()))
+            .unwrap(),
+        gpodo_frontends::online::OnlineMode::Update,
+        variance,
+        gpodo_node::learner::LearnerIdentity {
+            label: "ilgr".into(),
+            input_names: vec!["a".into(), "b".into()],
+            input_standardizer: None,
+            rows: None,
+            rover_sha256: String::new(),
+        },
+        gpodo_node::learner::LearnerStart::Empty,
+    )
+    .unwrap()
+}
+
+/// Asserts that the offline learner and the live one predict alike, to
+/// 1e-12, on three rows of two inputs.
+pub fn assert_same_learner(
+    offline: &mut dyn gpodo_frontends::prediction::ResidualSource,
+    live: &gpodo_node::learner::LiveLearner,
+) {
+    for inputs in [[0.0, 1.0], [0.5, -0.8], [-0.9, 0.1]] {
+        let window = gpodo_frontends::traverse::TraverseWindow {
+            start_secs: 0.0,
+            end_secs: 0.0,
+            steps: 0..0,
+            inputs: inputs.to_vec(),
+            true_residual: nalgebra::Vector3::zeros(),
+        };
+        let a = offline.on_window(0, &window).unwrap();
+        let b = live.predict(&inputs).unwrap();
+        assert!((a.mean - b.mean).abs().max() <= 1e-12, "{a:?} {b:?}");
+        assert!((a.variance - b.variance).abs().max() <= 1e-12);
+    }
+}
+
+/// An odometry output at `time_secs` with the motion model's `twist` as
+/// published, no row, no residual and no inputs (tests set what they
+/// need).
+pub fn output_at(time_secs: f64, twist: gpodo_traits::BodyTwist) -> gpodo_node::LiveOutput {
+    gpodo_node::LiveOutput {
+        time_secs,
+        row: None,
+        covered_secs: 0.0,
+        inputs: Vec::new(),
+        uncorrected: twist,
+        twist,
+        variance: [1e-4; 6],
+        pose: nalgebra::Isometry3::identity(),
+        pose_covariance: [0.0; 36],
+        uncorrected_pose: nalgebra::Isometry3::identity(),
+        out_of_range: Vec::new(),
+        residual: None,
+    }
+}

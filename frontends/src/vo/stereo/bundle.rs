@@ -27,7 +27,9 @@ use nalgebra::{
     Vector3, Vector6,
 };
 
-use super::pose::{CHI2_MONO, CHI2_STEREO, Correspondence, StereoIntrinsics, whitened};
+use super::pose::{
+    Correspondence, StereoIntrinsics, chi2 as correspondence_chi2, chi2_limit, whitened,
+};
 use crate::FrontendError;
 
 /// One keyframe's observation of one map point.
@@ -154,10 +156,7 @@ pub fn local_bundle_adjustment(
         Loss::Huber,
         settings.robust_iterations,
     );
-    for (keep, o) in inliers.iter_mut().zip(&map.observations) {
-        let (value, limit) = observation_chi2(o, &poses, &points, camera);
-        *keep = value <= limit;
-    }
+    set_aside(map, &poses, &points, camera, &mut inliers);
     context.minimise(
         &mut poses,
         &mut points,
@@ -165,14 +164,11 @@ pub fn local_bundle_adjustment(
         Loss::Squared,
         settings.refine_iterations,
     );
-    for (keep, o) in inliers.iter_mut().zip(&map.observations) {
-        let (value, limit) = observation_chi2(o, &poses, &points, camera);
-        *keep = *keep && value <= limit;
-    }
+    set_aside(map, &poses, &points, camera, &mut inliers);
     let n = context.normal(&poses, &points, &inliers, Loss::Squared);
     let reduced = context.reduced(&n, 0.0);
     let pose_covariance = reduced
-        .and_then(|(s, _)| s.try_inverse())
+        .and_then(|(s, _, _)| s.try_inverse())
         .unwrap_or_else(|| DMatrix::zeros(0, 0));
     Ok(Adjusted {
         chi2: (chi2_before, chi2(map, &poses, &points, &inliers, camera)),
@@ -240,18 +236,26 @@ fn observation_chi2(
     points: &[Point3<f64>],
     camera: &StereoIntrinsics,
 ) -> (f64, f64) {
-    let limit = if o.right_x.is_some() {
-        CHI2_STEREO
-    } else {
-        CHI2_MONO
-    };
-    let value = whitened(
+    correspondence_chi2(
         &correspondence(o, &points[o.point]),
         &poses[o.keyframe],
         camera,
     )
-    .map_or(f64::INFINITY, |(r, _, _)| r.iter().map(|x| x * x).sum());
-    (value, limit)
+}
+
+/// Sets aside the observations beyond their χ² limit or behind their
+/// camera (ORB-SLAM2's outliers after each pass).
+fn set_aside(
+    map: &LocalMap,
+    poses: &[Isometry3<f64>],
+    points: &[Point3<f64>],
+    camera: &StereoIntrinsics,
+    kept: &mut [bool],
+) {
+    for (keep, o) in kept.iter_mut().zip(&map.observations) {
+        let (value, limit) = observation_chi2(o, poses, points, camera);
+        *keep = *keep && value <= limit;
+    }
 }
 
 /// The kept observations' χ².
@@ -278,6 +282,9 @@ fn perturbed(step: &[f64], pose: &Isometry3<f64>) -> Isometry3<f64> {
         UnitQuaternion::from_scaled_axis(Vector3::new(step[0], step[1], step[2])),
     ) * pose
 }
+
+/// The reduced system, its right-hand side and the points' inverses.
+type Reduced = (DMatrix<f64>, DVector<f64>, Vec<Option<Matrix3<f64>>>);
 
 struct Context<'a> {
     map: &'a LocalMap,
@@ -316,11 +323,7 @@ impl Context<'_> {
                 continue;
             };
             let e2: f64 = r.iter().map(|x| x * x).sum();
-            let limit = if o.right_x.is_some() {
-                CHI2_STEREO
-            } else {
-                CHI2_MONO
-            };
+            let limit = chi2_limit(&c);
             let (weight, cost) = match loss {
                 Loss::Huber if e2 > limit => {
                     let delta = limit.sqrt();
@@ -352,9 +355,9 @@ impl Context<'_> {
     }
 
     /// The reduced system `S δp = b` with the points eliminated, each
-    /// block damped by `lambda` on its diagonal; with each point's damped
+    /// block damped by `lambda` on its diagonal, and each point's damped
     /// block's inverse. `None` when a point's block is singular.
-    fn reduced(&self, n: &Normal, lambda: f64) -> Option<(DMatrix<f64>, DVector<f64>)> {
+    fn reduced(&self, n: &Normal, lambda: f64) -> Option<Reduced> {
         let mut s = n.poses.clone();
         for d in 0..s.nrows() {
             s[(d, d)] += lambda * (1.0 + s[(d, d)]);
@@ -375,7 +378,7 @@ impl Context<'_> {
                 }
             }
         }
-        Some((s, b))
+        Some((s, b, inverses))
     }
 
     /// Per point, its damped block's inverse (`None` for a point no kept
@@ -419,15 +422,12 @@ impl Context<'_> {
         let mut lambda = 1e-5;
         let mut n = self.normal(poses, points, kept, loss);
         for _ in 0..iterations {
-            let Some((s, b)) = self.reduced(&n, lambda) else {
+            let Some((s, b, inverses)) = self.reduced(&n, lambda) else {
                 return;
             };
             let Some(dp) = s.cholesky().map(|c| c.solve(&b)) else {
                 lambda *= 10.0;
                 continue;
-            };
-            let Some(inverses) = self.point_inverses(&n, lambda) else {
-                return;
             };
             // Each point's step from the poses': V⁻¹ (−g_l − Σ Wᵀ δp).
             let mut rhs: Vec<Vector3<f64>> = n.points.iter().map(|(_, g)| -g).collect();

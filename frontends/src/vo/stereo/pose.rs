@@ -166,16 +166,24 @@ pub(super) fn whitened(
     Some((r, pose_rows, point_rows))
 }
 
-/// `c`'s χ² at `pose` and its threshold; infinite behind the camera.
-fn chi2(c: &Correspondence, pose: &Isometry3<f64>, camera: &StereoIntrinsics) -> (f64, f64) {
-    let limit = if c.right_x.is_some() {
+/// `c`'s χ² limit: the 95 % quantile of its degrees of freedom.
+pub(super) fn chi2_limit(c: &Correspondence) -> f64 {
+    if c.right_x.is_some() {
         CHI2_STEREO
     } else {
         CHI2_MONO
-    };
+    }
+}
+
+/// `c`'s χ² at `pose` and its threshold; infinite behind the camera.
+pub(super) fn chi2(
+    c: &Correspondence,
+    pose: &Isometry3<f64>,
+    camera: &StereoIntrinsics,
+) -> (f64, f64) {
     let value =
         whitened(c, pose, camera).map_or(f64::INFINITY, |(r, _, _)| r.iter().map(|x| x * x).sum());
-    (value, limit)
+    (value, chi2_limit(c))
 }
 
 /// PnP with RANSAC: poses from random triples of `correspondences` by
@@ -380,11 +388,7 @@ fn normal_equations(
             continue;
         };
         let e2: f64 = r.iter().map(|x| x * x).sum();
-        let limit = if c.right_x.is_some() {
-            CHI2_STEREO
-        } else {
-            CHI2_MONO
-        };
+        let limit = chi2_limit(c);
         let delta = limit.sqrt();
         let weight = match weighting {
             Weighting::Huber if e2 > limit => delta / e2.sqrt(),

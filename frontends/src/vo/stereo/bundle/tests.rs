@@ -135,33 +135,32 @@ fn the_reprojection_jacobians_match_finite_differences() {
     };
     let (r0, jp, jl) = whitened(&c(point), &pose, &cam).unwrap();
     let h = 1e-6;
-    for i in 0..6 {
-        let mut step = [0.0; 6];
-        step[i] = h;
-        let (plus, _, _) = whitened(&c(point), &perturbed(&step, &pose), &cam).unwrap();
-        step[i] = -h;
-        let (minus, _, _) = whitened(&c(point), &perturbed(&step, &pose), &cam).unwrap();
-        for row in 0..3 {
-            let fd = (plus[row] - minus[row]) / (2.0 * h);
-            assert!(
-                (fd - jp[row][i]).abs() < 1e-6 * (1.0 + fd.abs()),
-                "pose {i}, row {row}: {fd} against {}",
-                jp[row][i]
-            );
-        }
-    }
-    for i in 0..3 {
-        let mut d = Vector3::zeros();
-        d[i] = h;
-        let (plus, _, _) = whitened(&c(point + d), &pose, &cam).unwrap();
-        let (minus, _, _) = whitened(&c(point - d), &pose, &cam).unwrap();
-        for row in 0..3 {
-            let fd = (plus[row] - minus[row]) / (2.0 * h);
-            assert!(
-                (fd - jl[row][i]).abs() < 1e-6 * (1.0 + fd.abs()),
-                "point {i}, row {row}: {fd} against {}",
-                jl[row][i]
-            );
+    // Central differences of the residual along coordinate `i` of the
+    // pose's left perturbation (`pose_step`) or of the point.
+    let residual = |i: usize, sign: f64, pose_step: bool| {
+        let (p, x) = if pose_step {
+            let mut step = [0.0; 6];
+            step[i] = sign * h;
+            (perturbed(&step, &pose), point)
+        } else {
+            let mut d = Vector3::zeros();
+            d[i] = sign * h;
+            (pose, point + d)
+        };
+        whitened(&c(x), &p, &cam).unwrap().0
+    };
+    for (pose_step, columns) in [(true, 6), (false, 3)] {
+        for i in 0..columns {
+            let (plus, minus) = (residual(i, 1.0, pose_step), residual(i, -1.0, pose_step));
+            for row in 0..3 {
+                let fd = (plus[row] - minus[row]) / (2.0 * h);
+                let analytic = if pose_step { jp[row][i] } else { jl[row][i] };
+                assert!(
+                    (fd - analytic).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "{} {i}, row {row}: {fd} against {analytic}",
+                    if pose_step { "pose" } else { "point" }
+                );
+            }
         }
     }
     assert_eq!(r0.len(), 3);
