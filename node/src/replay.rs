@@ -63,8 +63,10 @@ pub struct ReplaySummary {
 pub type RecordedPair<'a> = StereoPair<&'a RosMessage>;
 
 /// The VO behind the gate in a replay: the odometry it publishes for a
-/// forwarded pair, or none (it gave nothing: lost, or not yet started).
-pub type ReplayVo<'a> = dyn FnMut(&RecordedPair<'_>) -> Option<Odometry> + 'a;
+/// forwarded pair (given with the gate's decision on it, whose
+/// keyframe-threshold scale a VO of gpodo's can apply), or none (it gave
+/// nothing: lost, or not yet started).
+pub type ReplayVo<'a> = dyn FnMut(&RecordedPair<'_>, &GateDecision) -> Option<Odometry> + 'a;
 
 /// The gate in a replay: its topics, its session (the learner in
 /// lock-step), and the VO it forwards pairs to, in the loop: the VO's
@@ -394,7 +396,7 @@ fn decide_pair(
             left_info: message(pair.left_info),
             right_info: message(pair.right_info),
         };
-        if let Some(odometry) = (g.vo)(&recorded) {
+        if let Some(odometry) = (g.vo)(&recorded, &decision) {
             g.session.vo_odometry(&odometry);
         }
     }

@@ -191,7 +191,7 @@ fn a_cyclone_dds_peer_gets_the_replays_gated_pairs_and_the_learner_ends_alike() 
     let mut model = load();
     let mut replayed = session(&model);
     let mut answers: BTreeMap<i64, [f64; 7]> = BTreeMap::new();
-    let mut vo = |pair: &RecordedPair<'_>| {
+    let mut vo = |pair: &RecordedPair<'_>, _: &gpodo_node::gate::GateDecision| {
         assert!(matches!(pair.left, RosMessage::Image(_)));
         let pose = vo_pose(&log, pair.stamp_ns);
         answers.insert(pair.stamp_ns, pose);

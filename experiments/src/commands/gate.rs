@@ -122,7 +122,9 @@ pub fn build_gate(
 }
 
 /// The identity of a learner of `spec` starting empty on `columns`, with
-/// the row recipe of `model` if one was given.
+/// the row recipe of `model` if one was given, and its input scaling when
+/// it reads the same columns (as the offline schemes' online learners
+/// learn on the trained model's standardised inputs).
 fn empty_identity(
     spec: &RegressorSpec,
     columns: &[String],
@@ -132,7 +134,9 @@ fn empty_identity(
     LearnerIdentity {
         label: format!("online: {}", spec.label()),
         input_names: columns.to_vec(),
-        input_standardizer: None,
+        input_standardizer: model
+            .filter(|m| m.input_names == columns)
+            .and_then(|m| m.input_standardizer.clone()),
         rows: model.and_then(|m| m.rows.clone()),
         rover_sha256,
     }

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 
 use crate::commands::live_gate::{Learner, LiveGateRun};
+use crate::commands::replay_frontend::{FrontEndVo, RecordedTraverse, ReplayFrontEnd};
 
 /// What `gpodo live` was asked.
 #[derive(Debug, Clone, Default)]
@@ -99,12 +100,51 @@ fn replay(
         )?),
         None => None,
     };
-    let recorded = match &gate {
-        Some(g) => crate::commands::live_gate::recorded_vo(bag, &g.file.topics.vo_odometry)?,
-        None => Default::default(),
+    // The VO behind the gate: the offline schemes' front end on the
+    // recording (`replay_frontend:`), else the recording's VO topic.
+    let frontend = gate.as_ref().and_then(|g| g.file.replay_frontend.clone());
+    let child_frame_id = gate
+        .as_ref()
+        .and_then(|g| g.file.vo_child_frame_id.clone())
+        .unwrap_or_default();
+    let traverse = match (&gate, &frontend) {
+        (Some(g), Some(f)) => {
+            let saved = gpodo_regressors::model_file::ModelFile::load(&options.model)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", options.model.display()))?;
+            Some(
+                RecordedTraverse::load(bag, map, &g.file.topics, &saved, &options.rover, f)
+                    .context("the gate file's `replay_frontend`")?,
+            )
+        }
+        _ => None,
     };
-    let mut vo =
-        |pair: &gpodo_node::replay::RecordedPair<'_>| recorded.get(&pair.stamp_ns).cloned();
+    let recorded = match (&gate, &traverse) {
+        (Some(g), None) => {
+            crate::commands::live_gate::recorded_vo(bag, &g.file.topics.vo_odometry)?
+        }
+        _ => Default::default(),
+    };
+    let mut behind = match (&traverse, &frontend) {
+        (Some(t), Some(f)) => Some((t.vo(f)?, ReplayFrontEnd::no_model(&t.traverse, f))),
+        _ => None,
+    };
+    let mut front_end =
+        match (&traverse, &frontend, behind.as_mut()) {
+            (Some(t), Some(f), Some((tracker, no_model))) => Some(
+                gpodo_frontends::run::FrontEnd::new(&t.traverse, f, no_model, tracker.as_mut())?,
+            ),
+            _ => None,
+        };
+    let mut answers = match (front_end.as_mut(), &traverse) {
+        (Some(fe), Some(t)) => Some(FrontEndVo::new(fe, t, &child_frame_id)),
+        _ => None,
+    };
+    let mut vo = |pair: &gpodo_node::replay::RecordedPair<'_>,
+                  decision: &gpodo_node::gate::GateDecision| match answers.as_mut()
+    {
+        Some(a) => a.answer(pair, decision),
+        None => recorded.get(&pair.stamp_ns).cloned(),
+    };
     let gated = gate.as_mut().map(|g| gpodo_node::replay::GatedReplay {
         topics: &g.file.topics,
         session: &mut g.session,
@@ -116,6 +156,16 @@ fn replay(
         g.finish();
     }
     let summary = summary?;
+    if let Some(a) = answers {
+        if let Some(e) = a.error {
+            anyhow::bail!("the replay's front end: {e}");
+        }
+        println!(
+            "the front end behind the gate: {} pairs processed, {} of them lost",
+            a.processed.len(),
+            a.lost
+        );
+    }
     if let Some(path) = &options.decisions {
         let csv = crate::commands::live_gate::decisions_csv(&summary.decisions);
         std::fs::write(path, csv).with_context(|| format!("{}", path.display()))?;

@@ -9,5 +9,6 @@ pub mod gate;
 pub mod import;
 pub mod live;
 pub mod live_gate;
+pub mod replay_frontend;
 pub mod simulate;
 pub mod tracker_calibration;

@@ -81,6 +81,14 @@ pub struct GateFile {
     /// Where and how often the learner's model is written.
     #[serde(default)]
     pub checkpoint: CheckpointSpec,
+    /// In a replay (`--replay`), the VO behind the gate: the front end the
+    /// offline schemes run (an experiment file's `frontend:`), tracking
+    /// the recording imported as `gpodo run` imports it, stepped by the
+    /// pairs the gate forwards. Its poses are the body's, so
+    /// `body_from_child` must be left out. Omitted: the recording's own
+    /// VO topic answers each forwarded pair.
+    #[serde(default)]
+    pub replay_frontend: Option<gpodo_frontends::params::FrontendParams>,
 }
 
 /// When the residual the policy reads changes (a gate file's
@@ -225,6 +233,23 @@ impl GateFile {
                     "online.min_targets",
                     "zero targets",
                     "refit_every and min_targets of at least 1",
+                ));
+            }
+        }
+        if let Some(frontend) = &self.replay_frontend {
+            frontend.validate().map_err(|e| match e {
+                gpodo_frontends::FrontendError::InvalidConfig { field, expected } => Issue::new(
+                    &format!("replay_frontend.{field}"),
+                    "an invalid setting",
+                    expected,
+                ),
+                e => Issue::from_frontend("replay_frontend", e),
+            })?;
+            if self.body_from_child.is_some() {
+                return Err(Issue::new(
+                    "body_from_child",
+                    "a transform beside `replay_frontend`",
+                    "no `body_from_child`: the replay's front end publishes the body's poses",
                 ));
             }
         }

@@ -99,6 +99,25 @@ fn fixed_rate_frames(config: &ExperimentConfig, times: &[f64]) -> Vec<usize> {
     frames
 }
 
+/// A recording's stereo pairs as the stereo VO `vo` reads them: through
+/// the recorded camera infos' intrinsics and baseline when the recording
+/// has both, else `vo`'s camera.
+///
+/// # Errors
+/// Camera infos that cannot give a camera, said.
+pub(crate) fn recorded_stereo_frames(
+    frames: &Arc<BagFrames>,
+    vo: &gpodo_frontends::vo::stereo::StereoVoParams,
+) -> Result<Arc<StereoFrames>, String> {
+    let camera = frames.camera(&vo.camera)?;
+    let source: Arc<BagFrames> = Arc::clone(frames);
+    Ok(Arc::new(StereoFrames::with_orb(
+        camera,
+        source,
+        vo.orb(&camera),
+    )))
+}
+
 /// The frames of each traverse, before any is rendered.
 fn camera_sources(
     config: &ExperimentConfig,
@@ -127,15 +146,14 @@ fn camera_sources(
                         t.name()
                     ))
                 })?;
-                let camera = frames.camera(&vo.camera).map_err(|detail| {
-                    PipelineError::Inconsistent(format!("the camera of `{}`: {detail}", t.name()))
-                })?;
-                let source: Arc<BagFrames> = Arc::clone(frames);
-                Ok(Some(Arc::new(StereoFrames::with_orb(
-                    camera,
-                    source,
-                    vo.orb(&camera),
-                ))))
+                recorded_stereo_frames(frames, vo)
+                    .map(Some)
+                    .map_err(|detail| {
+                        PipelineError::Inconsistent(format!(
+                            "the camera of `{}`: {detail}",
+                            t.name()
+                        ))
+                    })
             })
             .collect();
     };

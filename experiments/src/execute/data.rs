@@ -60,7 +60,7 @@ pub fn speed_ratio(
 
 /// `logs` with their joints in `rover`'s order (models read joints by
 /// position); without a rover, logs must have no wheel joints.
-fn in_rover_order(
+pub(crate) fn in_rover_order(
     logs: &[RoverLog],
     rover: Option<&RoverDescription>,
 ) -> Result<Vec<RoverLog>, gpodo_datasets::DatasetError> {
@@ -556,7 +556,7 @@ fn prepare_table(
 /// The stereo camera of the bag at `path` as frames for the stereo VO, on
 /// the clock of its imported `log`, whose camera frames become the pairs'
 /// stamps within it (placed by their header stamps).
-fn recorded_camera(
+pub(crate) fn recorded_camera(
     path: &std::path::Path,
     camera: &gpodo_datasets::bags::images::CameraTopics,
     skip_damaged: bool,
@@ -571,9 +571,8 @@ fn recorded_camera(
     };
     let recording = gpodo_datasets::bags::images::read_stereo(path, camera, on_damage)
         .map_err(gpodo_datasets::bags::import::ImportError::from)?;
-    let base_ns = (report.start_epoch_secs * 1e9).round() as i64;
-    // Stamps are whole nanoseconds; the base carries an f64's rounding.
-    let frames = gpodo_datasets::bags::frames::BagFrames::new(recording, base_ns, 1e-3);
+    let frames =
+        gpodo_datasets::bags::frames::BagFrames::new(recording, report.start_epoch_ns, 1e-3);
     let (first, last) = match (log.samples.first(), log.samples.last()) {
         (Some(a), Some(b)) => (a.time_secs, b.time_secs),
         _ => (0.0, 0.0),

@@ -70,6 +70,9 @@ pub struct ImportReport {
     pub rows_dropped: usize,
     /// The log's time 0, seconds since the epoch.
     pub start_epoch_secs: f64,
+    /// The log's time 0, nanoseconds since the epoch (the stamp of the
+    /// row at time 0, exactly).
+    pub start_epoch_ns: i64,
     /// One entry per stream.
     pub streams: Vec<StreamReport>,
     /// How a GNSS ground truth got its heading, when it has one.
@@ -252,13 +255,18 @@ pub fn import_bag(
         streams.push(j);
     }
     let (start, end) = common_span(&mut streams);
-    let dt = 1.0 / map.rate_hz;
-    let steps = row_count(path, map, &streams, start, end)?;
+    // The clock's rows fall on whole nanoseconds: a row at a message's
+    // stamp takes that message as it is, at the time a node reading the
+    // stamp gives it.
+    let (start_ns, end_ns) = ((start * 1e9).round() as i64, (end * 1e9).round() as i64);
+    let period_ns = 1e9 / map.rate_hz;
+    let steps = row_count(path, map, &streams, start_ns, end_ns)?;
     let mut samples = Vec::new();
     let mut ground_truth = Vec::new();
     let mut dropped = 0;
     for k in 0..steps {
-        let t = start + k as f64 * dt;
+        let offset_ns = (k as f64 * period_ns).round() as i64;
+        let t = (start_ns + offset_ns) as f64 * 1e-9;
         let values: Vec<Option<Vec<f64>>> = streams
             .iter_mut()
             .map(|s| s.at(t, map.max_gap_secs))
@@ -278,14 +286,14 @@ pub fn import_bag(
             dropped += 1;
             continue;
         }
-        let (sample, pose) = sample_at(t - start, i, g, ov, jv, &groups, gnss);
+        let (sample, pose) = sample_at(offset_ns as f64 * 1e-9, i, g, ov, jv, &groups, gnss);
         samples.push(sample);
         ground_truth.push(pose);
     }
     let mut reports: Vec<StreamReport> = streams.iter().map(|s| s.report.clone()).collect();
     // Visual odometry: its poses on the log's clock, and its stamps within
     // the log as the camera frames.
-    let (vo_poses, vo_report) = vo_on_clock(map, vo_messages.as_deref(), &clock, start);
+    let (vo_poses, vo_report) = vo_on_clock(map, vo_messages.as_deref(), &clock, start_ns);
     reports.extend(vo_report);
     let camera_times_secs: Vec<f64> = match (samples.first(), samples.last()) {
         (Some(first), Some(last)) => vo_poses
@@ -320,6 +328,7 @@ pub fn import_bag(
         rows: log.samples.len(),
         rows_dropped: dropped,
         start_epoch_secs: clock.base_ns as f64 * 1e-9 + start,
+        start_epoch_ns: clock.base_ns + start_ns,
         streams: reports,
         gnss_heading,
         gnss_sigma_m: median_sigmas(&sigmas),
@@ -396,7 +405,7 @@ fn vo_on_clock(
     map: &TopicMap,
     vo_messages: Option<&[Stamped]>,
     clock: &Clock,
-    start: f64,
+    start_ns: i64,
 ) -> (Vec<(f64, Isometry3<f64>)>, Option<StreamReport>) {
     let mut poses: Vec<(f64, Isometry3<f64>)> = vo_messages
         .into_iter()
@@ -414,7 +423,8 @@ fn vo_on_clock(
                 Translation3::from(Vector3::from(p.position)),
                 UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
             );
-            Some((clock.at(s, h.stamp_ns) - start, pose))
+            let ns = clock.ns(s, h.stamp_ns) - clock.base_ns - start_ns;
+            Some((ns as f64 * 1e-9, pose))
         })
         .collect();
     let read = poses.len();
@@ -442,12 +452,13 @@ fn row_count(
     path: &Path,
     map: &TopicMap,
     streams: &[&mut Stream],
-    start: f64,
-    end: f64,
+    start_ns: i64,
+    end_ns: i64,
 ) -> Result<usize, ImportError> {
-    let dt = 1.0 / map.rate_hz;
-    let rows = if end > start {
-        ((end - start) / dt).floor() + 1.0
+    let period_ns = 1e9 / map.rate_hz;
+    // A row within half a nanosecond of the end is on it.
+    let rows = if end_ns > start_ns {
+        ((end_ns - start_ns) as f64 / period_ns + 0.5 / period_ns).floor() + 1.0
     } else {
         0.0
     };
@@ -457,7 +468,7 @@ fn row_count(
         return Err(ImportError::TooManyRows {
             file: path.display().to_string(),
             rate_hz: map.rate_hz,
-            span_secs: end - start,
+            span_secs: (end_ns - start_ns) as f64 * 1e-9,
             rows,
             limit,
             messages,
