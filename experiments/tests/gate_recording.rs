@@ -10,7 +10,8 @@
 //! the same statistical tracker, stepped by the gate (`FrontEnd`), whose
 //! tracked pose (or a null pose, lost) comes back as the VO's odometry.
 //! The gate must forward exactly the frames the offline scheme processed,
-//! and the learners must end in the same state.
+//! with a tracker that keeps track and with one that loses it, and the
+//! learners must end in the same state.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -61,6 +62,39 @@ topics:
 
 #[test]
 fn on_a_recording_the_live_gate_makes_the_offline_schemes_decisions() {
+    let (lost, targets) = gate_against_offline(
+        "seed: 11",
+        SimulatedVoParams {
+            seed: 11,
+            ..SimulatedVoParams::default()
+        },
+    );
+    assert_eq!(lost, 0, "a wide window keeps track");
+    assert!(targets > 10, "{targets} targets");
+}
+
+#[test]
+fn on_a_recording_the_live_gate_follows_the_offline_scheme_through_losses() {
+    // Tracking succeeds half the time at an overlap of 0.86, with a prior
+    // or without: the tracker loses track early and, on a route that never
+    // comes back, stays lost; the gate looks every 0.4 s.
+    let (lost, _) = gate_against_offline(
+        "seed: 4, min_overlap: 0.86, prior_free_min_overlap: 0.86, overlap_softness: 0.03",
+        SimulatedVoParams {
+            seed: 4,
+            min_overlap: 0.86,
+            prior_free_min_overlap: 0.86,
+            overlap_softness: 0.03,
+            ..SimulatedVoParams::default()
+        },
+    );
+    assert!(lost > 5, "{lost} frames lost");
+}
+
+/// Runs the offline scheme and the replayed node on one recording with
+/// the statistical tracker `vo` (written `vo_yaml` in a gate file) behind
+/// the gate; returns the frames the tracker lost and the targets learned.
+fn gate_against_offline(vo_yaml: &str, vo_params: SimulatedVoParams) -> (usize, usize) {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 5);
@@ -139,10 +173,7 @@ fn on_a_recording_the_live_gate_makes_the_offline_schemes_decisions() {
     // The VO behind the gate tracks with its own motion prior, as an
     // external SLAM does; so does the offline scheme's.
     let params = FrontendParams {
-        vo: VoSpec::Simulated(SimulatedVoParams {
-            seed: 11,
-            ..SimulatedVoParams::default()
-        }),
+        vo: VoSpec::Simulated(vo_params),
         motion_prior: MotionPrior::ConstantVelocity,
         initial_residual_variance: file.initial_residual_variance,
         online: file.targets,
@@ -251,15 +282,15 @@ fn on_a_recording_the_live_gate_makes_the_offline_schemes_decisions() {
     );
     assert_eq!(summary.decisions.len(), camera_times.len());
     assert!(offline_frames.len() > 10 && offline_frames.len() < camera_times.len());
+    assert_eq!(lost, run.processed.iter().filter(|f| !f.tracked).count());
     assert_eq!(forwarded, &offline_frames);
     assert_eq!(learner.targets_learned(), run.online_targets as u64);
-    assert!(run.online_targets > 10, "{} targets", run.online_targets);
     // `gpodo live --gate --replay` with the same front end behind the gate
     // (`replay_frontend:`) makes the same decisions.
     let cli_gate = dir.join("gate-frontend.yaml");
     std::fs::write(
         &cli_gate,
-        format!("{GATE}replay_frontend: {{ vo: {{ kind: simulated, seed: 11 }}, motion_prior: constant_velocity }}\n"),
+        format!("{GATE}replay_frontend: {{ vo: {{ kind: simulated, {vo_yaml} }}, motion_prior: constant_velocity }}\n"),
     )
     .unwrap();
     let decisions = dir.join("decisions.csv");
@@ -311,4 +342,5 @@ fn on_a_recording_the_live_gate_makes_the_offline_schemes_decisions() {
         assert!((a.mean - b.mean).abs().max() <= 1e-12, "{a:?} {b:?}");
         assert!((a.variance - b.variance).abs().max() <= 1e-12);
     }
+    (lost, run.online_targets)
 }

@@ -182,7 +182,9 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
     assert_eq!(gp[1].twist_covariance[0], 1e-4);
     let last = gp.len() - 1;
     assert_ne!(gp[last].twist.linear, wheel[last].twist.linear);
-    assert!(gp[last].twist_covariance[0] < 1e-4);
+    // The learner's own variance (on the saved model's standardised
+    // inputs, as offline), not the prior's.
+    assert_ne!(gp[last].twist_covariance[0], 1e-4);
 
     // Written at the end; a second replay goes on from it.
     let learned = |said: &str| -> u64 {
@@ -203,5 +205,5 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
     assert!(learned(&again) > n, "{again}");
     // Resumed, its first outputs carry the learned model's variance.
     let resumed = bag_odometry(&dir.join("second.mcap"), "/odom/gp");
-    assert!(resumed[1].twist_covariance[0] < 1e-4);
+    assert_ne!(resumed[1].twist_covariance[0], 1e-4);
 }
