@@ -7,7 +7,8 @@
 //! with its learner learning online from the statistical tracker. Live,
 //! the recording is replayed through the node's feed (joint states as they
 //! come, the IMU held) and gate, and every pair the gate forwards goes to
-//! the same statistical tracker, stepped by the gate (`FrontEnd`), whose
+//! the same VO (the statistical tracker, or the stereo VO on the recorded
+//! images), in the front end stepped by the gate (`FrontEnd`), whose
 //! tracked pose (or a null pose, lost) comes back as the VO's odometry.
 //! The gate must forward exactly the frames the offline scheme processed,
 //! with a tracker that keeps track and with one that loses it, and the
@@ -30,11 +31,13 @@ use gpodo_frontends::run::FrontEnd;
 use gpodo_frontends::run_frontend;
 use gpodo_frontends::scheme::causal_selector;
 use gpodo_frontends::vo::SimulatedVoParams;
+use gpodo_frontends::vo::stereo::StereoVoParams;
 use gpodo_node::gate::GateDecision;
 use gpodo_node::gate::session::LearnerEnd;
 use gpodo_node::replay::{GatedReplay, Playback, RecordedPair, replay_gated};
 use gpodo_regressors::model_file::ModelFile;
-use gpodo_testbed::camera::traverse::{frame_times, pose_at};
+use gpodo_testbed::camera::traverse::{camera_stream, frame_times, pose_at};
+use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 use gpodo_traits::CameraParams;
 use gpodo_vision::GrayImage;
@@ -63,11 +66,12 @@ topics:
 #[test]
 fn on_a_recording_the_live_gate_makes_the_offline_schemes_decisions() {
     let (lost, targets) = gate_against_offline(
-        "seed: 11",
-        SimulatedVoParams {
+        "kind: simulated, seed: 11",
+        VoSpec::Simulated(SimulatedVoParams {
             seed: 11,
             ..SimulatedVoParams::default()
-        },
+        }),
+        None,
     );
     assert_eq!(lost, 0, "a wide window keeps track");
     assert!(targets > 10, "{targets} targets");
@@ -79,28 +83,43 @@ fn on_a_recording_the_live_gate_follows_the_offline_scheme_through_losses() {
     // or without: the tracker loses track early and, on a route that never
     // comes back, stays lost; the gate looks every 0.4 s.
     let (lost, _) = gate_against_offline(
-        "seed: 4, min_overlap: 0.86, prior_free_min_overlap: 0.86, overlap_softness: 0.03",
-        SimulatedVoParams {
+        "kind: simulated, seed: 4, min_overlap: 0.86, prior_free_min_overlap: 0.86, overlap_softness: 0.03",
+        VoSpec::Simulated(SimulatedVoParams {
             seed: 4,
             min_overlap: 0.86,
             prior_free_min_overlap: 0.86,
             overlap_softness: 0.03,
             ..SimulatedVoParams::default()
-        },
+        }),
+        None,
     );
     assert!(lost > 5, "{lost} frames lost");
 }
 
+#[test]
+fn on_a_recording_the_live_gate_makes_the_offline_decisions_with_the_stereo_vo_on_its_images() {
+    // The rendered camera at a quarter of ExoTeR's 1024 × 768; the stereo
+    // VO reads the recorded camera infos' intrinsics and baseline.
+    let (_, targets) = gate_against_offline(
+        "kind: stereo",
+        VoSpec::Stereo(StereoVoParams::default()),
+        Some(0.25),
+    );
+    assert!(targets > 3, "{targets} targets");
+}
+
 /// Runs the offline scheme and the replayed node on one recording with
-/// the statistical tracker `vo` (written `vo_yaml` in a gate file) behind
-/// the gate; returns the frames the tracker lost and the targets learned.
-fn gate_against_offline(vo_yaml: &str, vo_params: SimulatedVoParams) -> (usize, usize) {
+/// the VO `vo` (written `vo_yaml` in a gate file) behind the gate, the
+/// camera rendered at `rendered` times ExoTeR's size (else flat images:
+/// the gate and the statistical tracker read no pixels); returns the
+/// frames the VO lost and the targets learned.
+fn gate_against_offline(vo_yaml: &str, vo: VoSpec, rendered: Option<f64>) -> (usize, usize) {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let mut config = SimulatorConfig::preset(Preset::ExoterPrl, 5);
     config.training_runs = 1;
     config.training_run_secs = 60.0;
-    config.test_max_secs = 150.0;
+    config.test_max_secs = if rendered.is_some() { 60.0 } else { 150.0 };
     let testbed = config.simulate().unwrap();
     std::fs::create_dir_all(dir.join("train")).unwrap();
     std::fs::create_dir_all(dir.join("test")).unwrap();
@@ -108,25 +127,40 @@ fn gate_against_offline(vo_yaml: &str, vo_params: SimulatedVoParams) -> (usize, 
         .unwrap()
         .path;
     let log = &testbed.test[0];
-    // The gate never reads pixels, nor does the statistical tracker: flat
-    // images of the camera's size stand for the rendered ones.
-    let camera = CameraParams::exoter_bumblebee2().scaled(0.125);
-    let [w, h] = camera.image_size_px.map(|v| v as usize);
-    let mut stream = CameraStream {
-        camera,
-        times_secs: frame_times(log, 2.5),
-        frames: Box::new(move |_, _| {
-            Ok((GrayImage::filled(w, h, 90), GrayImage::filled(w, h, 90)))
-        }),
+    let ground = rendered.map(|_| {
+        GroundMaps::build(&testbed.terrain, &testbed.soils, &SceneSpec::default(), 3).unwrap()
+    });
+    let renderer = rendered.zip(ground.as_ref()).map(|(scale, ground)| {
+        StereoRenderer::new(
+            CameraParams::exoter_bumblebee2().scaled(scale),
+            ground,
+            SensorSpec::default(),
+            3,
+        )
+        .unwrap()
+    });
+    let mut stream = match &renderer {
+        Some(renderer) => camera_stream(renderer, log, 2.5),
+        None => {
+            let camera = CameraParams::exoter_bumblebee2().scaled(0.125);
+            let [w, h] = camera.image_size_px.map(|v| v as usize);
+            CameraStream {
+                camera,
+                times_secs: frame_times(log, 2.5),
+                frames: Box::new(move |_, _| {
+                    Ok((GrayImage::filled(w, h, 90), GrayImage::filled(w, h, 90)))
+                }),
+            }
+        }
     };
-    let vo: Vec<_> = frame_times(log, 2.5)
+    let recorded_vo: Vec<_> = frame_times(log, 2.5)
         .into_iter()
         .map(|t| (t, pose_at(log, t).unwrap()))
         .collect();
     let bag = write_mcap_with_camera(
         log,
         &dir.join("test"),
-        &vo,
+        &recorded_vo,
         WheelUnits::default(),
         Some(&mut stream),
     )
@@ -173,7 +207,7 @@ fn gate_against_offline(vo_yaml: &str, vo_params: SimulatedVoParams) -> (usize, 
     // The VO behind the gate tracks with its own motion prior, as an
     // external SLAM does; so does the offline scheme's.
     let params = FrontendParams {
-        vo: VoSpec::Simulated(vo_params),
+        vo,
         motion_prior: MotionPrior::ConstantVelocity,
         initial_residual_variance: file.initial_residual_variance,
         online: file.targets,
@@ -290,7 +324,9 @@ fn gate_against_offline(vo_yaml: &str, vo_params: SimulatedVoParams) -> (usize, 
     let cli_gate = dir.join("gate-frontend.yaml");
     std::fs::write(
         &cli_gate,
-        format!("{GATE}replay_frontend: {{ vo: {{ kind: simulated, {vo_yaml} }}, motion_prior: constant_velocity }}\n"),
+        format!(
+            "{GATE}replay_frontend: {{ vo: {{ {vo_yaml} }}, motion_prior: constant_velocity }}\n"
+        ),
     )
     .unwrap();
     let decisions = dir.join("decisions.csv");
