@@ -32,8 +32,8 @@ use crate::prediction::{ResidualPrediction, ResidualSource};
 use crate::rover_measures::{Look, RoverMeasures, SampledTruth, rover_measures};
 use crate::traverse::Traverse;
 use crate::vo::{
-    ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest, VisualOdometry,
-    VoMeasurement,
+    ErrorStructure, FrameRef, RefinedLink, TrackOutcome, TrackPurpose, TrackRequest,
+    VisualOdometry, VoMeasurement,
 };
 use crate::vo_target::TargetInterval;
 
@@ -377,6 +377,32 @@ impl<'a> Session<'a> {
         self.last_graph_node = node;
     }
 
+    /// Puts the links a local bundle adjustment refined (oldest first) in
+    /// place of the visual edges that placed those keyframes, and places
+    /// the keyframes on the visual map by them.
+    fn apply_refined_links(&mut self, links: &[RefinedLink]) {
+        for link in links {
+            let (Some(from_node), Some(to_node)) = (
+                self.node_of_frame(link.reference.index),
+                self.node_of_frame(link.current.index),
+            ) else {
+                continue;
+            };
+            if let (Some(from), Some(to)) = (self.graph_node(from_node), self.graph_node(to_node))
+                && let Some(edge) = self.graph.edges.iter_mut().rev().find(|e| {
+                    e.from == from
+                        && e.to == to
+                        && matches!(e.kind, EdgeKind::VisualOdometry | EdgeKind::Relocalisation)
+                })
+            {
+                edge.measurement = link.relative;
+                edge.covariance = link.covariance;
+            }
+            self.nodes[to_node].map_pose =
+                self.nodes[from_node].map_pose.map(|p| p * link.relative);
+        }
+    }
+
     fn make_keyframe(&mut self, node: usize) {
         self.keyframes.push(node);
         self.reference_kf = Some(node);
@@ -583,6 +609,8 @@ impl<'a> Session<'a> {
         }
         if became_keyframe && self.reference_kf != Some(node) {
             self.make_keyframe(node);
+            let links = self.vo.keyframe_inserted(frame);
+            self.apply_refined_links(&links);
             self.close_loop(node, frame.time_secs);
         }
         let processed = ProcessedFrame {

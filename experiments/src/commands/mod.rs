@@ -7,6 +7,7 @@
 
 pub mod gate;
 pub mod import;
+pub mod keyframe_chain;
 pub mod live;
 pub mod live_gate;
 pub mod replay_frontend;

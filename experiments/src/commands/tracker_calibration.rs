@@ -124,6 +124,35 @@ impl Drive {
             .collect()
     }
 
+    /// The drive rendered (ground seed 11) through `stereo`'s camera, as
+    /// `stereo` reads it, the true poses kept for the local map's
+    /// ground-truth placement control.
+    ///
+    /// # Errors
+    /// A ground that cannot be built.
+    pub fn stereo_frames(&self, stereo: &StereoVoParams) -> Result<Arc<StereoFrames>, String> {
+        let camera = stereo.camera;
+        let ground = GroundMaps::build(
+            &Terrain::flat(9.0).map_err(|e| e.to_string())?,
+            &SoilMap::uniform((self.soil)(), 9.0).map_err(|e| e.to_string())?,
+            &SceneSpec::default(),
+            11,
+        )
+        .map_err(|e| e.to_string())?;
+        let source = RenderedFrames::new(
+            Arc::new(ground),
+            camera,
+            SensorSpec::default(),
+            11,
+            self.frame_poses(&camera),
+        );
+        let true_poses = source.true_camera_poses();
+        Ok(Arc::new(
+            StereoFrames::with_orb(camera, Arc::new(source), stereo.orb(&camera))
+                .with_true_camera_poses(true_poses),
+        ))
+    }
+
     /// The drive as a traverse of its camera frames, with the statistical
     /// tracker's feature supply: the soil's texture times the share of
     /// features the exposure's blur leaves.
@@ -196,28 +225,8 @@ pub fn observe(
     stride: usize,
 ) -> Result<Vec<Observation>, String> {
     let camera = stereo.camera;
-    let ground = GroundMaps::build(
-        &Terrain::flat(9.0).map_err(|e| e.to_string())?,
-        &SoilMap::uniform((drive.soil)(), 9.0).map_err(|e| e.to_string())?,
-        &SceneSpec::default(),
-        11,
-    )
-    .map_err(|e| e.to_string())?;
     let poses = drive.frame_poses(&camera);
-    let source = RenderedFrames::new(
-        Arc::new(ground),
-        camera,
-        SensorSpec::default(),
-        11,
-        poses.clone(),
-    );
-    // The true poses, read only under the local map's ground-truth
-    // placement.
-    let true_poses = source.true_camera_poses();
-    let frames = Arc::new(
-        StereoFrames::with_orb(camera, Arc::new(source), stereo.orb(&camera))
-            .with_true_camera_poses(true_poses),
-    );
+    let frames = drive.stereo_frames(stereo)?;
     let mut vo = StereoVo::new(stereo.clone(), frames).map_err(|e| e.to_string())?;
     let traverse = drive.traverse(&camera)?;
     let statistical = SimulatedVo::new(*simulated, &traverse).map_err(|e| e.to_string())?;

@@ -125,6 +125,30 @@ pub trait VisualOdometry: Send {
     /// frame may be matched against, best first (empty when none is
     /// recognised).
     fn recognise(&self, current: FrameRef, keyframes: &[FrameRef]) -> Vec<FrameRef>;
+
+    /// Told that the frame it last tracked became a keyframe: the links
+    /// between keyframes a local bundle adjustment refined on it, oldest
+    /// first (the default, none: no adjustment).
+    fn keyframe_inserted(&mut self, keyframe: FrameRef) -> Vec<RefinedLink> {
+        let _ = keyframe;
+        Vec::new()
+    }
+}
+
+/// A link between two keyframes as a local bundle adjustment refined it:
+/// what replaces the visual edge that placed `current` against
+/// `reference`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefinedLink {
+    /// The keyframe `current` was tracked against.
+    pub reference: FrameRef,
+    /// The keyframe placed.
+    pub current: FrameRef,
+    /// `reference_from_current` (bodies).
+    pub relative: Isometry3<f64>,
+    /// Its covariance as a right perturbation, as a
+    /// [`VoMeasurement`]'s.
+    pub covariance: Matrix6<f64>,
 }
 
 /// The error of a relative pose measurement: `σ_t = (σ_t0 + k_t ‖t‖) / o^p`,

@@ -51,9 +51,11 @@ use super::frames::{Cached, StereoFrames};
 use super::grid::KeypointGrid;
 use super::pose::{Correspondence, StereoIntrinsics, ransac_pnp, refine_pose};
 use crate::vo::{
-    CameraParams, ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest,
+    CameraParams, ErrorStructure, FrameRef, RefinedLink, TrackOutcome, TrackPurpose, TrackRequest,
     VisualOdometry, VoMeasurement,
 };
+
+pub mod local_ba;
 
 /// Settings of the stereo VO.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,6 +113,14 @@ pub struct StereoVoParams {
     /// while more than `untracked` are not (ORB-SLAM2's `[100, 70]`; the
     /// default, none, is off).
     pub close_points_keyframe: Option<[usize; 2]>,
+    /// ORB-SLAM2's local bundle adjustment on each new keyframe: the new
+    /// keyframe and up to this many keyframes behind it along the links
+    /// it was tracked by (default 0: off; see [`local_ba`]).
+    pub local_ba_keyframes: usize,
+    /// Keyframes of that window sharing at least this many map points
+    /// with the new one are adjusted with it; the others are held fixed
+    /// (default 15, ORB-SLAM2's covisibility threshold).
+    pub covisible_min_points: usize,
     /// The camera (default ExoTeR's Bumblebee2 at half resolution,
     /// 512 × 384, as rendered); a recording's camera infos, when its topic
     /// map names both, replace its intrinsics, size and baseline.
@@ -135,6 +145,8 @@ impl Default for StereoVoParams {
             local_map_placement: LocalMapPlacement::Chained,
             overlap_denominator: OverlapDenominator::MostInliers,
             close_points_keyframe: None,
+            local_ba_keyframes: 0,
+            covisible_min_points: 15,
             camera: CameraParams::exoter_bumblebee2().scaled(0.5),
         }
     }
@@ -170,6 +182,9 @@ impl StereoVoParams {
         }
         if self.max_hamming == 0 || self.max_hamming > 256 {
             return bad("max_hamming", "a distance in [1, 256]");
+        }
+        if self.covisible_min_points == 0 {
+            return bad("covisible_min_points", "at least 1");
         }
         if self.ransac_iterations == 0 {
             return bad("ransac_iterations", "at least 1");
@@ -681,18 +696,10 @@ impl StereoVo {
         seen_again: usize,
         current: FrameRef,
     ) -> VoMeasurement {
-        let b = self.camera.body_from_camera();
-        let relative = b * tracked.pose.inverse() * b.inverse();
-        let r = b.rotation.to_rotation_matrix().into_inner();
-        let t = b.translation.vector;
-        let skew = t.cross_matrix();
-        let mut adjoint = Matrix6::zeros();
-        adjoint.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
-        adjoint.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
-        adjoint.fixed_view_mut::<3, 3>(3, 0).copy_from(&(skew * r));
+        let (relative, covariance) = self.body_motion(&tracked.pose, &tracked.covariance);
         VoMeasurement {
             relative,
-            covariance: adjoint * tracked.covariance * adjoint.transpose(),
+            covariance,
             overlap: (tracked.inliers as f64 / seen_again.max(1) as f64).min(1.0),
             needs_keyframe: self.params.close_points_keyframe.is_some_and(
                 |[tracked_below, untracked_above]| {
@@ -701,6 +708,23 @@ impl StereoVo {
                 },
             ),
         }
+    }
+
+    /// The body motion `reference_from_current` of the left cameras'
+    /// `camera_from_reference` and its covariance as a right perturbation
+    /// (the camera's left perturbation `covariance` carried through the
+    /// mounting's adjoint).
+    fn body_motion(
+        &self,
+        camera_from_reference: &Isometry3<f64>,
+        covariance: &Matrix6<f64>,
+    ) -> (Isometry3<f64>, Matrix6<f64>) {
+        let b = self.camera.body_from_camera();
+        let adjoint = local_ba::adjoint(&b);
+        (
+            b * camera_from_reference.inverse() * b.inverse(),
+            adjoint * covariance * adjoint.transpose(),
+        )
     }
 
     /// The current frame's close points (stereo keypoints within
@@ -796,6 +820,12 @@ impl VisualOdometry for StereoVo {
     /// The outcome of the same deterministic tracking: 1 or 0.
     fn success_probability(&self, request: &TrackRequest) -> f64 {
         f64::from(u8::from(self.track_request(request).is_some()))
+    }
+
+    /// ORB-SLAM2's local bundle adjustment on it, when
+    /// `local_ba_keyframes` is set ([`local_ba`]).
+    fn keyframe_inserted(&mut self, keyframe: FrameRef) -> Vec<RefinedLink> {
+        self.adjust_local_map(keyframe)
     }
 
     /// Appearance only: the keyframes whose whole-image signatures
