@@ -54,6 +54,21 @@ fn main() {
                         ..base.clone()
                     },
                 ),
+                (
+                    "local map, 5 behind",
+                    StereoVoParams {
+                        local_map_keyframes: 5,
+                        ..base.clone()
+                    },
+                ),
+                (
+                    "local map and BA, 5 behind",
+                    StereoVoParams {
+                        local_map_keyframes: 5,
+                        local_ba_keyframes: 5,
+                        ..base.clone()
+                    },
+                ),
             ] {
                 let o = run_chain(drive, &frames, &params);
                 let f = |i: usize| o.relative[i];
