@@ -42,7 +42,7 @@ use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 use gpodo_traits::CameraParams;
 use gpodo_vision::GrayImage;
 
-use common::{assert_succeeded, exoter, gpodo_quiet};
+use common::{assert_succeeded, exoter, fit_bag_model, gpodo_live_gated};
 
 const GATE: &str = "\
 selector:
@@ -170,31 +170,7 @@ fn gate_against_offline(vo_yaml: &str, vo: VoSpec, rendered: Option<f64>) -> (us
     let map = written_topic_map_in(log, rate_hz, WheelUnits::default());
     let topics = dir.join("topics.yaml");
     std::fs::write(&topics, serde_saphyr::to_string(&map).unwrap()).unwrap();
-    let indented: String = std::fs::read_to_string(&topics)
-        .unwrap()
-        .lines()
-        .map(|l| format!("    {l}\n"))
-        .collect();
-    let experiment = dir.join("bag.yaml");
-    std::fs::write(
-        &experiment,
-        format!(
-            "name: bag\ndataset:\n  kind: bags\n  train: [{}]\n  test: [{}]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - {{kind: exact_gp, kernel: rbf, hyperopt: {{max_iters: 10}}}}\n",
-            train.display(),
-            bag.display()
-        ),
-    )
-    .unwrap();
-    let model_path = dir.join("m.gpodo");
-    let out = gpodo_quiet(&[
-        "fit".as_ref(),
-        experiment.as_os_str(),
-        "--regressor".as_ref(),
-        "exact GP: rbf [hyperopt.max_iters=10]".as_ref(),
-        "--save".as_ref(),
-        model_path.as_os_str(),
-    ]);
-    assert_succeeded(&out, "gpodo fit: ");
+    let model_path = fit_bag_model(dir, &topics, &train, &bag, 10);
     let gate_path = dir.join("gate.yaml");
     std::fs::write(&gate_path, GATE).unwrap();
 
@@ -330,23 +306,14 @@ fn gate_against_offline(vo_yaml: &str, vo: VoSpec, rendered: Option<f64>) -> (us
     )
     .unwrap();
     let decisions = dir.join("decisions.csv");
-    let out = gpodo_quiet(&[
-        "live".as_ref(),
-        "--model".as_ref(),
-        model_path.as_os_str(),
-        "--rover".as_ref(),
-        exoter().as_os_str(),
-        "--topics".as_ref(),
-        topics.as_os_str(),
-        "--replay".as_ref(),
-        bag.as_os_str(),
-        "--out".as_ref(),
-        dir.join("cli.mcap").as_os_str(),
-        "--gate".as_ref(),
-        cli_gate.as_os_str(),
-        "--decisions".as_ref(),
-        decisions.as_os_str(),
-    ]);
+    let out = gpodo_live_gated(
+        &model_path,
+        &topics,
+        &bag,
+        &dir.join("cli.mcap"),
+        &cli_gate,
+        &decisions,
+    );
     assert_succeeded(&out, "gpodo live --gate --replay with a front end: ");
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(

@@ -25,7 +25,7 @@ use gpodo_testbed::camera::{GroundMaps, SceneSpec, SensorSpec, StereoRenderer};
 use gpodo_testbed::sim::preset::{Preset, SimulatorConfig};
 use gpodo_traits::CameraParams;
 
-use common::{assert_succeeded, bag_odometry, exoter, gpodo_quiet};
+use common::{assert_succeeded, bag_odometry, fit_bag_model, gpodo_live_gated};
 
 /// The VO gave nothing from here to there (s, the drive's clock).
 const GAP: std::ops::Range<f64> = 14.0..18.0;
@@ -96,52 +96,12 @@ fn a_gated_replay_decides_every_pair_learns_from_the_vo_and_resumes_its_checkpoi
         .unwrap()
         .unwrap()
         .path();
-    let indented: String = std::fs::read_to_string(&topics)
-        .unwrap()
-        .lines()
-        .map(|l| format!("    {l}\n"))
-        .collect();
-    let experiment = dir.join("bag.yaml");
-    std::fs::write(
-        &experiment,
-        format!(
-            "name: bag\ndataset:\n  kind: bags\n  train: [{}]\n  test: [{}]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - {{kind: exact_gp, kernel: rbf, hyperopt: {{max_iters: 15}}}}\n",
-            train.display(),
-            bag.display()
-        ),
-    )
-    .unwrap();
-    let model = dir.join("m.gpodo");
-    let out = gpodo_quiet(&[
-        "fit".as_ref(),
-        experiment.as_os_str(),
-        "--regressor".as_ref(),
-        "exact GP: rbf [hyperopt.max_iters=15]".as_ref(),
-        "--save".as_ref(),
-        model.as_os_str(),
-    ]);
-    assert_succeeded(&out, "gpodo fit: ");
+    let model = fit_bag_model(dir, &topics, &train, &bag, 15);
     let gate = dir.join("gate.yaml");
     std::fs::write(&gate, GATE).unwrap();
 
     let replay = |out: &Path, decisions: &Path| {
-        gpodo_quiet(&[
-            "live".as_ref(),
-            "--model".as_ref(),
-            model.as_os_str(),
-            "--rover".as_ref(),
-            exoter().as_os_str(),
-            "--topics".as_ref(),
-            topics.as_os_str(),
-            "--replay".as_ref(),
-            bag.as_os_str(),
-            "--out".as_ref(),
-            out.as_os_str(),
-            "--gate".as_ref(),
-            gate.as_os_str(),
-            "--decisions".as_ref(),
-            decisions.as_os_str(),
-        ])
+        gpodo_live_gated(&model, &topics, &bag, out, &gate, decisions)
     };
     let (first, first_decisions) = (dir.join("first.mcap"), dir.join("first.csv"));
     let out = replay(&first, &first_decisions);

@@ -204,10 +204,11 @@ impl<'f, 'a> FrontEndVo<'f, 'a> {
             return None;
         }
         let time_secs = (pair.stamp_ns - self.start_epoch_ns) as f64 * 1e-9;
+        // The frames' times increase (a traverse checks them).
         let index = self
             .camera_times_secs
-            .iter()
-            .position(|&t| t == time_secs)?;
+            .binary_search_by(|t| t.total_cmp(&time_secs))
+            .ok()?;
         let processed = self.front_end.advance_to(time_secs).and_then(|()| {
             self.front_end.process(
                 FrameRef { index, time_secs },

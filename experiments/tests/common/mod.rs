@@ -65,3 +65,73 @@ pub fn bag_odometry(bag: &Path, topic: &str) -> Vec<gpodo_datasets::bags::messag
         })
         .collect()
 }
+
+/// Fits an exact GP (RBF, `max_iters` hyperparameter iterations) on the
+/// bag `train`, tested on `bag`, read through the topic map at `topics`,
+/// with `gpodo fit`; the model is saved to `dir/m.gpodo`, its path
+/// returned.
+pub fn fit_bag_model(
+    dir: &Path,
+    topics: &Path,
+    train: &Path,
+    bag: &Path,
+    max_iters: usize,
+) -> std::path::PathBuf {
+    let indented: String = std::fs::read_to_string(topics)
+        .unwrap()
+        .lines()
+        .map(|l| format!("    {l}\n"))
+        .collect();
+    let experiment = dir.join("bag.yaml");
+    std::fs::write(
+        &experiment,
+        format!(
+            "name: bag\ndataset:\n  kind: bags\n  train: [{}]\n  test: [{}]\n  topics:\n{indented}motion_model: {{kind: weighted_jacobian}}\nregressors:\n  - {{kind: exact_gp, kernel: rbf, hyperopt: {{max_iters: {max_iters}}}}}\n",
+            train.display(),
+            bag.display()
+        ),
+    )
+    .unwrap();
+    let model = dir.join("m.gpodo");
+    let regressor = format!("exact GP: rbf [hyperopt.max_iters={max_iters}]");
+    let out = gpodo_quiet(&[
+        "fit".as_ref(),
+        experiment.as_os_str(),
+        "--regressor".as_ref(),
+        regressor.as_ref(),
+        "--save".as_ref(),
+        model.as_os_str(),
+    ]);
+    assert_succeeded(&out, "gpodo fit: ");
+    model
+}
+
+/// `gpodo --quiet live` replaying `bag` through `model` on ExoTeR with the
+/// topic map `topics` and the gate file `gate`, its odometry to `out` and
+/// its decisions to `decisions`.
+pub fn gpodo_live_gated(
+    model: &Path,
+    topics: &Path,
+    bag: &Path,
+    out: &Path,
+    gate: &Path,
+    decisions: &Path,
+) -> Output {
+    gpodo_quiet(&[
+        "live".as_ref(),
+        "--model".as_ref(),
+        model.as_os_str(),
+        "--rover".as_ref(),
+        exoter().as_os_str(),
+        "--topics".as_ref(),
+        topics.as_os_str(),
+        "--replay".as_ref(),
+        bag.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--gate".as_ref(),
+        gate.as_os_str(),
+        "--decisions".as_ref(),
+        decisions.as_os_str(),
+    ])
+}
