@@ -14,6 +14,7 @@
 //! relative translation and rotation errors at gaps of 1, 5 and 12 frames,
 //! the position error at the last frame over the path length, the NEES of
 //! the keyframe links (mean; 6 when the covariances are right), the
+//! links' RMS translation error and the keyframes' RMS position error, the
 //! keyframes, and the adjustment's median time per keyframe on one thread
 //! (its matching included, the features cached).
 
@@ -39,9 +40,9 @@ fn main() {
         ..StereoVoParams::default()
     };
     println!(
-        "| drive | corners | setting | rel. t 1/5/12 (mm) | rel. r 1/5/12 (°) | end error / path | link NEES | keyframes | BA ms/keyframe |"
+        "| drive | corners | setting | rel. t 1/5/12 (mm) | rel. r 1/5/12 (°) | end error / path | link NEES | link RMS (mm) | keyframe RMS (mm) | keyframes | BA ms/keyframe |"
     );
-    println!("|---|---|---|---|---|---:|---:|---:|---:|");
+    println!("|---|---|---|---|---|---:|---:|---:|---:|---:|---:|");
     for drive in Drive::calibration_set(frames).iter().take(3) {
         for (corners, base) in [("ExoTeR's", &exoter), ("strong", &strong)] {
             let frames = drive.stereo_frames(base).unwrap();
@@ -73,7 +74,7 @@ fn main() {
                 let o = run_chain(drive, &frames, &params);
                 let f = |i: usize| o.relative[i];
                 println!(
-                    "| {} | {corners} | {setting} | {:.2} / {:.2} / {:.2} | {:.3} / {:.3} / {:.3} | {:.2} % | {:.1} | {} | {:.1} |{}",
+                    "| {} | {corners} | {setting} | {:.2} / {:.2} / {:.2} | {:.3} / {:.3} / {:.3} | {:.2} % | {:.1} | {:.2} | {:.2} | {} | {:.1} |{}",
                     drive.name,
                     f(0).0,
                     f(1).0,
@@ -83,6 +84,8 @@ fn main() {
                     f(2).1,
                     o.drift_percent,
                     o.nees,
+                    o.link_rms_mm,
+                    o.keyframe_rms_mm,
                     o.keyframes,
                     1e3 * median(o.keyframe_secs.clone()),
                     o.lost_at

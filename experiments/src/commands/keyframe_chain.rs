@@ -57,6 +57,12 @@ pub struct ChainOutcome {
     pub drift_percent: f64,
     /// The keyframe links' mean NEES (6 when their covariances are right).
     pub nees: f64,
+    /// The keyframe links' RMS translation error (mm): what the local
+    /// bundle adjustment refines.
+    pub link_rms_mm: f64,
+    /// The keyframes' RMS position error in the map (mm): the links'
+    /// errors accumulated along the chain.
+    pub keyframe_rms_mm: f64,
     /// Keyframes made.
     pub keyframes: usize,
     /// Each keyframe's time in [`VisualOdometry::keyframe_inserted`] (s).
@@ -172,8 +178,31 @@ pub fn run_chain(
             Some((e.transpose() * info * e)[(0, 0)])
         })
         .collect();
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    let link_errors: Vec<f64> = links
+        .iter()
+        .enumerate()
+        .filter_map(|(c, l)| {
+            let (r, m, _) = (*l)?;
+            Some(
+                1e3 * error(&m, &(truth[r].inverse() * truth[c]))
+                    .fixed_rows::<3>(3)
+                    .norm(),
+            )
+        })
+        .collect();
+    let keyframe_errors: Vec<f64> = keyframe_pose
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| {
+            let p = (*p)?;
+            Some(1e3 * ((start * p).translation.vector - truth[k].translation.vector).norm())
+        })
+        .collect();
     ChainOutcome {
         relative,
+        link_rms_mm: rms(&link_errors),
+        keyframe_rms_mm: rms(&keyframe_errors),
         drift_percent: 100.0 * end_error / path.max(1e-9),
         nees: nees.iter().sum::<f64>() / nees.len().max(1) as f64,
         keyframes,

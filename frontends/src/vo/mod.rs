@@ -220,3 +220,15 @@ pub fn isotropic_covariance(rotation_sigma_rad: f64, translation_sigma_m: f64) -
     let (r, t) = (rotation_sigma_rad.powi(2), translation_sigma_m.powi(2));
     Matrix6::from_diagonal(&nalgebra::Vector6::new(r, r, r, t, t, t))
 }
+
+/// The `[ω; ρ]` adjoint of `t`: `t · Exp(ξ) = Exp(Ad(t) ξ) · t`, a
+/// perturbation carried through `t`.
+pub fn adjoint(t: &Isometry3<f64>) -> Matrix6<f64> {
+    let r = t.rotation.to_rotation_matrix().into_inner();
+    let mut a = Matrix6::zeros();
+    a.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    a.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+    a.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(t.translation.vector.cross_matrix() * r));
+    a
+}

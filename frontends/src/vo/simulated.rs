@@ -49,9 +49,11 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    CameraParams, ErrorModel, ErrorStructure, FrameRef, TrackOutcome, TrackPurpose, TrackRequest,
-    VisualOdometry, VoMeasurement, isotropic_covariance,
+    CameraParams, ErrorModel, ErrorStructure, FrameRef, RefinedLink, TrackOutcome, TrackPurpose,
+    TrackRequest, VisualOdometry, VoMeasurement, isotropic_covariance,
 };
+
+pub mod covisibility;
 use crate::FrontendError;
 use crate::traverse::Traverse;
 
@@ -130,6 +132,12 @@ pub struct SimulatedVoParams {
     /// Features relocalisation and loop closing need (default 50,
     /// ORB-SLAM2's inliers after relocalisation).
     pub min_relocalisation_features: u32,
+    /// Keyframes behind a new keyframe that the covisible keyframes'
+    /// adjustment takes in (default 0: off; see [`covisibility`]).
+    pub covisibility_keyframes: usize,
+    /// Least overlap of two keyframes' views for the adjustment to tie
+    /// them by a measurement of their own (default 0.5).
+    pub covisible_min_overlap: f64,
     /// Seed of every draw (default 0).
     pub seed: u64,
 }
@@ -177,6 +185,8 @@ impl Default for SimulatedVoParams {
             features_per_frame: 156.0,
             min_tracked_features: 30,
             min_relocalisation_features: 50,
+            covisibility_keyframes: 0,
+            covisible_min_overlap: 0.5,
             seed: 0,
         }
     }
@@ -213,6 +223,7 @@ impl SimulatedVoParams {
             ("recognition_min_overlap", self.recognition_min_overlap),
             ("recognition_probability", self.recognition_probability),
             ("map_error_share", self.map_error_share),
+            ("covisible_min_overlap", self.covisible_min_overlap),
         ] {
             if !fraction(v) {
                 return bad(field, "a fraction in [0, 1]");
@@ -284,6 +295,9 @@ pub struct SimulatedVo {
     frames: Vec<Isometry3<f64>>,
     /// Feature supply at each camera frame (1 = the reference texture).
     supply: Vec<f64>,
+    /// The keyframes' links and the last measurement, for the covisible
+    /// keyframes' adjustment.
+    covisibility: covisibility::Links,
 }
 
 impl SimulatedVo {
@@ -311,6 +325,7 @@ impl SimulatedVo {
             params,
             frames,
             supply,
+            covisibility: covisibility::Links::default(),
         })
     }
 
@@ -422,6 +437,34 @@ impl SimulatedVo {
         let k = self.supply_of(request).unwrap_or(1.0).sqrt().recip();
         (r * k, t * k)
     }
+
+    /// A measurement's error `Exp(σ ⊙ z)` (right), its own part drawn from
+    /// `rng`; under `error_model: shared` the share `ρ` of its variance is
+    /// the map error of keyframe `reference`.
+    fn drawn_error(
+        &self,
+        rng: &mut ChaCha8Rng,
+        reference: usize,
+        (sigma_r, sigma_t): (f64, f64),
+    ) -> Isometry3<f64> {
+        let draw =
+            |rng: &mut ChaCha8Rng| Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+        let (own_r, own_t) = (draw(rng), draw(rng));
+        let (z_r, z_t) = match self.params.error_model {
+            TrackerErrorModel::Independent => (own_r, own_t),
+            TrackerErrorModel::Shared => {
+                let mut map = self.rng(MAP_ERROR_KEY, reference, 0);
+                let (map_r, map_t) = (draw(&mut map), draw(&mut map));
+                let rho = self.params.map_error_share;
+                let (shared, own) = (rho.sqrt(), (1.0 - rho).sqrt());
+                (shared * map_r + own * own_r, shared * map_t + own * own_t)
+            }
+        };
+        Isometry3::from_parts(
+            Translation3::from(z_t * sigma_t),
+            UnitQuaternion::from_scaled_axis(z_r * sigma_r),
+        )
+    }
 }
 
 impl VisualOdometry for SimulatedVo {
@@ -449,33 +492,27 @@ impl VisualOdometry for SimulatedVo {
             return TrackOutcome::Lost;
         }
         let (sigma_r, sigma_t) = self.request_sigmas(request, &truth, overlap);
-        let draw =
-            |rng: &mut ChaCha8Rng| Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
-        let (own_r, own_t) = (draw(&mut rng), draw(&mut rng));
-        let (z_r, z_t) = match self.params.error_model {
-            TrackerErrorModel::Independent => (own_r, own_t),
-            TrackerErrorModel::Shared => {
-                let mut map = self.rng(MAP_ERROR_KEY, request.reference.index, 0);
-                let (map_r, map_t) = (draw(&mut map), draw(&mut map));
-                let rho = self.params.map_error_share;
-                let (shared, own) = (rho.sqrt(), (1.0 - rho).sqrt());
-                (shared * map_r + own * own_r, shared * map_t + own * own_t)
-            }
-        };
-        let noise = Isometry3::from_parts(
-            Translation3::from(z_t * sigma_t),
-            UnitQuaternion::from_scaled_axis(z_r * sigma_r),
-        );
-        TrackOutcome::Tracked(VoMeasurement {
+        let noise = self.drawn_error(&mut rng, request.reference.index, (sigma_r, sigma_t));
+        let measurement = VoMeasurement {
             relative: truth * noise,
             covariance: isotropic_covariance(sigma_r, sigma_t),
             overlap: self.refound_share(request, overlap),
             needs_keyframe: false,
-        })
+        };
+        if request.purpose != TrackPurpose::LoopClosure {
+            self.covisibility.tracked(request, &measurement);
+        }
+        TrackOutcome::Tracked(measurement)
     }
 
     fn success_probability(&self, request: &TrackRequest) -> f64 {
         self.success_and_overlap(request).map_or(0.0, |(p, _)| p)
+    }
+
+    /// The covisible keyframes' adjustment, when `covisibility_keyframes`
+    /// is set ([`covisibility`]).
+    fn keyframe_inserted(&mut self, keyframe: FrameRef) -> Vec<RefinedLink> {
+        self.adjust_covisible(keyframe)
     }
 
     fn predicted_overlap(&self, reference: FrameRef, current: FrameRef) -> Option<f64> {

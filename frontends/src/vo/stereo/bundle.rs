@@ -94,6 +94,10 @@ pub struct Adjusted {
     /// order of the free keyframes): the inverse of the reduced system,
     /// the map points marginalised.
     pub pose_covariance: DMatrix<f64>,
+    /// Per point, its covariance given the adjusted poses (the inverse of
+    /// its block of the normal equations at the end); `None` for a point
+    /// no kept observation sees, or when the system is singular.
+    pub point_covariance: Vec<Option<Matrix3<f64>>>,
 }
 
 /// How an observation is weighed.
@@ -166,16 +170,20 @@ pub fn local_bundle_adjustment(
     );
     set_aside(map, &poses, &points, camera, &mut inliers);
     let n = context.normal(&poses, &points, &inliers, Loss::Squared);
-    let reduced = context.reduced(&n, 0.0);
-    let pose_covariance = reduced
-        .and_then(|(s, _, _)| s.try_inverse())
-        .unwrap_or_else(|| DMatrix::zeros(0, 0));
+    let (pose_covariance, point_covariance) = match context.reduced(&n, 0.0) {
+        Some((s, _, inverses)) => (
+            s.try_inverse().unwrap_or_else(|| DMatrix::zeros(0, 0)),
+            inverses,
+        ),
+        None => (DMatrix::zeros(0, 0), vec![None; points.len()]),
+    };
     Ok(Adjusted {
         chi2: (chi2_before, chi2(map, &poses, &points, &inliers, camera)),
         poses,
         points,
         inliers,
         pose_covariance,
+        point_covariance,
     })
 }
 

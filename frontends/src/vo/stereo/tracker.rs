@@ -6,7 +6,8 @@
 //!   the rows ([`gpodo_vision::stereo`]).
 //! * **Map points**: the reference frame's stereo-matched keypoints closer
 //!   than `max_depth_baselines` baselines (ORB-SLAM2's `ThDepth`, 40 on
-//!   ExoTeR), placed by their disparity.
+//!   ExoTeR), placed by their disparity, or as the local bundle
+//!   adjustment refined them.
 //! * **Matching**: each map point is projected into the current frame by
 //!   the prior and matched within `search_radius_px` times its level's
 //!   scale (ORB-SLAM2's `TrackWithMotionModel`, 7 px for stereo, searched
@@ -266,7 +267,15 @@ pub struct StereoVo {
     /// Per frame tracked or relocalised: its reference and
     /// `camera_from_reference`, the links the local map follows back.
     parents: HashMap<usize, (FrameRef, Isometry3<f64>)>,
+    /// Per keyframe the local bundle adjustment has refined: per keypoint,
+    /// its map point (that keyframe's camera) and its covariance given the
+    /// adjusted poses, which replace the keypoint's own triangulation.
+    refined_points: HashMap<usize, RefinedPoints>,
 }
+
+/// A keyframe's refined map points: per keypoint, the point (its camera)
+/// and its covariance.
+type RefinedPoints = HashMap<usize, (Point3<f64>, Matrix3<f64>)>;
 
 /// What tracking one request found, before it is a measurement.
 struct Tracked {
@@ -312,6 +321,7 @@ impl StereoVo {
             shared_points: HashMap::new(),
             inliers: HashMap::new(),
             parents: HashMap::new(),
+            refined_points: HashMap::new(),
         })
     }
 
@@ -324,7 +334,7 @@ impl StereoVo {
     /// images cannot be had).
     pub fn map_point_count(&self, frame: FrameRef) -> usize {
         match self.features(frame).as_ref() {
-            Ok(features) => self.map_points(&features.stereo).len(),
+            Ok(features) => self.map_points(frame, &features.stereo).len(),
             Err(_) => 0,
         }
     }
@@ -338,10 +348,19 @@ impl StereoVo {
     /// The map points of a reference frame: `(keypoint, point, its
     /// covariance)` for each stereo match within the depth limit, placed
     /// by its disparity with its level's scale as each coordinate's
-    /// standard deviation.
-    fn map_points(&self, features: &StereoFeatures) -> Vec<(usize, Point3<f64>, Matrix3<f64>)> {
+    /// standard deviation, or where the local bundle adjustment has
+    /// refined it, as refined.
+    fn map_points(
+        &self,
+        frame: FrameRef,
+        features: &StereoFeatures,
+    ) -> Vec<(usize, Point3<f64>, Matrix3<f64>)> {
+        let refined = self.refined_points.get(&frame.index);
         self.close_keypoints(features)
             .map(|(k, d)| {
+                if let Some(&(point, covariance)) = refined.and_then(|r| r.get(&k)) {
+                    return (k, point, covariance);
+                }
                 let kp = &features.left.keypoints[k];
                 let sigma = features.left.scales[usize::from(kp.level)];
                 let (point, covariance) =
@@ -455,7 +474,7 @@ impl StereoVo {
             return 0;
         };
         let features = &features.stereo;
-        let points = self.map_points(features);
+        let points = self.map_points(reference, features);
         let behind = self.keyframes_behind(reference, self.params.local_map_keyframes.max(1));
         if behind.is_empty() {
             return points.len();
@@ -547,7 +566,7 @@ impl StereoVo {
                 .rotation
                 .to_rotation_matrix()
                 .into_inner();
-            for (k, point, point_covariance) in self.map_points(features) {
+            for (k, point, point_covariance) in self.map_points(keyframe, features) {
                 let point = reference_from_keyframe * point;
                 let Some(centre) = self.in_image(&(tracked.pose * point)) else {
                     continue;
@@ -590,7 +609,7 @@ impl StereoVo {
             return None;
         };
         let (reference, current) = (&reference.stereo, &current.stereo);
-        let points = self.map_points(reference);
+        let points = self.map_points(request.reference, reference);
         let prior = request.prior.map(|p| self.camera_prior(&p));
         let width = f64::from(self.camera.image_size_px[0]);
         let wide = self.params.wide_search_px * width / 1024.0;
@@ -720,7 +739,7 @@ impl StereoVo {
         covariance: &Matrix6<f64>,
     ) -> (Isometry3<f64>, Matrix6<f64>) {
         let b = self.camera.body_from_camera();
-        let adjoint = local_ba::adjoint(&b);
+        let adjoint = crate::vo::adjoint(&b);
         (
             b * camera_from_reference.inverse() * b.inverse(),
             adjoint * covariance * adjoint.transpose(),

@@ -13,27 +13,20 @@
 //! outside ORB-SLAM2's local window are), are held fixed. The refined
 //! links become the keyframes' links here and the visual edges of the
 //! front end's pose graph, each with its covariance from the adjustment
-//! (the map points marginalised).
+//! (the map points marginalised). The refined points go back to the
+//! keyframes that see them, with their covariance given the adjusted
+//! poses, and later frames are tracked against them.
 
 use nalgebra::{Isometry3, Matrix6};
 
-use super::super::bundle::{BundleSettings, LocalMap, Observation, local_bundle_adjustment};
+use super::super::bundle::{
+    Adjusted, BundleSettings, LocalMap, Observation, local_bundle_adjustment,
+};
 use super::super::frames::Cached;
 use super::super::grid::KeypointGrid;
 use super::StereoVo;
-use crate::vo::{FrameRef, RefinedLink};
+use crate::vo::{FrameRef, RefinedLink, adjoint};
 use gpodo_vision::stereo::StereoFeatures;
-
-/// `[ω; ρ]` adjoint of `t`: a left perturbation carried through it.
-pub(super) fn adjoint(t: &Isometry3<f64>) -> Matrix6<f64> {
-    let r = t.rotation.to_rotation_matrix().into_inner();
-    let mut a = Matrix6::zeros();
-    a.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
-    a.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
-    a.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(t.translation.vector.cross_matrix() * r));
-    a
-}
 
 /// The observation of keypoint `k` of `features` by window keyframe
 /// `keyframe` (its point set later).
@@ -82,9 +75,11 @@ impl StereoVo {
         let poses: Vec<Isometry3<f64>> = window.iter().map(|(_, p)| p.inverse()).collect();
         let mut points = Vec::new();
         let mut observations = Vec::new();
+        // Per observation, the keypoint it is.
+        let mut keypoints = Vec::new();
         let mut shared = vec![0_usize; window.len()];
         for (i, &features) in stereo.iter().enumerate() {
-            for (k, point, _) in self.map_points(features) {
+            for (k, point, _) in self.map_points(window[i].0, features) {
                 if taken[i][k] {
                     continue;
                 }
@@ -118,6 +113,7 @@ impl StereoVo {
                         shared[o.keyframe] += 1;
                     }
                     observations.push(Observation { point: index, ..o });
+                    keypoints.push(found);
                 }
             }
         }
@@ -166,6 +162,7 @@ impl StereoVo {
                 _ => Matrix6::zeros(),
             }
         };
+        self.keep_refined_points(&window, &map, &adjusted, &keypoints);
         let mut links = Vec::new();
         for m in (0..last).rev() {
             let (child, parent) = (m, m + 1);
@@ -198,5 +195,51 @@ impl StereoVo {
             "local bundle adjustment"
         );
         links
+    }
+
+    /// Hands the adjusted points back to the keyframes that see them: each
+    /// kept observation's keypoint takes its point, in its keyframe's
+    /// camera, with the point's covariance given the adjusted poses, so
+    /// later frames are tracked against the refined map (as ORB-SLAM2's
+    /// are against its shared map points). A point its keyframes no longer
+    /// agree on (fewer than two kept observations) is left as it was.
+    fn keep_refined_points(
+        &mut self,
+        window: &[(FrameRef, Isometry3<f64>)],
+        map: &LocalMap,
+        adjusted: &Adjusted,
+        keypoints: &[usize],
+    ) {
+        let mut kept = vec![0_usize; map.points.len()];
+        for (o, inlier) in map.observations.iter().zip(&adjusted.inliers) {
+            if *inlier {
+                kept[o.point] += 1;
+            }
+        }
+        for ((o, inlier), &k) in map
+            .observations
+            .iter()
+            .zip(&adjusted.inliers)
+            .zip(keypoints)
+        {
+            let Some(covariance) = adjusted.point_covariance[o.point] else {
+                continue;
+            };
+            if !*inlier || kept[o.point] < 2 {
+                continue;
+            }
+            let pose = &adjusted.poses[o.keyframe];
+            let r = pose.rotation.to_rotation_matrix().into_inner();
+            self.refined_points
+                .entry(window[o.keyframe].0.index)
+                .or_default()
+                .insert(
+                    k,
+                    (
+                        pose * adjusted.points[o.point],
+                        r * covariance * r.transpose(),
+                    ),
+                );
+        }
     }
 }
