@@ -55,8 +55,8 @@ fn drive(vo: &mut SimulatedVo, t: &Traverse) -> (Vec<RefinedLink>, Vec<RefinedLi
     let mut refined = Vec::new();
     for k in 1..KEYFRAMES {
         let (reference, current) = (frame(t, (k - 1) * SPACING), frame(t, k * SPACING));
-        let truth = t.ground_truth_at(reference.time_secs).inverse()
-            * t.ground_truth_at(current.time_secs);
+        let truth =
+            t.ground_truth_at(reference.time_secs).inverse() * t.ground_truth_at(current.time_secs);
         let TrackOutcome::Tracked(m) = vo.track(&TrackRequest {
             reference,
             current,

@@ -1,10 +1,13 @@
-//! The stereo VO on a rendered drive as the front end drives it, without
-//! the pose graph: every frame tracked against the reference keyframe with
-//! a wheel-odometry-like prior (5 % short, 0.2° off in yaw), a keyframe
+//! A VO (the stereo VO, or the statistical tracker on the same drive) on a
+//! rendered drive as the front end drives it, without the pose graph:
+//! every frame looked at (every frame, or every `step`-th) tracked against
+//! the reference keyframe with a wheel-odometry-like prior (5 % short,
+//! 0.2° off in yaw), a keyframe
 //! when the overlap falls below 0.8 (the front end's rule), and on each
 //! new keyframe the VO told so ([`VisualOdometry::keyframe_inserted`]):
 //! with local bundle adjustment on, its refined links re-place the
-//! keyframes. [`run_chain`] measures the final map against the truth.
+//! keyframes. [`run_chain`] and [`run_chain_with`] measure the final map
+//! against the truth.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -85,13 +88,25 @@ pub fn run_chain(
     frames: &Arc<StereoFrames>,
     params: &StereoVoParams,
 ) -> ChainOutcome {
-    let camera = params.camera;
+    let mut vo = StereoVo::new(params.clone(), Arc::clone(frames)).expect("valid VO settings");
+    run_chain_with(drive, &params.camera, &mut vo, 1)
+}
+
+/// Runs `vo` over `drive` as the module says, looking at every `step`-th
+/// frame (1: the drive's 2.5 fps; 5: 0.5 fps), `camera` placing the
+/// frames.
+pub fn run_chain_with(
+    drive: &Drive,
+    camera: &gpodo_traits::CameraParams,
+    vo: &mut dyn VisualOdometry,
+    step: usize,
+) -> ChainOutcome {
+    let step = step.max(1);
     let truth: Vec<Isometry3<f64>> = drive
-        .frame_poses(&camera)
+        .frame_poses(camera)
         .iter()
         .map(|p| p.world_from_body)
         .collect();
-    let mut vo = StereoVo::new(params.clone(), Arc::clone(frames)).expect("valid VO settings");
     let n = truth.len();
     // Keyframes' map poses; per frame, its keyframe and the tracked motion.
     let mut keyframe_pose: Vec<Option<Isometry3<f64>>> = vec![None; n];
@@ -105,7 +120,7 @@ pub fn run_chain(
     let mut ba_secs = Vec::new();
     let mut lost_at = None;
     let mut last = 0;
-    for k in 1..n {
+    for k in (step..n).step_by(step) {
         let true_motion = truth[reference].inverse() * truth[k];
         let prior = Isometry3::from_parts(
             Translation3::from(true_motion.translation.vector * 0.95),

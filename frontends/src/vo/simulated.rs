@@ -37,6 +37,12 @@
 //!   prior-free. After a loss the tracker relocalises only where it mapped
 //!   before.
 //!
+//! * **Covisible keyframes** (off unless `covisibility_keyframes` is set):
+//!   on each new keyframe, the links of the keyframes behind it are placed
+//!   again together with measurements between the keyframes whose views
+//!   overlap, as the stereo VO's local bundle adjustment places them
+//!   ([`covisibility`]).
+//!
 //! Every draw comes from a generator seeded by `(seed, purpose, reference,
 //! current)`, and a keyframe's map error by `(seed, reference)`, so a run's
 //! result does not depend on the order or the thread in which requests

@@ -92,7 +92,8 @@ pub struct Adjusted {
     pub chi2: (f64, f64),
     /// The free poses' covariance at the end (left perturbations, in the
     /// order of the free keyframes): the inverse of the reduced system,
-    /// the map points marginalised.
+    /// the map points marginalised; empty when that system is not positive
+    /// definite (a free keyframe the points do not hold).
     pub pose_covariance: DMatrix<f64>,
     /// Per point, its covariance given the adjusted poses (the inverse of
     /// its block of the normal equations at the end); `None` for a point
@@ -172,7 +173,8 @@ pub fn local_bundle_adjustment(
     let n = context.normal(&poses, &points, &inliers, Loss::Squared);
     let (pose_covariance, point_covariance) = match context.reduced(&n, 0.0) {
         Some((s, _, inverses)) => (
-            s.try_inverse().unwrap_or_else(|| DMatrix::zeros(0, 0)),
+            s.cholesky()
+                .map_or_else(|| DMatrix::zeros(0, 0), |c| c.inverse()),
             inverses,
         ),
         None => (DMatrix::zeros(0, 0), vec![None; points.len()]),

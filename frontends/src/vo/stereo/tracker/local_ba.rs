@@ -177,6 +177,12 @@ impl StereoVo {
             let covariance = sigma(c, c) - sigma(c, p) * a.transpose() - a * sigma(p, c)
                 + a * sigma(p, p) * a.transpose();
             let covariance = 0.5 * (covariance + covariance.transpose());
+            if covariance.cholesky().is_none() {
+                // The reduced system's inverse can lose definiteness to
+                // cancellation where the points barely hold a keyframe:
+                // that link stands as tracked.
+                continue;
+            }
             self.parents
                 .insert(window[child].0.index, (window[parent].0, relative));
             let (body, body_covariance) = self.body_motion(&relative, &covariance);
