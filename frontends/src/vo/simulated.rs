@@ -58,10 +58,10 @@ use super::{
     CameraParams, ErrorModel, ErrorStructure, FrameRef, RefinedLink, TrackOutcome, TrackPurpose,
     TrackRequest, VisualOdometry, VoMeasurement, isotropic_covariance,
 };
-
-pub mod covisibility;
 use crate::FrontendError;
 use crate::traverse::Traverse;
+
+pub mod covisibility;
 
 /// Settings of the simulated tracker. Every field has a default.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
