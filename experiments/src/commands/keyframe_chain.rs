@@ -2,12 +2,12 @@
 //! rendered drive as the front end drives it, without the pose graph:
 //! every frame looked at (every frame, or every `step`-th) tracked against
 //! the reference keyframe with a wheel-odometry-like prior (5 % short,
-//! 0.2° off in yaw), a keyframe
-//! when the overlap falls below 0.8 (the front end's rule), and on each
-//! new keyframe the VO told so ([`VisualOdometry::keyframe_inserted`]):
-//! with local bundle adjustment on, its refined links re-place the
-//! keyframes. [`run_chain`] and [`run_chain_with`] measure the final map
-//! against the truth.
+//! 0.2° off in yaw), a keyframe when the overlap falls below 0.8 (the
+//! front end's rule), and on each new keyframe the VO told so
+//! ([`VisualOdometry::keyframe_inserted`]): with local bundle adjustment
+//! (or covisible keyframes) on, its refined links re-place the keyframes.
+//! [`run_chain`] and [`run_chain_with`] measure the final map against the
+//! truth.
 
 use std::sync::Arc;
 use std::time::Instant;
