@@ -71,11 +71,12 @@ impl Links {
 }
 
 /// One relative measurement in the window: reference and current (window
-/// places), the error `δ` of `reference_from_current` against the truth,
-/// and its information.
+/// places), the truth of `reference_from_current`, the measurement's error
+/// `δ` against it, and its information.
 struct Measured {
     reference: usize,
     current: usize,
+    truth: Isometry3<f64>,
     error: Vector6<f64>,
     information: Matrix6<f64>,
 }
@@ -168,35 +169,36 @@ impl SimulatedVo {
             .enumerate()
             .map(|(i, f)| (f.index, i))
             .collect();
-        let mut measured = Vec::new();
-        // The links, as tracked.
-        for (i, frame) in window.iter().enumerate().take(window.len() - 1) {
-            let Some(link) = self.covisibility.links.get(&frame.index) else {
-                continue;
-            };
-            let (Some(&r), Some(truth)) = (
-                place.get(&link.reference.index),
-                self.truth(link.reference, *frame),
-            ) else {
-                continue;
-            };
-            let Some(information) = link.covariance.try_inverse() else {
-                continue;
-            };
-            measured.push(Measured {
-                reference: r,
-                current: i,
-                error: right_error(&truth, &link.relative),
-                information,
-            });
-        }
+        // The window's links, as tracked: `(current, reference)` places,
+        // the truth of `reference_from_current`, the link.
+        let linked: Vec<(usize, usize, Isometry3<f64>, Link)> = window[..window.len() - 1]
+            .iter()
+            .enumerate()
+            .filter_map(|(c, frame)| {
+                let link = *self.covisibility.links.get(&frame.index)?;
+                let r = *place.get(&link.reference.index)?;
+                Some((c, r, self.truth(link.reference, *frame)?, link))
+            })
+            .collect();
+        let mut measured: Vec<Measured> = linked
+            .iter()
+            .filter_map(|(c, r, truth, link)| {
+                Some(Measured {
+                    reference: *r,
+                    current: *c,
+                    truth: *truth,
+                    error: right_error(truth, &link.relative),
+                    information: link.covariance.try_inverse()?,
+                })
+            })
+            .collect();
         // The covisible pairs not linked already, older as reference.
         for (c, current) in window.iter().enumerate() {
             for (r, reference) in window.iter().enumerate().skip(c + 1) {
-                let linked = measured.iter().any(|m| {
-                    (m.reference, m.current) == (r, c) || (m.reference, m.current) == (c, r)
-                });
-                if linked {
+                if linked
+                    .iter()
+                    .any(|(a, b, _, _)| (*a, *b) == (c, r) || (*a, *b) == (r, c))
+                {
                     continue;
                 }
                 let (Some((relative, covariance)), Some(truth)) = (
@@ -212,27 +214,20 @@ impl SimulatedVo {
                 measured.push(Measured {
                     reference: r,
                     current: c,
+                    truth,
                     error,
                     information,
                 });
             }
         }
-        let Some((errors, covariance)) = self.solve_window(&window, &measured) else {
+        let Some((errors, covariance)) = solve_window(window.len() - 1, &measured) else {
             return Vec::new();
         };
         // Each link's refined error `ε_c − Ad(T⁻¹) ε_r` and its covariance.
         let oldest = window.len() - 1;
         let mut refined = Vec::new();
-        for (c, frame) in window.iter().enumerate().take(oldest).rev() {
-            let Some(link) = self.covisibility.links.get(&frame.index) else {
-                continue;
-            };
-            let (Some(&r), Some(truth)) = (
-                place.get(&link.reference.index),
-                self.truth(link.reference, *frame),
-            ) else {
-                continue;
-            };
+        for (c, r, truth, link) in linked.iter().rev() {
+            let (c, r) = (*c, *r);
             let a = adjoint(&truth.inverse());
             let mut jacobian = DMatrix::zeros(6, 6 * oldest);
             jacobian
@@ -248,45 +243,39 @@ impl SimulatedVo {
                 link_covariance.fixed_view::<6, 6>(0, 0).into_owned();
             refined.push(RefinedLink {
                 reference: link.reference,
-                current: *frame,
-                relative: right_perturbed(&truth, &error),
+                current: window[c],
+                relative: right_perturbed(truth, &error),
                 covariance: 0.5 * (link_covariance + link_covariance.transpose()),
             });
         }
         refined
     }
+}
 
-    /// The window keyframes' errors (all but the oldest, which is fixed,
-    /// stacked newest first) that best explain `measured`, and their
-    /// covariance; `None` when the measurements do not hold every
-    /// keyframe.
-    fn solve_window(
-        &self,
-        window: &[FrameRef],
-        measured: &[Measured],
-    ) -> Option<(DVector<f64>, DMatrix<f64>)> {
-        let oldest = window.len() - 1;
-        let n = 6 * oldest;
-        let mut h = DMatrix::<f64>::zeros(n, n);
-        let mut g = DVector::<f64>::zeros(n);
-        for m in measured {
-            let truth = self.truth(window[m.reference], window[m.current])?;
-            let a = adjoint(&truth.inverse());
-            // The prediction's Jacobians: I for the current, −Ad(T⁻¹) for
-            // the reference; the fixed oldest has none.
-            let blocks = [(m.current, Matrix6::identity()), (m.reference, -a)];
-            for (i, ji) in blocks.iter().filter(|(i, _)| *i < oldest) {
-                let wi = ji.transpose() * m.information;
-                let mut gi = g.fixed_rows_mut::<6>(6 * i);
-                gi += wi * m.error;
-                for (j, jj) in blocks.iter().filter(|(j, _)| *j < oldest) {
-                    let mut hij = h.fixed_view_mut::<6, 6>(6 * i, 6 * j);
-                    hij += wi * jj;
-                }
+/// The window keyframes' errors (all but the `oldest`, which is fixed,
+/// stacked newest first) that best explain `measured`, and their
+/// covariance; `None` when the measurements do not hold every
+/// keyframe.
+fn solve_window(oldest: usize, measured: &[Measured]) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let n = 6 * oldest;
+    let mut h = DMatrix::<f64>::zeros(n, n);
+    let mut g = DVector::<f64>::zeros(n);
+    for m in measured {
+        let a = adjoint(&m.truth.inverse());
+        // The prediction's Jacobians: I for the current, −Ad(T⁻¹) for
+        // the reference; the fixed oldest has none.
+        let blocks = [(m.current, Matrix6::identity()), (m.reference, -a)];
+        for (i, ji) in blocks.iter().filter(|(i, _)| *i < oldest) {
+            let wi = ji.transpose() * m.information;
+            let mut gi = g.fixed_rows_mut::<6>(6 * i);
+            gi += wi * m.error;
+            for (j, jj) in blocks.iter().filter(|(j, _)| *j < oldest) {
+                let mut hij = h.fixed_view_mut::<6, 6>(6 * i, 6 * j);
+                hij += wi * jj;
             }
         }
-        let covariance = h.cholesky()?.inverse();
-        let errors = &covariance * g;
-        Some((errors, covariance))
     }
+    let covariance = h.cholesky()?.inverse();
+    let errors = &covariance * g;
+    Some((errors, covariance))
 }
